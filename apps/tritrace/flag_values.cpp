@@ -1,0 +1,59 @@
+// Flag value parsing with std::from_chars, which accepts no leading spaces, signs like '+', or
+// trailing junk.
+#include "flag_values.h"
+
+#include <charconv>
+#include <cmath>
+#include <limits>
+
+namespace tritrace::cli {
+
+std::optional<long long> parse_integer(const std::string& text) {
+  long long value = 0;
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  if (ec != std::errc() || ptr != end || text.empty()) return std::nullopt;
+  return value;
+}
+
+std::optional<double> parse_finite(const std::string& text) {
+  double value = 0.0;
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  if (ec != std::errc() || ptr != end || text.empty() || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
+std::optional<glm::vec3> parse_vec3(const std::string& text) {
+  glm::vec3 v(0.0f);
+  size_t start = 0;
+  for (int i = 0; i < 3; ++i) {
+    const size_t comma = text.find(',', start);
+    const bool last = (i == 2);
+    if (last != (comma == std::string::npos)) return std::nullopt;  // too few or too many parts
+    const std::optional<double> x = parse_finite(text.substr(start, comma - start));
+    if (!x || std::abs(*x) > std::numeric_limits<float>::max()) return std::nullopt;
+    v[i] = static_cast<float>(*x);
+    start = comma + 1;
+  }
+  return v;
+}
+
+std::string check_integer_in(const std::string& text, long long lo, long long hi) {
+  const std::optional<long long> v = parse_integer(text);
+  if (v && *v >= lo && *v <= hi) return "";
+  return "must be an integer from " + std::to_string(lo) + " to " + std::to_string(hi) + ", got '" +
+         text + "'";
+}
+
+std::string check_finite(const std::string& text) {
+  if (parse_finite(text)) return "";
+  return "must be a finite number, got '" + text + "'";
+}
+
+std::string check_vec3(const std::string& text) {
+  if (parse_vec3(text)) return "";
+  return "must be three finite numbers X,Y,Z, got '" + text + "'";
+}
+
+}  // namespace tritrace::cli

@@ -1,0 +1,59 @@
+// tritrace's command line: parses the subcommand and turns every error into one line on stderr,
+// `tritrace: <file or flag>: <reason>`, with exit code 2 for usage errors and 1 for runtime ones.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+#include <string>
+
+#include "render_command.h"
+#include "tritrace/error.h"
+
+namespace {
+
+// CLI11's messages, reduced to one line that names the flag first where CLI11 gives one.
+std::string usage_message(const CLI::ParseError& e) {
+  std::string msg = e.what();
+  if (dynamic_cast<const CLI::ExtrasError*>(&e)) {
+    const size_t colon = msg.find(": ");
+    const std::string args = colon == std::string::npos ? msg : msg.substr(colon + 2);
+    return args + ": unknown option or argument (see --help)";
+  }
+  if (dynamic_cast<const CLI::RequiredError*>(&e) && msg.find("subcommand") != std::string::npos) {
+    return "missing command: use 'tritrace render' (see --help)";
+  }
+  for (char& c : msg) {
+    if (c == '\n') c = ' ';
+  }
+  return msg;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app("tritrace: a fast ray tracer for triangle scenes", "tritrace");
+  app.require_subcommand(1);
+  tritrace::cli::RenderArgs render_args;
+  CLI::App* render = tritrace::cli::add_render_command(app, render_args);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "tritrace: %s\n", usage_message(e).c_str());
+    return static_cast<int>(tritrace::ExitCode::kUsage);
+  }
+
+  try {
+    if (render->parsed()) return tritrace::cli::run_render(render_args);
+  } catch (const tritrace::Error& e) {
+    std::fprintf(stderr, "tritrace: %s\n", e.what());
+    return static_cast<int>(e.exit_code());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tritrace: %s\n", e.what());
+    return static_cast<int>(tritrace::ExitCode::kRuntime);
+  }
+  return 0;
+}

@@ -1,0 +1,37 @@
+// Accel: the interface every acceleration structure implements. Queries come in batches (a tile's
+// rays at a time), so the virtual call happens once per batch, never per ray or per triangle.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "tritrace/geometry/hit.h"
+#include "tritrace/math/ray.h"
+
+namespace tritrace {
+
+class Accel {
+ public:
+  virtual ~Accel() = default;
+
+  // For each ray, the closest hit with t in [tmin, tmax]; on an exact tie in t the triangle that
+  // comes first in the scene wins. hits.size() == rays.size().
+  virtual void intersect(std::span<const Ray> rays, std::span<Hit> hits) const = 0;
+
+  // For each ray, 1 when any triangle is hit with t in [tmin, tmax], else 0.
+  virtual void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const = 0;
+
+  // Single-ray conveniences for tests and tools.
+  Hit intersect(const Ray& ray) const {
+    Hit hit;
+    intersect(std::span<const Ray>(&ray, 1), std::span<Hit>(&hit, 1));
+    return hit;
+  }
+  bool occluded(const Ray& ray) const {
+    uint8_t result = 0;
+    occluded(std::span<const Ray>(&ray, 1), std::span<uint8_t>(&result, 1));
+    return result != 0;
+  }
+};
+
+}  // namespace tritrace

@@ -1,0 +1,74 @@
+// The brute-force loops, instantiated once per kernel so the kernel inlines into the loop.
+#include "tritrace/accel/brute_force.h"
+
+namespace tritrace {
+namespace {
+
+template <Kernel K>
+void intersect_all(const TriangleMesh& mesh, std::span<const Ray> rays, std::span<Hit> hits) {
+  const glm::vec3* v0 = mesh.v0().data();
+  const glm::vec3* e1 = mesh.e1().data();
+  const glm::vec3* e2 = mesh.e2().data();
+  const uint32_t n = static_cast<uint32_t>(mesh.size());
+  for (size_t r = 0; r < rays.size(); ++r) {
+    const Ray& ray = rays[r];
+    Hit best;
+    TriangleHit h;
+    for (uint32_t i = 0; i < n; ++i) {
+      // Strictly closer: on an exact tie the earlier triangle keeps the hit.
+      if (intersect_triangle<K>(ray, v0[i], e1[i], e2[i], h) && h.t < best.t) {
+        best = {h.t, h.u, h.v, i};
+      }
+    }
+    hits[r] = best;
+  }
+}
+
+template <Kernel K>
+void occluded_all(const TriangleMesh& mesh, std::span<const Ray> rays,
+                  std::span<uint8_t> occluded) {
+  const glm::vec3* v0 = mesh.v0().data();
+  const glm::vec3* e1 = mesh.e1().data();
+  const glm::vec3* e2 = mesh.e2().data();
+  const uint32_t n = static_cast<uint32_t>(mesh.size());
+  for (size_t r = 0; r < rays.size(); ++r) {
+    uint8_t blocked = 0;
+    TriangleHit h;
+    for (uint32_t i = 0; i < n; ++i) {
+      if (intersect_triangle<K>(rays[r], v0[i], e1[i], e2[i], h)) {
+        blocked = 1;
+        break;
+      }
+    }
+    occluded[r] = blocked;
+  }
+}
+
+}  // namespace
+
+BruteForceAccel::BruteForceAccel(const TriangleMesh& mesh, Kernel kernel)
+    : mesh_(mesh), kernel_(kernel) {}
+
+void BruteForceAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
+  switch (kernel_) {
+    case Kernel::kInverse:
+      return intersect_all<Kernel::kInverse>(mesh_, rays, hits);
+    case Kernel::kCramer:
+      return intersect_all<Kernel::kCramer>(mesh_, rays, hits);
+    case Kernel::kMollerTrumbore:
+      return intersect_all<Kernel::kMollerTrumbore>(mesh_, rays, hits);
+  }
+}
+
+void BruteForceAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+  switch (kernel_) {
+    case Kernel::kInverse:
+      return occluded_all<Kernel::kInverse>(mesh_, rays, occluded);
+    case Kernel::kCramer:
+      return occluded_all<Kernel::kCramer>(mesh_, rays, occluded);
+    case Kernel::kMollerTrumbore:
+      return occluded_all<Kernel::kMollerTrumbore>(mesh_, rays, occluded);
+  }
+}
+
+}  // namespace tritrace

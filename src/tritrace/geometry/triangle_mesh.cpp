@@ -1,0 +1,39 @@
+// TriangleMesh construction and queries.
+#include "tritrace/geometry/triangle_mesh.h"
+
+#include <glm/glm.hpp>
+
+namespace tritrace {
+
+void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,
+                       uint32_t material) {
+  const glm::vec3 e1 = b - a;
+  const glm::vec3 e2 = c - a;
+  const glm::vec3 n = glm::cross(e2, e1);
+  const float len = glm::length(n);
+  v0_.push_back(a);
+  e1_.push_back(e1);
+  e2_.push_back(e2);
+  normal_.push_back(len > 0.0f ? n / len : glm::vec3(0.0f));
+  material_.push_back(material);
+}
+
+glm::vec3 TriangleMesh::vertex(size_t tri, int corner) const {
+  if (corner == 1) return v0_[tri] + e1_[tri];
+  if (corner == 2) return v0_[tri] + e2_[tri];
+  return v0_[tri];
+}
+
+Bounds3 TriangleMesh::bounds() const {
+  if (empty()) return {};
+  Bounds3 b{v0_[0], v0_[0]};
+  for (size_t i = 0; i < size(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      b.lo = glm::min(b.lo, vertex(i, c));
+      b.hi = glm::max(b.hi, vertex(i, c));
+    }
+  }
+  return b;
+}
+
+}  // namespace tritrace

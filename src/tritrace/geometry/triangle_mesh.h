@@ -1,0 +1,39 @@
+// TriangleMesh: triangles stored as structure-of-arrays (v0, e1 = v1 - v0, e2 = v2 - v0), the layout
+// the kernels read, plus the geometric normal and a material id per triangle.
+#pragma once
+
+#include <cstdint>
+#include <glm/vec3.hpp>
+#include <vector>
+
+namespace tritrace {
+
+struct Bounds3 {
+  glm::vec3 lo{0.0f};
+  glm::vec3 hi{0.0f};
+};
+
+class TriangleMesh {
+ public:
+  // The normal follows the lab's convention, normalize(cross(e2, e1)); a zero-area triangle gets a
+  // zero normal (it can never be hit).
+  void add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, uint32_t material);
+
+  size_t size() const { return v0_.size(); }
+  bool empty() const { return v0_.empty(); }
+
+  const std::vector<glm::vec3>& v0() const { return v0_; }
+  const std::vector<glm::vec3>& e1() const { return e1_; }
+  const std::vector<glm::vec3>& e2() const { return e2_; }
+  const std::vector<glm::vec3>& normal() const { return normal_; }
+  const std::vector<uint32_t>& material() const { return material_; }
+
+  glm::vec3 vertex(size_t tri, int corner) const;  // corner 0, 1 or 2
+  Bounds3 bounds() const;
+
+ private:
+  std::vector<glm::vec3> v0_, e1_, e2_, normal_;
+  std::vector<uint32_t> material_;
+};
+
+}  // namespace tritrace

@@ -1,0 +1,34 @@
+// Image: a width x height grid of linear float RGB, row 0 at the top, and the lab's conversion to
+// 8-bit (clamp to [0,1], times 255, truncate; no gamma).
+#pragma once
+
+#include <cstdint>
+#include <glm/vec3.hpp>
+#include <vector>
+
+namespace tritrace {
+
+class Image {
+ public:
+  Image() = default;
+  Image(int width, int height);
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  glm::vec3& at(int x, int y) { return pixels_[static_cast<size_t>(y) * width_ + x]; }
+  const glm::vec3& at(int x, int y) const { return pixels_[static_cast<size_t>(y) * width_ + x]; }
+  const std::vector<glm::vec3>& pixels() const { return pixels_; }
+
+ private:
+  int width_ = 0;
+  int height_ = 0;
+  std::vector<glm::vec3> pixels_;
+};
+
+// The lab's byte: truncate(clamp(255 * c, 0, 255)), so 0.5 -> 127. NaN maps to 0.
+uint8_t to_byte_lab(float c);
+
+// Interleaved RGB bytes, row 0 first, using to_byte_lab.
+std::vector<uint8_t> to_rgb8_lab(const Image& image);
+
+}  // namespace tritrace
