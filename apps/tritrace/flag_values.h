@@ -1,6 +1,6 @@
 // Strict parsing of flag values: the whole string must be a number of the right kind, finite and in
-// range. Each checker returns an empty string when the value is fine, else the reason it is not (the
-// form CLI11 validators use), so that every bad value gets a message naming the rule it broke.
+// range. Each checker returns an empty string when the value is fine, else the reason it is not
+// (the form CLI11 validators use), so that every bad value gets a message naming the rule it broke.
 #pragma once
 
 #include <glm/vec3.hpp>

@@ -11,14 +11,20 @@
 namespace {
 
 // CLI11's messages, reduced to one line that names the flag first where CLI11 gives one.
-std::string usage_message(const CLI::ParseError& e) {
+std::string usage_message(const CLI::ParseError& e, int argc, char** argv) {
   std::string msg = e.what();
   if (dynamic_cast<const CLI::ExtrasError*>(&e)) {
     const size_t colon = msg.find(": ");
     const std::string args = colon == std::string::npos ? msg : msg.substr(colon + 2);
     return args + ": unknown option or argument (see --help)";
   }
+  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) && msg.find(" missing") != std::string::npos) {
+    return msg.substr(0, msg.find(": ")) + ": missing value";
+  }
   if (dynamic_cast<const CLI::RequiredError*>(&e) && msg.find("subcommand") != std::string::npos) {
+    if (argc > 1 && argv[1][0] != '-') {
+      return std::string(argv[1]) + ": unknown command (use 'tritrace render'; see --help)";
+    }
     return "missing command: use 'tritrace render' (see --help)";
   }
   for (char& c : msg) {
@@ -42,7 +48,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForAllHelp& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "tritrace: %s\n", usage_message(e).c_str());
+    std::fprintf(stderr, "tritrace: %s\n", usage_message(e, argc, argv).c_str());
     return static_cast<int>(tritrace::ExitCode::kUsage);
   }
 

@@ -37,14 +37,16 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
   CLI::App* sub = app.add_subcommand(
       "render", "Render the built-in Cornell box with the lab's camera, light and shading");
   sub->add_option("-o,--output", args.output, "Output image: .png, .ppm (8-bit) or .pfm (float)")
+      ->type_name("PATH")
       ->capture_default_str();
-  auto side = validator("INT in [1, 16384]", [](std::string& s) {
-    return check_integer_in(s, 1, kMaxImageSide);
-  });
-  sub->add_option("--width", args.width, "Image width in pixels")
+  auto side = validator("", [](std::string& s) { return check_integer_in(s, 1, kMaxImageSide); });
+  sub->add_option("--width", args.width, "Image width in pixels, 1 to 16384")
+      ->type_name("W")
       ->capture_default_str()
       ->check(side);
-  sub->add_option("--height", args.height, "Image height in pixels (also the focal length)")
+  sub->add_option("--height", args.height,
+                  "Image height in pixels, 1 to 16384 (also the focal length)")
+      ->type_name("H")
       ->capture_default_str()
       ->check(side);
   sub->add_option("--kernel", args.kernel,
@@ -73,7 +75,8 @@ int run_render(const RenderArgs& args) {
   // Everything is checked before rendering, so a bad output path costs no render time and leaves
   // no file.
   if (!image_format_for(args.output)) {
-    throw Error("--output", "'" + args.output + "' has an unknown extension (use .png, .ppm or .pfm)",
+    throw Error("--output",
+                "'" + args.output + "' has an unknown extension (use .png, .ppm or .pfm)",
                 ExitCode::kUsage);
   }
   check_writable_path(args.output);
@@ -85,7 +88,8 @@ int run_render(const RenderArgs& args) {
   if (!args.light.empty()) scene_options.light_position = *parse_vec3(args.light);
   const Kernel kernel = args.kernel.empty() ? kDefaultKernel : *parse_kernel(args.kernel);
   RenderOptions render_options;
-  if (!args.threads.empty()) render_options.threads = static_cast<int>(*parse_integer(args.threads));
+  if (!args.threads.empty())
+    render_options.threads = static_cast<int>(*parse_integer(args.threads));
 
   const Scene scene = make_cornell_box(scene_options);
   const BruteForceAccel accel(scene.mesh, kernel);

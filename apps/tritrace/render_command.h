@@ -12,7 +12,7 @@ struct RenderArgs {
   std::string height = "500";
   std::string kernel;  // empty: the default kernel
   std::string yaw = "0";
-  std::string light;  // empty: the lab's light position
+  std::string light;    // empty: the lab's light position
   std::string threads;  // empty: all cores
   bool quiet = false;
 };

@@ -1,7 +1,7 @@
 // The ray/triangle kernels. Each solves v0 + u*e1 + v*e2 = o + t*d for (t, u, v) and reports a hit
 // when u >= 0, v >= 0, u + v <= 1 (edges inclusive) and tmin <= t <= tmax. A degenerate triangle or
-// a ray parallel to the triangle's plane never hits, and no kernel returns NaN or Inf: every test is
-// written so that a NaN fails it.
+// a ray parallel to the triangle's plane never hits, and no kernel returns NaN or Inf: every test
+// is written so that a NaN fails it.
 #pragma once
 
 #include <array>

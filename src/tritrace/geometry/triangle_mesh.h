@@ -1,5 +1,5 @@
-// TriangleMesh: triangles stored as structure-of-arrays (v0, e1 = v1 - v0, e2 = v2 - v0), the layout
-// the kernels read, plus the geometric normal and a material id per triangle.
+// TriangleMesh: triangles stored as structure-of-arrays (v0, e1 = v1 - v0, e2 = v2 - v0), the
+// layout the kernels read, plus the geometric normal and a material id per triangle.
 #pragma once
 
 #include <cstdint>

@@ -4,7 +4,9 @@
 namespace tritrace {
 
 Image::Image(int width, int height)
-    : width_(width), height_(height), pixels_(static_cast<size_t>(width) * height, glm::vec3(0.0f)) {}
+    : width_(width),
+      height_(height),
+      pixels_(static_cast<size_t>(width) * height, glm::vec3(0.0f)) {}
 
 uint8_t to_byte_lab(float c) {
   const float scaled = 255.0f * c;

@@ -14,7 +14,9 @@
 
 namespace tritrace {
 
-int default_thread_count() { return std::max(1, tbb::info::default_concurrency()); }
+int default_thread_count() {
+  return std::max(1, tbb::info::default_concurrency());
+}
 
 Image render(const Scene& scene, const Accel& accel, const Integrator& integrator,
              const RenderOptions& options, RenderStats* stats) {

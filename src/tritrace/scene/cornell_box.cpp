@@ -13,9 +13,8 @@ constexpr float kL = 555.0f;
 enum Colour : uint32_t { kRed, kYellow, kGreen, kCyan, kBlue, kPurple, kWhite, kColourCount };
 
 constexpr std::array<glm::vec3, kColourCount> kAlbedo = {
-    glm::vec3(0.75f, 0.15f, 0.15f), glm::vec3(0.75f, 0.75f, 0.15f),
-    glm::vec3(0.15f, 0.75f, 0.15f), glm::vec3(0.15f, 0.75f, 0.75f),
-    glm::vec3(0.15f, 0.15f, 0.75f), glm::vec3(0.75f, 0.15f, 0.75f),
+    glm::vec3(0.75f, 0.15f, 0.15f), glm::vec3(0.75f, 0.75f, 0.15f), glm::vec3(0.15f, 0.75f, 0.15f),
+    glm::vec3(0.15f, 0.75f, 0.75f), glm::vec3(0.15f, 0.15f, 0.75f), glm::vec3(0.75f, 0.15f, 0.75f),
     glm::vec3(0.75f, 0.75f, 0.75f)};
 
 // v = v * 2/L; v = v - (1,1,1); v.x = -v.x; v.y = -v.y, in that order.

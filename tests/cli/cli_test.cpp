@@ -1,0 +1,457 @@
+// CLI integration tests: run the real tritrace executable (fork/execv, no shell) in a fresh folder
+// and check its exit code, stdout, stderr and the files it leaves behind.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "tritrace/image/image_io.h"
+
+#ifndef TRITRACE_CLI_PATH
+#error "TRITRACE_CLI_PATH must name the built tritrace executable"
+#endif
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct RunResult {
+  int exit_code = -1;  // the process's exit status, or 128 + signal if it was killed
+  std::string out;
+  std::string err;
+};
+
+std::string MakeTempFolder() {
+  std::string pattern = (fs::temp_directory_path() / "tritrace_cli_test.XXXXXX").string();
+  if (::mkdtemp(pattern.data()) == nullptr) {
+    ADD_FAILURE() << "mkdtemp failed: " << std::strerror(errno);
+    return "";
+  }
+  return pattern;
+}
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Every entry in `folder`, hidden ones included, sorted.
+std::vector<std::string> ListFolder(const fs::path& folder) {
+  std::vector<std::string> names;
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
+    names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+size_t CountLines(const std::string& text) {
+  return std::count(text.begin(), text.end(), '\n');
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    work_ = MakeTempFolder();
+    capture_ = MakeTempFolder();
+    ASSERT_FALSE(work_.empty());
+    ASSERT_FALSE(capture_.empty());
+  }
+
+  void TearDown() override {
+    std::error_code ec;
+    if (!work_.empty()) {
+      // Undo any permission change a test made, so that the folder can be removed.
+      fs::permissions(work_, fs::perms::owner_all, fs::perm_options::add, ec);
+      for (const fs::directory_entry& entry : fs::directory_iterator(work_, ec)) {
+        fs::permissions(entry.path(), fs::perms::owner_all, fs::perm_options::add, ec);
+      }
+      fs::remove_all(work_, ec);
+    }
+    if (!capture_.empty()) fs::remove_all(capture_, ec);
+  }
+
+  // Runs `tritrace args...` with work_ as the current folder and stdin from /dev/null.
+  RunResult Run(const std::vector<std::string>& args) const {
+    const std::string out_path = (capture_ / "stdout").string();
+    const std::string err_path = (capture_ / "stderr").string();
+    const std::string binary = TRITRACE_CLI_PATH;
+    std::vector<std::string> storage;
+    storage.push_back(binary);
+    storage.insert(storage.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& s : storage) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    const std::string cwd = work_.string();
+
+    RunResult result;
+    const pid_t pid = ::fork();
+    if (pid < 0) {
+      ADD_FAILURE() << "fork failed: " << std::strerror(errno);
+      return result;
+    }
+    if (pid == 0) {
+      // Child: only async-signal-safe calls until execv.
+      const int in = ::open("/dev/null", O_RDONLY);
+      const int out = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+      const int err = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+      if (in < 0 || out < 0 || err < 0 || ::chdir(cwd.c_str()) != 0 || ::dup2(in, 0) < 0 ||
+          ::dup2(out, 1) < 0 || ::dup2(err, 2) < 0) {
+        ::_exit(126);
+      }
+      ::execv(binary.c_str(), argv.data());
+      ::_exit(127);
+    }
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0) {
+      if (errno != EINTR) {
+        ADD_FAILURE() << "waitpid failed: " << std::strerror(errno);
+        return result;
+      }
+    }
+    if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
+    if (WIFSIGNALED(status)) result.exit_code = 128 + WTERMSIG(status);
+    result.out = ReadFile(out_path);
+    result.err = ReadFile(err_path);
+    return result;
+  }
+
+  // Runs `tritrace render args... -q`, expects success and returns the bytes of `output`.
+  std::string RenderQuietly(std::vector<std::string> args, const std::string& output) {
+    args.insert(args.begin(), "render");
+    args.insert(args.end(), {"-o", output, "-q"});
+    const RunResult r = Run(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(r.err, "");
+    return ReadFile(work_ / output);
+  }
+
+  fs::path work_;     // the CLI's current folder
+  fs::path capture_;  // stdout and stderr of the last run
+};
+
+// The folder holds exactly `files`: no other output and no leftover temporary file.
+void ExpectOnlyFiles(const fs::path& folder, std::vector<std::string> files) {
+  std::sort(files.begin(), files.end());
+  EXPECT_EQ(ListFolder(folder), files);
+}
+
+// An error: one line `tritrace: <subject>: ...<reason>...` on stderr, nothing on stdout.
+void ExpectErrorLine(const RunResult& r, int exit_code, const std::string& subject,
+                     const std::string& reason) {
+  EXPECT_EQ(r.exit_code, exit_code) << r.err;
+  EXPECT_EQ(r.out, "");
+  EXPECT_EQ(CountLines(r.err), 1u) << r.err;
+  ASSERT_FALSE(r.err.empty());
+  EXPECT_EQ(r.err.back(), '\n');
+  EXPECT_EQ(r.err.rfind("tritrace: " + subject + ": ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find(reason), std::string::npos) << "'" << reason << "' not in: " << r.err;
+}
+
+void ExpectRgb8Image(const fs::path& path, int width, int height) {
+  ASSERT_TRUE(fs::is_regular_file(path)) << path;
+  const tritrace::Rgb8Image image = tritrace::read_image_rgb8(path.string());
+  EXPECT_EQ(image.width, width);
+  EXPECT_EQ(image.height, height);
+  EXPECT_EQ(image.rgb.size(), static_cast<size_t>(width) * height * 3);
+}
+
+// ---- Successful renders ---------------------------------------------------------------------
+
+TEST_F(CliTest, NoArgumentsWritesA500x500CornellPngAndOneSummaryLine) {
+  const RunResult r = Run({"render"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  const std::regex summary(
+      R"(rendered 500x500 in [0-9]+(\.[0-9]+)? ms \([0-9]+(\.[0-9]+)? Mrays/s, [0-9]+ threads?\) )"
+      R"(to cornell\.png\n)");
+  EXPECT_TRUE(std::regex_match(r.out, summary)) << r.out;
+  ExpectOnlyFiles(work_, {"cornell.png"});
+  ExpectRgb8Image(work_ / "cornell.png", 500, 500);
+}
+
+TEST_F(CliTest, QuietFlagsPrintNothing) {
+  for (const std::string flag : {"-q", "--quiet"}) {
+    SCOPED_TRACE(flag);
+    const RunResult r = Run({"render", "--width", "64", "--height", "64", flag});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(r.err, "");
+    ExpectOnlyFiles(work_, {"cornell.png"});
+    ExpectRgb8Image(work_ / "cornell.png", 64, 64);
+  }
+}
+
+TEST_F(CliTest, WidthAndHeightSetTheImageSize) {
+  const RunResult r = Run({"render", "--width", "64", "--height", "48", "-o", "small.png"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("rendered 64x48 in "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(" to small.png\n"), std::string::npos) << r.out;
+  ExpectOnlyFiles(work_, {"small.png"});
+  ExpectRgb8Image(work_ / "small.png", 64, 48);
+}
+
+// 8-bit outputs, by extension, case-insensitively; both read back at the requested size.
+class CliRgb8OutputTest : public CliTest, public ::testing::WithParamInterface<std::string> {};
+
+TEST_P(CliRgb8OutputTest, WritesAnImageOfTheRequestedSize) {
+  const std::string name = GetParam();
+  const RunResult r = Run({"render", "--width", "40", "--height", "30", "--output", name});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.find(" to " + name + "\n"), std::string::npos) << r.out;
+  ExpectOnlyFiles(work_, {name});
+  ExpectRgb8Image(work_ / name, 40, 30);
+}
+
+INSTANTIATE_TEST_SUITE_P(Extensions, CliRgb8OutputTest,
+                         ::testing::Values("out.png", "out.PNG", "out.ppm", "out.PpM"),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           std::string name = info.param;
+                           std::replace(name.begin(), name.end(), '.', '_');
+                           return name;
+                         });
+
+TEST_F(CliTest, PfmOutputHasTheHeaderAndFloatPixels) {
+  for (const std::string name : {"out.pfm", "OUT.PFM"}) {
+    SCOPED_TRACE(name);
+    const std::string bytes = RenderQuietly({"--width", "40", "--height", "30"}, name);
+    const std::string header = "PF\n40 30\n-1.0\n";
+    ASSERT_GE(bytes.size(), header.size());
+    EXPECT_EQ(bytes.substr(0, header.size()), header);
+    EXPECT_EQ(bytes.size(), header.size() + 40u * 30u * 3u * 4u);
+    EXPECT_TRUE(fs::remove(work_ / name));
+    ExpectOnlyFiles(work_, {});
+  }
+}
+
+TEST_F(CliTest, OutputInASubfolderLeavesNoTemporaryFile) {
+  fs::create_directory(work_ / "sub");
+  const std::string bytes = RenderQuietly({"--width", "32", "--height", "32"}, "sub/x.png");
+  ExpectOnlyFiles(work_, {"sub"});
+  ExpectOnlyFiles(work_ / "sub", {"x.png"});
+  ExpectRgb8Image(work_ / "sub" / "x.png", 32, 32);
+}
+
+TEST_F(CliTest, ExistingOutputFileIsReplaced) {
+  std::ofstream(work_ / "x.png") << "not an image";
+  RenderQuietly({"--width", "32", "--height", "24"}, "x.png");
+  ExpectOnlyFiles(work_, {"x.png"});
+  ExpectRgb8Image(work_ / "x.png", 32, 24);
+}
+
+TEST_F(CliTest, OneAndTwoThreadsGiveByteIdenticalPngs) {
+  const RunResult one =
+      Run({"render", "--width", "64", "--height", "64", "--threads", "1", "-o", "one.png"});
+  EXPECT_EQ(one.exit_code, 0) << one.err;
+  EXPECT_NE(one.out.find(", 1 thread) "), std::string::npos) << one.out;
+  const RunResult two =
+      Run({"render", "--width", "64", "--height", "64", "--threads", "2", "-o", "two.png"});
+  EXPECT_EQ(two.exit_code, 0) << two.err;
+  EXPECT_NE(two.out.find(", 2 threads) "), std::string::npos) << two.out;
+  const std::string a = ReadFile(work_ / "one.png");
+  const std::string b = ReadFile(work_ / "two.png");
+  EXPECT_FALSE(a.empty());
+  EXPECT_TRUE(a == b) << "--threads 1 and --threads 2 wrote different files";
+  ExpectOnlyFiles(work_, {"one.png", "two.png"});
+}
+
+TEST_F(CliTest, EveryKernelRenders) {
+  for (const std::string kernel : {"inverse", "cramer", "moller-trumbore"}) {
+    SCOPED_TRACE(kernel);
+    const std::string name = kernel + ".png";
+    RenderQuietly({"--width", "32", "--height", "32", "--kernel", kernel}, name);
+    ExpectRgb8Image(work_ / name, 32, 32);
+  }
+  ExpectOnlyFiles(work_, {"cramer.png", "inverse.png", "moller-trumbore.png"});
+}
+
+TEST_F(CliTest, FarLightChangesTheImage) {
+  const std::string base = RenderQuietly({"--width", "64", "--height", "64"}, "default.png");
+  const std::string far =
+      RenderQuietly({"--width", "64", "--height", "64", "--light", "0,-100,-100"}, "far.png");
+  EXPECT_FALSE(base.empty());
+  EXPECT_FALSE(far.empty());
+  EXPECT_TRUE(base != far) << "--light 0,-100,-100 gave the default image";
+  ExpectRgb8Image(work_ / "far.png", 64, 64);
+}
+
+TEST_F(CliTest, YawChangesTheImage) {
+  const std::string base = RenderQuietly({"--width", "64", "--height", "64"}, "default.png");
+  const std::string turned =
+      RenderQuietly({"--width", "64", "--height", "64", "--yaw", "0.5"}, "turned.png");
+  EXPECT_FALSE(base.empty());
+  EXPECT_TRUE(base != turned) << "--yaw 0.5 gave the default image";
+}
+
+TEST_F(CliTest, HelpListsEveryFlagAndExitsZero) {
+  const RunResult r = Run({"render", "--help"});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.err, "");
+  for (const std::string flag : {"-o", "--output", "--width", "--height", "--kernel", "--yaw",
+                                 "--light", "--threads", "-q", "--quiet", "--help"}) {
+    EXPECT_NE(r.out.find(flag), std::string::npos) << flag << " missing from:\n" << r.out;
+  }
+  for (const std::string kernel : {"inverse", "cramer", "moller-trumbore"}) {
+    EXPECT_NE(r.out.find(kernel), std::string::npos) << kernel << " missing from:\n" << r.out;
+  }
+  ExpectOnlyFiles(work_, {});
+}
+
+TEST_F(CliTest, TopLevelHelpNamesTheRenderCommand) {
+  const RunResult r = Run({"--help"});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.find("render"), std::string::npos) << r.out;
+  ExpectOnlyFiles(work_, {});
+}
+
+// ---- Errors ---------------------------------------------------------------------------------
+
+TEST_F(CliTest, NoSubcommandIsAUsageError) {
+  const RunResult r = Run({});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.out, "");
+  EXPECT_EQ(CountLines(r.err), 1u) << r.err;
+  EXPECT_EQ(r.err.rfind("tritrace: ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("render"), std::string::npos) << r.err;
+  ExpectOnlyFiles(work_, {});
+}
+
+TEST_F(CliTest, UnknownSubcommandIsAUsageError) {
+  const RunResult r = Run({"draw"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.out, "");
+  EXPECT_EQ(CountLines(r.err), 1u) << r.err;
+  EXPECT_EQ(r.err.rfind("tritrace: ", 0), 0u) << r.err;
+  ExpectOnlyFiles(work_, {});
+}
+
+struct ErrorCase {
+  std::string name;               // test name suffix
+  std::vector<std::string> args;  // after "render"
+  int exit_code;
+  std::string subject;  // what the message names first: the flag, argument or path
+  std::string reason;   // a substring of the rest
+};
+
+std::ostream& operator<<(std::ostream& os, const ErrorCase& c) {
+  os << "render";
+  for (const std::string& a : c.args) os << " '" << a << "'";
+  return os;
+}
+
+class CliErrorTest : public CliTest, public ::testing::WithParamInterface<ErrorCase> {};
+
+TEST_P(CliErrorTest, PrintsOneLineAndWritesNoFile) {
+  const ErrorCase& c = GetParam();
+  std::vector<std::string> args = {"render"};
+  args.insert(args.end(), c.args.begin(), c.args.end());
+  const RunResult r = Run(args);
+  ExpectErrorLine(r, c.exit_code, c.subject, c.reason);
+  ExpectOnlyFiles(work_, {});
+}
+
+const char kSideRange[] = "must be an integer from 1 to 16384";
+const char kThreadRange[] = "must be an integer from 1 to 1024";
+const char kVec3[] = "must be three finite numbers X,Y,Z";
+const char kFinite[] = "must be a finite number";
+const char kExtension[] = "unknown extension";
+
+INSTANTIATE_TEST_SUITE_P(
+    Errors, CliErrorTest,
+    ::testing::Values(
+        ErrorCase{"UnknownFlag", {"--bogus"}, 2, "--bogus", "unknown option"},
+        ErrorCase{"UnexpectedPositional", {"extra"}, 2, "extra", "unknown option or argument"},
+        ErrorCase{"WidthMissingValue", {"--width"}, 2, "--width", "missing value"},
+        ErrorCase{"OutputMissingValue", {"-o"}, 2, "--output", "missing value"},
+        ErrorCase{"WidthZero", {"--width", "0"}, 2, "--width", kSideRange},
+        ErrorCase{"WidthZeroWithEquals", {"--width=0"}, 2, "--width", kSideRange},
+        ErrorCase{"WidthNegative", {"--width", "-5"}, 2, "--width", kSideRange},
+        ErrorCase{"WidthNotANumber", {"--width", "abc"}, 2, "--width", kSideRange},
+        ErrorCase{"WidthFractional", {"--width", "1.5"}, 2, "--width", kSideRange},
+        ErrorCase{"WidthWithPlusSign", {"--width", "+5"}, 2, "--width", kSideRange},
+        ErrorCase{"WidthWithLeadingSpace", {"--width", " 5"}, 2, "--width", kSideRange},
+        ErrorCase{"WidthWithTrailingJunk", {"--width", "5px"}, 2, "--width", kSideRange},
+        ErrorCase{"WidthEmpty", {"--width", ""}, 2, "--width", kSideRange},
+        ErrorCase{"WidthAboveMaximum", {"--width", "16385"}, 2, "--width", kSideRange},
+        ErrorCase{"WidthHuge", {"--width", "99999999999999999999"}, 2, "--width", kSideRange},
+        ErrorCase{"HeightZero", {"--height", "0"}, 2, "--height", kSideRange},
+        ErrorCase{"HeightNegative", {"--height", "-1"}, 2, "--height", kSideRange},
+        ErrorCase{"HeightAboveMaximum", {"--height", "16385"}, 2, "--height", kSideRange},
+        ErrorCase{"ThreadsZero", {"--threads", "0"}, 2, "--threads", kThreadRange},
+        ErrorCase{"ThreadsAboveMaximum", {"--threads", "1025"}, 2, "--threads", kThreadRange},
+        ErrorCase{"ThreadsNotANumber", {"--threads", "many"}, 2, "--threads", kThreadRange},
+        ErrorCase{"UnknownKernel", {"--kernel", "foo"}, 2, "--kernel", "unknown kernel 'foo'"},
+        ErrorCase{"KernelMissingValue", {"--kernel"}, 2, "--kernel", "missing value"},
+        ErrorCase{"LightTwoNumbers", {"--light", "1,2"}, 2, "--light", kVec3},
+        ErrorCase{"LightNaN", {"--light", "1,nan,2"}, 2, "--light", kVec3},
+        ErrorCase{"LightFourNumbers", {"--light", "1,2,3,4"}, 2, "--light", kVec3},
+        ErrorCase{"LightInfinite", {"--light", "inf,0,0"}, 2, "--light", kVec3},
+        ErrorCase{"LightBeyondFloat", {"--light", "1e39,0,0"}, 2, "--light", kVec3},
+        ErrorCase{"LightEmptyPart", {"--light", "1,,2"}, 2, "--light", kVec3},
+        ErrorCase{"YawInfinite", {"--yaw", "inf"}, 2, "--yaw", kFinite},
+        ErrorCase{"YawNaN", {"--yaw", "nan"}, 2, "--yaw", kFinite},
+        ErrorCase{"YawNotANumber", {"--yaw", "abc"}, 2, "--yaw", kFinite},
+        ErrorCase{"UnknownOutputExtension", {"-o", "x.jpg"}, 2, "--output", kExtension},
+        ErrorCase{"OutputWithoutExtension", {"--output", "image"}, 2, "--output", kExtension},
+        // Any reason: an empty path has no extension and is no file name either.
+        ErrorCase{"EmptyOutputPath", {"-o", ""}, 2, "--output", ""},
+        // A bad value is reported even when a valid render would otherwise follow.
+        ErrorCase{"BadValueAmongGoodOnes",
+                  {"--width", "64", "--height", "64", "--yaw", "inf", "-o", "x.png"},
+                  2,
+                  "--yaw",
+                  kFinite},
+        // A bad extension is reported before the folder is looked at.
+        ErrorCase{"BadExtensionInMissingFolder", {"-o", "nodir/x.jpg"}, 2, "--output", kExtension},
+        // Runtime errors.
+        ErrorCase{
+            "OutputFolderMissing", {"-o", "nodir/x.png"}, 1, "nodir/x.png", "does not exist"}),
+    [](const ::testing::TestParamInfo<ErrorCase>& info) { return info.param.name; });
+
+TEST_F(CliTest, OutputPathThatIsAFolderIsARuntimeError) {
+  fs::create_directory(work_ / "out.png");
+  const RunResult r = Run({"render", "--width", "16", "--height", "16", "-o", "out.png"});
+  ExpectErrorLine(r, 1, "out.png", "folder");
+  ExpectOnlyFiles(work_, {"out.png"});
+  EXPECT_TRUE(fs::is_directory(work_ / "out.png"));
+  ExpectOnlyFiles(work_ / "out.png", {});
+}
+
+TEST_F(CliTest, OutputFolderThatIsAFileIsARuntimeError) {
+  std::ofstream(work_ / "plain.txt") << "text";
+  const RunResult r = Run({"render", "--width", "16", "--height", "16", "-o", "plain.txt/x.png"});
+  ExpectErrorLine(r, 1, "plain.txt/x.png", "not a folder");
+  ExpectOnlyFiles(work_, {"plain.txt"});
+  EXPECT_EQ(ReadFile(work_ / "plain.txt"), "text");
+}
+
+TEST_F(CliTest, UnwritableOutputFolderIsARuntimeError) {
+  if (::geteuid() == 0) {
+    GTEST_SKIP() << "running as root, where permission bits do not stop writes";
+  }
+  const fs::path locked = work_ / "locked";
+  fs::create_directory(locked);
+  fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec);
+  const RunResult r = Run({"render", "--width", "16", "--height", "16", "-o", "locked/x.png"});
+  ExpectErrorLine(r, 1, "locked/x.png", "not writable");
+  ExpectOnlyFiles(work_, {"locked"});
+  ExpectOnlyFiles(locked, {});
+}
+
+}  // namespace

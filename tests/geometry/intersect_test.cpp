@@ -1,0 +1,164 @@
+// Hand-computed cases for every ray/triangle kernel: interior, edge and vertex hits, near misses,
+// triangles behind the ray, parallel rays, degenerate triangles and the t interval.
+#include "tritrace/geometry/intersect.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace tritrace {
+namespace {
+
+// The unit right triangle in the plane z = 0: v0 = (0,0,0), v1 = (1,0,0), v2 = (0,1,0), so a hit at
+// (x, y, 0) has u = x and v = y.
+const glm::vec3 kV0(0.0f), kE1(1.0f, 0.0f, 0.0f), kE2(0.0f, 1.0f, 0.0f);
+
+Ray ray_down_z(float x, float y, float z = -1.0f) {
+  Ray r;
+  r.origin = {x, y, z};
+  r.dir = {0.0f, 0.0f, 1.0f};
+  return r;
+}
+
+class KernelTest : public ::testing::TestWithParam<Kernel> {
+ protected:
+  bool hit(const Ray& ray, TriangleHit& out, glm::vec3 v0 = kV0, glm::vec3 e1 = kE1,
+           glm::vec3 e2 = kE2) const {
+    out = {-7.0f, -7.0f, -7.0f};
+    return intersect_triangle(GetParam(), ray, v0, e1, e2, out);
+  }
+};
+
+TEST_P(KernelTest, InteriorHitGivesDistanceAndBarycentrics) {
+  TriangleHit h;
+  ASSERT_TRUE(hit(ray_down_z(0.25f, 0.25f), h));
+  EXPECT_FLOAT_EQ(h.t, 1.0f);
+  EXPECT_FLOAT_EQ(h.u, 0.25f);
+  EXPECT_FLOAT_EQ(h.v, 0.25f);
+}
+
+TEST_P(KernelTest, ObliqueRayAgainstTiltedTriangle) {
+  // Triangle v0 = (1,1,1), e1 = (2,0,0), e2 = (0,2,2). The point u = 0.25, v = 0.5 is
+  // (1.5, 2, 2); the ray starts 3 units before it along the unit direction (0, 0.6, -0.8).
+  const glm::vec3 v0(1.0f), e1(2.0f, 0.0f, 0.0f), e2(0.0f, 2.0f, 2.0f);
+  Ray r;
+  r.dir = {0.0f, 0.6f, -0.8f};
+  r.origin = glm::vec3(1.5f, 2.0f, 2.0f) - 3.0f * r.dir;
+  TriangleHit h;
+  ASSERT_TRUE(hit(r, h, v0, e1, e2));
+  EXPECT_NEAR(h.t, 3.0f, 1e-5f);
+  EXPECT_NEAR(h.u, 0.25f, 1e-5f);
+  EXPECT_NEAR(h.v, 0.5f, 1e-5f);
+}
+
+TEST_P(KernelTest, EdgeHitCountsAsHit) {
+  TriangleHit h;
+  ASSERT_TRUE(hit(ray_down_z(0.5f, 0.0f), h));  // edge v0-v1: v = 0
+  EXPECT_FLOAT_EQ(h.u, 0.5f);
+  EXPECT_EQ(h.v, 0.0f);
+  ASSERT_TRUE(hit(ray_down_z(0.0f, 0.75f), h));  // edge v0-v2: u = 0
+  EXPECT_EQ(h.u, 0.0f);
+  ASSERT_TRUE(hit(ray_down_z(0.5f, 0.5f), h));  // edge v1-v2: u + v = 1
+  EXPECT_FLOAT_EQ(h.u + h.v, 1.0f);
+}
+
+TEST_P(KernelTest, VertexHitCountsAsHit) {
+  TriangleHit h;
+  ASSERT_TRUE(hit(ray_down_z(0.0f, 0.0f), h));
+  EXPECT_EQ(h.u, 0.0f);
+  EXPECT_EQ(h.v, 0.0f);
+  ASSERT_TRUE(hit(ray_down_z(1.0f, 0.0f), h));
+  EXPECT_FLOAT_EQ(h.u, 1.0f);
+  ASSERT_TRUE(hit(ray_down_z(0.0f, 1.0f), h));
+  EXPECT_FLOAT_EQ(h.v, 1.0f);
+}
+
+TEST_P(KernelTest, JustOutsideEachEdgeMisses) {
+  TriangleHit h;
+  EXPECT_FALSE(hit(ray_down_z(0.5f, -1e-4f), h));
+  EXPECT_FALSE(hit(ray_down_z(-1e-4f, 0.5f), h));
+  EXPECT_FALSE(hit(ray_down_z(0.5f, 0.5001f), h));
+  EXPECT_FALSE(hit(ray_down_z(1.0001f, 0.0f), h));
+  EXPECT_FALSE(hit(ray_down_z(2.0f, 2.0f), h));
+}
+
+TEST_P(KernelTest, TriangleBehindTheOriginMisses) {
+  TriangleHit h;
+  EXPECT_FALSE(hit(ray_down_z(0.25f, 0.25f, 1.0f), h));  // would be t = -1
+}
+
+TEST_P(KernelTest, RayParallelToThePlaneMisses) {
+  TriangleHit h;
+  Ray above = ray_down_z(-1.0f, 0.25f, -1.0f);
+  above.dir = {1.0f, 0.0f, 0.0f};
+  EXPECT_FALSE(hit(above, h));
+  Ray in_plane = ray_down_z(-1.0f, 0.25f, 0.0f);  // slides along the triangle's own plane
+  in_plane.dir = {1.0f, 0.0f, 0.0f};
+  EXPECT_FALSE(hit(in_plane, h));
+}
+
+TEST_P(KernelTest, DegenerateTriangleNeverHits) {
+  TriangleHit h;
+  const Ray r = ray_down_z(0.5f, 0.5f);
+  EXPECT_FALSE(hit(r, h, kV0, glm::vec3(1.0f, 1.0f, 0.0f), glm::vec3(2.0f, 2.0f, 0.0f)));  // line
+  EXPECT_FALSE(hit(r, h, glm::vec3(0.5f, 0.5f, 0.0f), glm::vec3(0.0f), glm::vec3(0.0f)));  // point
+  EXPECT_FALSE(hit(ray_down_z(0.0f, 0.0f), h, kV0, glm::vec3(0.0f), glm::vec3(0.0f)));
+}
+
+TEST_P(KernelTest, DistanceLimitsAreInclusive) {
+  Ray r = ray_down_z(0.25f, 0.25f);
+  TriangleHit h;
+  r.tmax = 1.0f;
+  EXPECT_TRUE(hit(r, h));
+  r.tmax = 0.999f;
+  EXPECT_FALSE(hit(r, h));
+  r.tmax = kRayTMax;
+  r.tmin = 1.0f;
+  EXPECT_TRUE(hit(r, h));
+  r.tmin = 1.001f;
+  EXPECT_FALSE(hit(r, h));
+}
+
+TEST_P(KernelTest, NonFiniteRaysMissWithoutProducingNaN) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  TriangleHit h;
+  Ray r = ray_down_z(0.25f, 0.25f);
+  r.dir = {nan, 0.0f, 1.0f};
+  EXPECT_FALSE(hit(r, h));
+  r.dir = {0.0f, 0.0f, inf};
+  EXPECT_FALSE(hit(r, h));
+  r = ray_down_z(nan, 0.25f);
+  EXPECT_FALSE(hit(r, h));
+  r = ray_down_z(0.25f, 0.25f);
+  r.dir = {0.0f, 0.0f, 0.0f};  // zero direction: parallel to everything
+  EXPECT_FALSE(hit(r, h));
+}
+
+TEST_P(KernelTest, TinyButValidTriangleIsHit) {
+  // A triangle a millionth of a unit across: the determinant is about 1e-12, far from zero in
+  // floating point, and the kernel must not treat it as degenerate.
+  const glm::vec3 e1(1e-6f, 0.0f, 0.0f), e2(0.0f, 1e-6f, 0.0f);
+  TriangleHit h;
+  ASSERT_TRUE(hit(ray_down_z(0.25e-6f, 0.25e-6f), h, kV0, e1, e2));
+  EXPECT_FLOAT_EQ(h.t, 1.0f);
+  EXPECT_NEAR(h.u, 0.25f, 1e-4f);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllKernels, KernelTest, ::testing::ValuesIn(kAllKernels),
+                         [](const auto& info) {
+                           std::string name(kernel_name(info.param));
+                           std::erase(name, '-');
+                           return name;
+                         });
+
+TEST(KernelNames, RoundTripAndRejectUnknown) {
+  for (Kernel k : kAllKernels) EXPECT_EQ(parse_kernel(kernel_name(k)), k);
+  EXPECT_EQ(parse_kernel("moller-trumbore"), Kernel::kMollerTrumbore);
+  EXPECT_FALSE(parse_kernel("Cramer").has_value());
+  EXPECT_FALSE(parse_kernel("").has_value());
+}
+
+}  // namespace
+}  // namespace tritrace
