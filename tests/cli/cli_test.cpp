@@ -454,4 +454,13 @@ TEST_F(CliTest, UnwritableOutputFolderIsARuntimeError) {
   ExpectOnlyFiles(locked, {});
 }
 
+// Root ignores permission bits, but /proc refuses new files from anyone: the write itself fails,
+// after the render, and must still leave nothing behind and exit 1.
+TEST_F(CliTest, FolderThatRefusesNewFilesIsARuntimeError) {
+  const RunResult r = Run({"render", "--width", "16", "--height", "16", "-o", "/proc/x.png"});
+  ExpectErrorLine(r, 1, "/proc/x.png", "cannot create");
+  EXPECT_FALSE(fs::exists("/proc/x.png"));
+  ExpectOnlyFiles(work_, {});
+}
+
 }  // namespace
