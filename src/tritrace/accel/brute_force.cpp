@@ -50,25 +50,11 @@ BruteForceAccel::BruteForceAccel(const TriangleMesh& mesh, Kernel kernel)
     : mesh_(mesh), kernel_(kernel) {}
 
 void BruteForceAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
-  switch (kernel_) {
-    case Kernel::kInverse:
-      return intersect_all<Kernel::kInverse>(mesh_, rays, hits);
-    case Kernel::kCramer:
-      return intersect_all<Kernel::kCramer>(mesh_, rays, hits);
-    case Kernel::kMollerTrumbore:
-      return intersect_all<Kernel::kMollerTrumbore>(mesh_, rays, hits);
-  }
+  with_kernel(kernel_, [&]<Kernel K>() { intersect_all<K>(mesh_, rays, hits); });
 }
 
 void BruteForceAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
-  switch (kernel_) {
-    case Kernel::kInverse:
-      return occluded_all<Kernel::kInverse>(mesh_, rays, occluded);
-    case Kernel::kCramer:
-      return occluded_all<Kernel::kCramer>(mesh_, rays, occluded);
-    case Kernel::kMollerTrumbore:
-      return occluded_all<Kernel::kMollerTrumbore>(mesh_, rays, occluded);
-  }
+  with_kernel(kernel_, [&]<Kernel K>() { occluded_all<K>(mesh_, rays, occluded); });
 }
 
 }  // namespace tritrace

@@ -24,15 +24,8 @@ std::optional<Kernel> parse_kernel(std::string_view name) {
 
 bool intersect_triangle(Kernel kernel, const Ray& ray, const glm::vec3& v0, const glm::vec3& e1,
                         const glm::vec3& e2, TriangleHit& out) {
-  switch (kernel) {
-    case Kernel::kInverse:
-      return intersect_triangle<Kernel::kInverse>(ray, v0, e1, e2, out);
-    case Kernel::kCramer:
-      return intersect_triangle<Kernel::kCramer>(ray, v0, e1, e2, out);
-    case Kernel::kMollerTrumbore:
-      return intersect_triangle<Kernel::kMollerTrumbore>(ray, v0, e1, e2, out);
-  }
-  return false;
+  return with_kernel(kernel,
+                     [&]<Kernel K>() { return intersect_triangle<K>(ray, v0, e1, e2, out); });
 }
 
 }  // namespace tritrace

@@ -99,6 +99,22 @@ inline bool intersect_triangle(const Ray& ray, const glm::vec3& v0, const glm::v
   }
 }
 
+// Calls fn.template operator()<K>() with the compile-time kernel matching `kernel`, so that a loop
+// over triangles is instantiated once per kernel and the kernel inlines into it. Adding a kernel
+// means adding one case here.
+template <typename Fn>
+decltype(auto) with_kernel(Kernel kernel, Fn&& fn) {
+  switch (kernel) {
+    case Kernel::kInverse:
+      return fn.template operator()<Kernel::kInverse>();
+    case Kernel::kCramer:
+      return fn.template operator()<Kernel::kCramer>();
+    case Kernel::kMollerTrumbore:
+      break;
+  }
+  return fn.template operator()<Kernel::kMollerTrumbore>();
+}
+
 // Runtime dispatch for tests and tools; hot loops use the template above.
 bool intersect_triangle(Kernel kernel, const Ray& ray, const glm::vec3& v0, const glm::vec3& e1,
                         const glm::vec3& e2, TriangleHit& out);
