@@ -72,8 +72,8 @@ void BM_LabFrame(benchmark::State& state) {
   }
   state.SetLabel(std::string(kernel_name(kernel)) + " " + std::to_string(side) + "x" +
                  std::to_string(side) + (options.threads ? " 1 thread" : " all cores"));
-  state.counters["Mrays/s"] = benchmark::Counter(static_cast<double>(rays) / 1e6,
-                                                 benchmark::Counter::kIsRate);
+  state.counters["Mrays/s"] =
+      benchmark::Counter(static_cast<double>(rays) / 1e6, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_LabFrame)
     ->ArgNames({"kernel", "side", "threads"})

@@ -4,13 +4,13 @@
 #include <cstdio>
 
 #include "flag_values.h"
-#include "tritrace/accel/brute_force.h"
+#include "tritrace/accel/make_accel.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/image/image_io.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/renderer.h"
-#include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/procedural.h"
 
 namespace tritrace::cli {
 namespace {
@@ -20,6 +20,15 @@ constexpr long long kMaxThreads = 1024;
 
 CLI::Validator validator(std::string description, std::function<std::string(std::string&)> fn) {
   return CLI::Validator(std::move(fn), std::move(description), "");
+}
+
+std::string accel_list() {
+  std::string names;
+  for (AccelKind k : available_accels()) {
+    if (!names.empty()) names += "|";
+    names += accel_name(k);
+  }
+  return names;
 }
 
 std::string kernel_list() {
@@ -35,7 +44,7 @@ std::string kernel_list() {
 
 CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
   CLI::App* sub = app.add_subcommand(
-      "render", "Render the built-in Cornell box with the lab's camera, light and shading");
+      "render", "Render a built-in scene with the lab's camera, light and shading");
   sub->add_option("-o,--output", args.output, "Output image: .png, .ppm (8-bit) or .pfm (float)")
       ->type_name("PATH")
       ->capture_default_str();
@@ -49,6 +58,26 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
       ->type_name("H")
       ->capture_default_str()
       ->check(side);
+  sub->add_option("--scene", args.scene,
+                  std::string("Built-in scene: ") + std::string(kBuiltinSceneHelp))
+      ->type_name("NAME")
+      ->capture_default_str()
+      ->check(validator("", [](std::string& s) {
+        return s == "cornell" || parse_terrain_triangles(s)
+                   ? std::string()
+                   : "unknown scene '" + s + "' (use " + std::string(kBuiltinSceneHelp) + ")";
+      }));
+  sub->add_option("--accel", args.accel,
+                  "Acceleration structure: " + accel_list() +
+                      " (brute is the lab's loop over all triangles)")
+      ->type_name("NAME")
+      ->capture_default_str()
+      ->check(validator("", [](std::string& s) {
+        const std::optional<AccelKind> kind = parse_accel(s);
+        if (kind && accel_available(*kind)) return std::string();
+        if (kind) return "'" + s + "' is not built in (this build has " + accel_list() + ")";
+        return "unknown acceleration structure '" + s + "' (use " + accel_list() + ")";
+      }));
   sub->add_option("--kernel", args.kernel,
                   "Ray/triangle intersection: " + kernel_list() + " (default " +
                       std::string(kernel_name(kDefaultKernel)) + ", the fastest)")
@@ -91,11 +120,11 @@ int run_render(const RenderArgs& args) {
   if (!args.threads.empty())
     render_options.threads = static_cast<int>(*parse_integer(args.threads));
 
-  const Scene scene = make_cornell_box(scene_options);
-  const BruteForceAccel accel(scene.mesh, kernel);
+  const Scene scene = make_builtin_scene(args.scene, scene_options);
+  const std::unique_ptr<Accel> accel = make_accel(*parse_accel(args.accel), scene.mesh, kernel);
   const LabIntegrator integrator;
   RenderStats stats;
-  const Image image = render(scene, accel, integrator, render_options, &stats);
+  const Image image = render(scene, *accel, integrator, render_options, &stats);
   write_image(image, args.output);
 
   if (!args.quiet) {

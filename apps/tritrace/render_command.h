@@ -1,4 +1,4 @@
-// `tritrace render`: renders the built-in Cornell box with the lab integrator to an image file.
+// `tritrace render`: renders a built-in scene with the lab integrator to an image file.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -10,6 +10,8 @@ struct RenderArgs {
   std::string output = "cornell.png";
   std::string width = "500";
   std::string height = "500";
+  std::string scene = "cornell";
+  std::string accel = "bvh";
   std::string kernel;  // empty: the default kernel
   std::string yaw = "0";
   std::string light;    // empty: the lab's light position

@@ -18,21 +18,27 @@ void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& 
   material_.push_back(material);
 }
 
+void TriangleMesh::reserve(size_t triangles) {
+  for (auto* v : {&v0_, &e1_, &e2_, &normal_}) v->reserve(triangles);
+  material_.reserve(triangles);
+}
+
 glm::vec3 TriangleMesh::vertex(size_t tri, int corner) const {
   if (corner == 1) return v0_[tri] + e1_[tri];
   if (corner == 2) return v0_[tri] + e2_[tri];
   return v0_[tri];
 }
 
+Bounds3 TriangleMesh::triangle_bounds(size_t tri) const {
+  Bounds3 b = Bounds3::empty();
+  for (int c = 0; c < 3; ++c) b.extend(vertex(tri, c));
+  return b;
+}
+
 Bounds3 TriangleMesh::bounds() const {
   if (empty()) return {};
-  Bounds3 b{v0_[0], v0_[0]};
-  for (size_t i = 0; i < size(); ++i) {
-    for (int c = 0; c < 3; ++c) {
-      b.lo = glm::min(b.lo, vertex(i, c));
-      b.hi = glm::max(b.hi, vertex(i, c));
-    }
-  }
+  Bounds3 b = Bounds3::empty();
+  for (size_t i = 0; i < size(); ++i) b.extend(triangle_bounds(i));
   return b;
 }
 

@@ -6,12 +6,9 @@
 #include <glm/vec3.hpp>
 #include <vector>
 
-namespace tritrace {
+#include "tritrace/math/bounds.h"
 
-struct Bounds3 {
-  glm::vec3 lo{0.0f};
-  glm::vec3 hi{0.0f};
-};
+namespace tritrace {
 
 class TriangleMesh {
  public:
@@ -19,6 +16,7 @@ class TriangleMesh {
   // zero normal (it can never be hit).
   void add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, uint32_t material);
 
+  void reserve(size_t triangles);
   size_t size() const { return v0_.size(); }
   bool empty() const { return v0_.empty(); }
 
@@ -29,7 +27,8 @@ class TriangleMesh {
   const std::vector<uint32_t>& material() const { return material_; }
 
   glm::vec3 vertex(size_t tri, int corner) const;  // corner 0, 1 or 2
-  Bounds3 bounds() const;
+  Bounds3 bounds() const;                          // of the whole mesh; all zero when empty
+  Bounds3 triangle_bounds(size_t tri) const;
 
  private:
   std::vector<glm::vec3> v0_, e1_, e2_, normal_;

@@ -1,0 +1,226 @@
+// Binned SAH construction. Each task splits one node's range of the primitive permutation: it bins
+// centroids along all three axes, sweeps the bins for the cheapest plane, partitions in place and
+// recurses, spawning a task for large halves. Nodes go into a concurrent vector; a node's index is
+// reserved before its children are built, so the tree needs no fix-up pass.
+#include "tritrace/accel/bvh/binned_sah_builder.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/concurrent_vector.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/task_group.h>
+
+#include <algorithm>
+#include <array>
+#include <numeric>
+
+namespace tritrace::bvh {
+namespace {
+
+constexpr int kMaxBins = 32;
+// Below this depth splits halve the range instead, which bounds the tree's depth (and so the
+// traversal stack) by kMaxSahDepth + log2(n) whatever the input.
+constexpr uint32_t kMaxSahDepth = 64;
+
+struct Bin {
+  Bounds3 bounds = Bounds3::empty();
+  uint32_t count = 0;
+};
+
+struct BinSet {
+  std::array<std::array<Bin, kMaxBins>, 3> axis;
+  Bounds3 bounds = Bounds3::empty();  // of the primitives, not only their centroids
+};
+
+class Builder {
+ public:
+  Builder(std::span<const Bounds3> prim_bounds, const BuildConfig& config)
+      : bounds_(prim_bounds), config_(config) {
+    config_.bins = std::clamp(config_.bins, 2, kMaxBins);
+    centroids_.resize(prim_bounds.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, prim_bounds.size()), [&](const auto& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) centroids_[i] = prim_bounds[i].centre();
+    });
+  }
+
+  BinaryBvh build() {
+    BinaryBvh out;
+    const uint32_t n = static_cast<uint32_t>(bounds_.size());
+    if (n == 0) return out;
+    prims_.resize(n);
+    std::iota(prims_.begin(), prims_.end(), 0u);
+    nodes_.reserve(2 * (n / std::max(1u, config_.max_leaf_size / 2)) + 1);
+    const uint32_t root = static_cast<uint32_t>(nodes_.grow_by(1) - nodes_.begin());
+    tbb::task_group group;
+    build_node(root, 0, n, 0, group);
+    group.wait();
+    out.nodes.assign(nodes_.begin(), nodes_.end());
+    out.prim_index = std::move(prims_);
+    return out;
+  }
+
+ private:
+  float leaf_cost(uint32_t count) const {
+    return config_.block_cost *
+           static_cast<float>((count + config_.block_size - 1) / config_.block_size);
+  }
+
+  // Centroid bounds and primitive bounds of a range.
+  std::pair<Bounds3, Bounds3> range_bounds(uint32_t begin, uint32_t end) const {
+    using Pair = std::pair<Bounds3, Bounds3>;
+    auto body = [&](const tbb::blocked_range<uint32_t>& r, Pair acc) {
+      for (uint32_t i = r.begin(); i != r.end(); ++i) {
+        acc.first.extend(centroids_[prims_[i]]);
+        acc.second.extend(bounds_[prims_[i]]);
+      }
+      return acc;
+    };
+    const Pair init{Bounds3::empty(), Bounds3::empty()};
+    if (end - begin < config_.parallel_threshold) {
+      return body(tbb::blocked_range<uint32_t>(begin, end), init);
+    }
+    return tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, 4096), init, body,
+                                [](Pair a, const Pair& b) {
+                                  a.first.extend(b.first);
+                                  a.second.extend(b.second);
+                                  return a;
+                                });
+  }
+
+  int bin_of(float c, float lo, float scale) const {
+    const int b = static_cast<int>((c - lo) * scale);
+    return std::clamp(b, 0, config_.bins - 1);
+  }
+
+  BinSet bin_range(uint32_t begin, uint32_t end, const Bounds3& cb) const {
+    glm::vec3 scale;
+    for (int a = 0; a < 3; ++a) {
+      const float extent = cb.hi[a] - cb.lo[a];
+      scale[a] = extent > 0.0f ? static_cast<float>(config_.bins) / extent : 0.0f;
+    }
+    auto body = [&](const tbb::blocked_range<uint32_t>& r, BinSet acc) {
+      for (uint32_t i = r.begin(); i != r.end(); ++i) {
+        const uint32_t p = prims_[i];
+        for (int a = 0; a < 3; ++a) {
+          Bin& bin = acc.axis[a][bin_of(centroids_[p][a], cb.lo[a], scale[a])];
+          bin.bounds.extend(bounds_[p]);
+          ++bin.count;
+        }
+      }
+      return acc;
+    };
+    if (end - begin < config_.parallel_threshold) {
+      return body(tbb::blocked_range<uint32_t>(begin, end), BinSet{});
+    }
+    return tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, 4096), BinSet{}, body,
+                                [&](BinSet a, const BinSet& b) {
+                                  for (int ax = 0; ax < 3; ++ax) {
+                                    for (int i = 0; i < config_.bins; ++i) {
+                                      a.axis[ax][i].bounds.extend(b.axis[ax][i].bounds);
+                                      a.axis[ax][i].count += b.axis[ax][i].count;
+                                    }
+                                  }
+                                  return a;
+                                });
+  }
+
+  void build_node(uint32_t index, uint32_t begin, uint32_t end, uint32_t depth,
+                  tbb::task_group& group) {
+    const uint32_t count = end - begin;
+    const auto [cb, bounds] = range_bounds(begin, end);
+
+    auto make_leaf = [&] {
+      BinaryNode& node = nodes_[index];
+      node.bounds = bounds;
+      node.first = begin;
+      node.count = count;
+    };
+
+    // Find the cheapest binned split over the three axes.
+    float best_cost = std::numeric_limits<float>::infinity();
+    int best_axis = -1, best_split = 0;
+    const float parent_area = bounds.area();
+    if (count > 1) {
+      const BinSet bins = bin_range(begin, end, cb);
+      for (int a = 0; a < 3; ++a) {
+        if (!(cb.hi[a] > cb.lo[a])) continue;
+        std::array<float, kMaxBins> right_cost{};
+        Bounds3 acc = Bounds3::empty();
+        uint32_t n = 0;
+        for (int i = config_.bins - 1; i > 0; --i) {
+          acc.extend(bins.axis[a][i].bounds);
+          n += bins.axis[a][i].count;
+          right_cost[i] = n > 0 ? acc.area() * leaf_cost(n) : 0.0f;
+        }
+        acc = Bounds3::empty();
+        n = 0;
+        for (int i = 0; i < config_.bins - 1; ++i) {
+          acc.extend(bins.axis[a][i].bounds);
+          n += bins.axis[a][i].count;
+          if (n == 0 || n == count) continue;
+          const float cost = acc.area() * leaf_cost(n) + right_cost[i + 1];
+          if (cost < best_cost) {
+            best_cost = cost;
+            best_axis = a;
+            best_split = i + 1;
+          }
+        }
+      }
+    }
+
+    if (count <= config_.max_leaf_size) {
+      const float split_cost =
+          config_.traversal_cost + (parent_area > 0.0f ? best_cost / parent_area : 0.0f);
+      if (best_axis < 0 || leaf_cost(count) <= split_cost) return make_leaf();
+    }
+
+    uint32_t mid;
+    if (best_axis >= 0 && depth < kMaxSahDepth) {
+      const int a = best_axis;
+      const float extent = cb.hi[a] - cb.lo[a];
+      const float scale = static_cast<float>(config_.bins) / extent;
+      const float lo = cb.lo[a];
+      const auto it = std::partition(prims_.begin() + begin, prims_.begin() + end, [&](uint32_t p) {
+        return bin_of(centroids_[p][a], lo, scale) < best_split;
+      });
+      mid = static_cast<uint32_t>(it - prims_.begin());
+    } else {
+      // All centroids coincide (or the tree is too deep): split the range in half.
+      mid = begin + count / 2;
+    }
+    if (mid == begin || mid == end) mid = begin + count / 2;
+
+    const auto children = nodes_.grow_by(2);
+    const uint32_t left = static_cast<uint32_t>(children - nodes_.begin());
+    {
+      BinaryNode& node = nodes_[index];
+      node.bounds = bounds;
+      node.count = 0;
+      node.first = left;
+      node.right = left + 1;
+    }
+    if (count >= config_.parallel_threshold) {
+      group.run([this, left, begin, mid, depth, &group] {
+        build_node(left, begin, mid, depth + 1, group);
+      });
+      build_node(left + 1, mid, end, depth + 1, group);
+    } else {
+      build_node(left, begin, mid, depth + 1, group);
+      build_node(left + 1, mid, end, depth + 1, group);
+    }
+  }
+
+  std::span<const Bounds3> bounds_;
+  BuildConfig config_;
+  std::vector<glm::vec3> centroids_;
+  std::vector<uint32_t> prims_;
+  tbb::concurrent_vector<BinaryNode> nodes_;
+};
+
+}  // namespace
+
+BinaryBvh build_binned_sah(std::span<const Bounds3> prim_bounds, const BuildConfig& config) {
+  return Builder(prim_bounds, config).build();
+}
+
+}  // namespace tritrace::bvh

@@ -1,0 +1,44 @@
+// A binary BVH built top-down with the binned surface area heuristic of Wald, "On fast
+// Construction of SAH-based Bounding Volume Hierarchies" (IEEE RT 2007), in parallel with TBB. It
+// is the reference tree from which the wide, SIMD-friendly layout is made (wide_bvh.h).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "tritrace/math/bounds.h"
+
+namespace tritrace::bvh {
+
+struct BuildConfig {
+  int bins = 16;
+  // Leaves hold at most this many primitives (one SIMD block of triangles).
+  uint32_t max_leaf_size = 8;
+  // The SAH prices a leaf per started block of `block_size` primitives, since a SIMD block costs
+  // the same whether it holds one triangle or eight.
+  uint32_t block_size = 8;
+  float traversal_cost = 1.0f;  // one node visit
+  float block_cost = 1.2f;      // one block of triangle tests, relative to a node visit
+  // Ranges at least this large are binned with a parallel reduction and split in parallel tasks.
+  uint32_t parallel_threshold = 1u << 14;
+};
+
+struct BinaryNode {
+  Bounds3 bounds;
+  uint32_t count = 0;  // > 0: leaf of prim_index[first, first + count)
+  uint32_t first = 0;  // leaf: first index; inner: index of the left child
+  uint32_t right = 0;  // inner: index of the right child
+  bool is_leaf() const { return count > 0; }
+};
+
+struct BinaryBvh {
+  std::vector<BinaryNode> nodes;     // nodes[0] is the root; empty for no primitives
+  std::vector<uint32_t> prim_index;  // leaves index into this permutation of the primitives
+};
+
+// Builds over the primitives' bounding boxes. Boxes must be non-empty and finite.
+[[nodiscard]] BinaryBvh build_binned_sah(std::span<const Bounds3> prim_bounds,
+                                         const BuildConfig& config = {});
+
+}  // namespace tritrace::bvh

@@ -1,0 +1,93 @@
+// The backend registry.
+#include "tritrace/accel/make_accel.h"
+
+#include <chrono>
+#include <string>
+
+#include "tritrace/accel/brute_force.h"
+#include "tritrace/accel/bvh/bvh_accel.h"
+#include "tritrace/error.h"
+#if TRITRACE_HAVE_EMBREE
+#include "tritrace/accel/embree_accel.h"
+#endif
+
+namespace tritrace {
+namespace {
+constexpr AccelKind kAll[] = {AccelKind::kBvh, AccelKind::kBrute, AccelKind::kEmbree,
+                              AccelKind::kEmbreeSingle};
+}
+
+std::string_view accel_name(AccelKind kind) {
+  switch (kind) {
+    case AccelKind::kBvh:
+      return "bvh";
+    case AccelKind::kBrute:
+      return "brute";
+    case AccelKind::kEmbree:
+      return "embree";
+    case AccelKind::kEmbreeSingle:
+      return "embree-single";
+  }
+  return "unknown";
+}
+
+std::optional<AccelKind> parse_accel(std::string_view name) {
+  for (AccelKind k : kAll) {
+    if (accel_name(k) == name) return k;
+  }
+  return std::nullopt;
+}
+
+bool accel_available(AccelKind kind) {
+  const bool embree = kind == AccelKind::kEmbree || kind == AccelKind::kEmbreeSingle;
+  return !embree || TRITRACE_HAVE_EMBREE;
+}
+
+std::vector<AccelKind> available_accels() {
+  std::vector<AccelKind> out;
+  for (AccelKind k : kAll) {
+    if (accel_available(k)) out.push_back(k);
+  }
+  return out;
+}
+
+std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kernel kernel,
+                                  AccelInfo* info) {
+  const auto start = std::chrono::steady_clock::now();
+  std::unique_ptr<Accel> accel;
+  AccelInfo local;
+  switch (kind) {
+    case AccelKind::kBrute:
+      accel = std::make_unique<BruteForceAccel>(mesh, kernel);
+      break;
+    case AccelKind::kBvh: {
+      auto bvh = std::make_unique<BvhAccel>(mesh, kernel);
+      local.structure_bytes = bvh->tree().node_bytes();
+      local.triangle_copy_bytes = bvh->tree().block_bytes();
+      accel = std::move(bvh);
+      break;
+    }
+    case AccelKind::kEmbree:
+    case AccelKind::kEmbreeSingle: {
+#if TRITRACE_HAVE_EMBREE
+      const EmbreeMode mode = kind == AccelKind::kEmbreeSingle ? EmbreeMode::kSingle
+                              : EmbreeAccel::native_packet16() ? EmbreeMode::kPacket16
+                                                               : EmbreeMode::kPacket8;
+      auto embree = std::make_unique<EmbreeAccel>(mesh, mode);
+      local.structure_bytes = embree->structure_bytes();
+      accel = std::move(embree);
+      break;
+#else
+      throw Error("--accel", std::string(accel_name(kind)) +
+                                 ": this build has no Embree (install libembree-dev and "
+                                 "rebuild with TRITRACE_WITH_EMBREE=ON)");
+#endif
+    }
+  }
+  local.build_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (info) *info = local;
+  return accel;
+}
+
+}  // namespace tritrace

@@ -1,0 +1,36 @@
+// Choosing an acceleration structure by name: the one place that knows every backend, so front
+// ends and benchmarks treat them alike.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "tritrace/accel/accel.h"
+#include "tritrace/geometry/intersect.h"
+#include "tritrace/geometry/triangle_mesh.h"
+
+namespace tritrace {
+
+// kEmbree traces with Embree's fastest mode for coherent batches (packets); kEmbreeSingle with
+// rtcIntersect1, for the comparison.
+enum class AccelKind { kBvh, kBrute, kEmbree, kEmbreeSingle };
+
+std::string_view accel_name(AccelKind kind);  // "bvh", "brute", "embree", "embree-single"
+std::optional<AccelKind> parse_accel(std::string_view name);
+bool accel_available(AccelKind kind);  // Embree only when built with it
+std::vector<AccelKind> available_accels();
+
+struct AccelInfo {
+  double build_ms = 0.0;
+  size_t structure_bytes = 0;      // the structure itself, beyond the scene's triangle data
+  size_t triangle_copy_bytes = 0;  // triangles the structure keeps in its own layout
+};
+
+// Builds the structure over `mesh` (which must outlive it). The kernel applies to brute and bvh;
+// Embree uses its own. Throws Error(name, reason) when the backend is not built in.
+std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kernel kernel,
+                                  AccelInfo* info = nullptr);
+
+}  // namespace tritrace

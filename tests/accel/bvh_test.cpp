@@ -1,0 +1,239 @@
+// BvhAccel against the brute-force oracle (the same closest hit, bit for bit, with the same kernel,
+// and the same occlusion) on many kinds of rays, and the tree's structural invariants.
+#include "tritrace/accel/bvh/bvh_accel.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <random>
+#include <set>
+#include <vector>
+
+#include "tritrace/accel/brute_force.h"
+#include "tritrace/render/lab_integrator.h"
+#include "tritrace/render/renderer.h"
+#include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/procedural.h"
+
+namespace tritrace {
+namespace {
+
+using bvh::kLeafBit;
+using bvh::WideBvh;
+
+TriangleMesh random_soup(int n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-1.0f, 1.0f), size(0.01f, 0.3f);
+  TriangleMesh m;
+  for (int i = 0; i < n; ++i) {
+    const glm::vec3 c(pos(rng), pos(rng), pos(rng));
+    const float s = size(rng);
+    m.add(c, c + s * glm::vec3(pos(rng), pos(rng), pos(rng)),
+          c + s * glm::vec3(pos(rng), pos(rng), pos(rng)), 0);
+  }
+  return m;
+}
+
+// Rays of every awkward kind: from outside and inside, aimed at vertices and edges, parallel to the
+// axes, with zero direction components, and grazing along a coordinate plane.
+std::vector<Ray> awkward_rays(const TriangleMesh& mesh, int n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-1.5f, 1.5f), unit(0.0f, 1.0f);
+  std::uniform_int_distribution<size_t> tri(0, mesh.size() - 1);
+  std::vector<Ray> rays;
+  for (int i = 0; i < n; ++i) {
+    Ray r;
+    r.origin = glm::vec3(pos(rng), pos(rng), pos(rng)) * (i % 3 == 0 ? 4.0f : 1.0f);
+    const size_t t = tri(rng);
+    glm::vec3 target;
+    switch (i % 6) {
+      case 0:  // a vertex
+        target = mesh.vertex(t, static_cast<int>(i % 3));
+        break;
+      case 1: {  // a point on an edge
+        const float a = unit(rng);
+        target = mesh.v0()[t] + a * mesh.e1()[t];
+        break;
+      }
+      default: {  // inside (or near) the triangle
+        const float a = unit(rng), b = unit(rng) * (1.0f - a);
+        target = mesh.v0()[t] + a * mesh.e1()[t] + b * mesh.e2()[t];
+      }
+    }
+    r.dir = target - r.origin;
+    if (i % 7 == 0) r.dir[i % 3] = 0.0f;  // a zero component
+    if (i % 11 == 0) {                    // parallel to an axis
+      r.dir = glm::vec3(0.0f);
+      r.dir[i % 3] = (i % 2) ? 1.0f : -1.0f;
+    }
+    if (i % 13 == 0) r.origin.y = target.y, r.dir.y = 0.0f;  // grazing a horizontal plane
+    if (glm::dot(r.dir, r.dir) == 0.0f) r.dir = {0.0f, 0.0f, 1.0f};
+    r.dir = glm::normalize(r.dir);
+    if (i % 5 == 0) r.tmax = unit(rng) * 3.0f;  // a bounded segment, like a shadow ray
+    rays.push_back(r);
+  }
+  return rays;
+}
+
+void expect_same_as_brute(const TriangleMesh& mesh, Kernel kernel, int rays_count, uint32_t seed) {
+  const BruteForceAccel brute(mesh, kernel);
+  const BvhAccel accel(mesh, kernel);
+  const std::vector<Ray> rays = awkward_rays(mesh, rays_count, seed);
+  std::vector<Hit> want(rays.size()), got(rays.size());
+  std::vector<uint8_t> want_occ(rays.size()), got_occ(rays.size());
+  brute.intersect(rays, want);
+  accel.intersect(rays, got);
+  brute.occluded(rays, want_occ);
+  accel.occluded(rays, got_occ);
+  int mismatches = 0, hits = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    hits += want[i].found();
+    const bool same = want[i].prim == got[i].prim && want[i].t == got[i].t &&
+                      want[i].u == got[i].u && want[i].v == got[i].v && want_occ[i] == got_occ[i];
+    if (!same && ++mismatches <= 5) {
+      ADD_FAILURE() << kernel_name(kernel) << " ray " << i << ": brute prim " << want[i].prim
+                    << " t " << want[i].t << " occ " << int(want_occ[i]) << ", bvh prim "
+                    << got[i].prim << " t " << got[i].t << " occ " << int(got_occ[i]);
+    }
+  }
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_GT(hits, rays_count / 5) << "too few hits for the comparison to mean much";
+}
+
+class BvhVsBrute : public ::testing::TestWithParam<Kernel> {};
+
+TEST_P(BvhVsBrute, CornellBoxSameHitsBitForBit) {
+  expect_same_as_brute(make_cornell_box().mesh, GetParam(), 20000, 1);
+}
+
+TEST_P(BvhVsBrute, TerrainSameHitsBitForBit) {
+  expect_same_as_brute(make_terrain_scene(20000).mesh, GetParam(), 4000, 2);
+}
+
+TEST_P(BvhVsBrute, RandomSoupSameHitsBitForBit) {
+  expect_same_as_brute(random_soup(3000, 3), GetParam(), 4000, 4);
+}
+
+TEST_P(BvhVsBrute, CornellImageIsIdentical) {
+  const Scene scene = make_cornell_box({.width = 200, .height = 200, .yaw = 0.4});
+  const BruteForceAccel brute(scene.mesh, GetParam());
+  const BvhAccel accel(scene.mesh, GetParam());
+  const Image a = render(scene, brute, LabIntegrator{}, {});
+  const Image b = render(scene, accel, LabIntegrator{}, {});
+  EXPECT_EQ(
+      std::memcmp(a.pixels().data(), b.pixels().data(), a.pixels().size() * sizeof(glm::vec3)), 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllKernels, BvhVsBrute, ::testing::ValuesIn(kAllKernels),
+                         [](const auto& info) {
+                           std::string name(kernel_name(info.param));
+                           std::erase(name, '-');
+                           return name;
+                         });
+
+// Walks the tree: every triangle in exactly one leaf lane, leaves within the size limit, every
+// child's box inside its parent's slot box.
+void check_invariants(const TriangleMesh& mesh) {
+  const WideBvh tree = bvh::build_wide_bvh(mesh);
+  ASSERT_EQ(tree.triangles, mesh.size());
+  if (mesh.empty()) {
+    EXPECT_TRUE(tree.nodes.empty());
+    return;
+  }
+  std::vector<int> seen(mesh.size(), 0);
+  struct Item {
+    uint32_t ref;
+    Bounds3 box;
+  };
+  std::vector<Item> todo{{0, Bounds3{glm::vec3(-1e30f), glm::vec3(1e30f)}}};
+  size_t nodes_visited = 0;
+  while (!todo.empty()) {
+    const Item item = todo.back();
+    todo.pop_back();
+    if (item.ref & kLeafBit) {
+      const bvh::TriangleBlock& b = tree.blocks[item.ref & ~kLeafBit];
+      for (int l = 0; l < bvh::kWidth; ++l) {
+        if (b.prim[l] == kNoHit) continue;
+        ASSERT_LT(b.prim[l], mesh.size());
+        ++seen[b.prim[l]];
+        // The triangle lies inside its leaf's box.
+        for (int c = 0; c < 3; ++c) {
+          const glm::vec3 p = mesh.vertex(b.prim[l], c);
+          EXPECT_TRUE(item.box.contains(Bounds3{p, p}));
+        }
+      }
+      continue;
+    }
+    ASSERT_LT(item.ref, tree.nodes.size());
+    ++nodes_visited;
+    const bvh::WideNode& n = tree.nodes[item.ref];
+    int used = 0;
+    for (int i = 0; i < bvh::kWidth; ++i) {
+      if (n.child[i] == bvh::kEmptyChild) continue;
+      ++used;
+      const Bounds3 box{{n.lo_x[i], n.lo_y[i], n.lo_z[i]}, {n.hi_x[i], n.hi_y[i], n.hi_z[i]}};
+      EXPECT_TRUE(item.box.contains(box)) << "child box outside its parent";
+      todo.push_back({n.child[i], box});
+    }
+    EXPECT_GE(used, 1);
+  }
+  EXPECT_EQ(nodes_visited, tree.nodes.size()) << "unreachable nodes";
+  for (size_t i = 0; i < mesh.size(); ++i) EXPECT_EQ(seen[i], 1) << "triangle " << i;
+}
+
+TEST(BvhInvariants, CornellBox) {
+  check_invariants(make_cornell_box().mesh);
+}
+TEST(BvhInvariants, Terrain) {
+  check_invariants(make_terrain_scene(50000).mesh);
+}
+TEST(BvhInvariants, RandomSoup) {
+  check_invariants(random_soup(5000, 9));
+}
+TEST(BvhInvariants, EmptyMesh) {
+  check_invariants(TriangleMesh{});
+}
+
+TEST(BvhInvariants, ManyIdenticalTrianglesStayShallowEnough) {
+  TriangleMesh m;  // no plane separates identical centroids: the builder must still terminate
+  for (int i = 0; i < 5000; ++i) m.add({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0);
+  check_invariants(m);
+  const BvhAccel accel(m, kDefaultKernel);
+  Ray r;
+  r.origin = {0.2f, 0.2f, -1.0f};
+  EXPECT_EQ(accel.intersect(r).prim, 0u);  // the tie goes to the first triangle
+}
+
+TEST(BvhAccel, EmptyAndSingleTriangleScenes) {
+  const TriangleMesh empty;
+  const BvhAccel none(empty, kDefaultKernel);
+  Ray r;
+  r.origin = {0.25f, 0.25f, -1.0f};
+  EXPECT_FALSE(none.intersect(r).found());
+  EXPECT_FALSE(none.occluded(r));
+
+  TriangleMesh one;
+  one.add({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0);
+  const BvhAccel single(one, kDefaultKernel);
+  const Hit h = single.intersect(r);
+  ASSERT_TRUE(h.found());
+  EXPECT_FLOAT_EQ(h.t, 1.0f);
+  EXPECT_TRUE(single.occluded(r));
+  r.origin = {0.75f, 0.75f, -1.0f};
+  EXPECT_FALSE(single.intersect(r).found());
+}
+
+TEST(BvhAccel, NonFiniteRaysHitNothing) {
+  const Scene scene = make_cornell_box();
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  Ray r;
+  r.dir = {std::numeric_limits<float>::quiet_NaN(), 0.0f, 1.0f};
+  EXPECT_FALSE(accel.intersect(r).found());
+  EXPECT_FALSE(accel.occluded(r));
+  r.dir = {0.0f, 0.0f, 1.0f};
+  r.origin = {std::numeric_limits<float>::infinity(), 0.0f, 0.0f};
+  EXPECT_FALSE(accel.intersect(r).found());
+}
+
+}  // namespace
+}  // namespace tritrace
