@@ -5,6 +5,7 @@
 #include <exception>
 #include <string>
 
+#include "bench_command.h"
 #include "render_command.h"
 #include "tritrace/error.h"
 
@@ -23,9 +24,10 @@ std::string usage_message(const CLI::ParseError& e, int argc, char** argv) {
   }
   if (dynamic_cast<const CLI::RequiredError*>(&e) && msg.find("subcommand") != std::string::npos) {
     if (argc > 1 && argv[1][0] != '-') {
-      return std::string(argv[1]) + ": unknown command (use 'tritrace render'; see --help)";
+      return std::string(argv[1]) +
+             ": unknown command (use 'tritrace render' or 'tritrace bench'; see --help)";
     }
-    return "missing command: use 'tritrace render' (see --help)";
+    return "missing command: use 'tritrace render' or 'tritrace bench' (see --help)";
   }
   for (char& c : msg) {
     if (c == '\n') c = ' ';
@@ -40,6 +42,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   tritrace::cli::RenderArgs render_args;
   CLI::App* render = tritrace::cli::add_render_command(app, render_args);
+  tritrace::cli::BenchArgs bench_args;
+  CLI::App* bench = tritrace::cli::add_bench_command(app, bench_args);
 
   try {
     app.parse(argc, argv);
@@ -54,6 +58,7 @@ int main(int argc, char** argv) {
 
   try {
     if (render->parsed()) return tritrace::cli::run_render(render_args);
+    if (bench->parsed()) return tritrace::cli::run_bench(bench_args);
   } catch (const tritrace::Error& e) {
     std::fprintf(stderr, "tritrace: %s\n", e.what());
     return static_cast<int>(e.exit_code());

@@ -2,9 +2,12 @@
 // and check its exit code, stdout, stderr and the files it leaves behind.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <nlohmann/json.hpp>
+#include <set>
 
 #include <algorithm>
 #include <cerrno>
@@ -398,6 +401,9 @@ INSTANTIATE_TEST_SUITE_P(
         ErrorCase{"ThreadsNotANumber", {"--threads", "many"}, 2, "--threads", kThreadRange},
         ErrorCase{"UnknownKernel", {"--kernel", "foo"}, 2, "--kernel", "unknown kernel 'foo'"},
         ErrorCase{"KernelMissingValue", {"--kernel"}, 2, "--kernel", "missing value"},
+        ErrorCase{"UnknownScene", {"--scene", "teapot"}, 2, "--scene", "unknown scene 'teapot'"},
+        ErrorCase{"TerrainWithoutCount", {"--scene", "terrain:"}, 2, "--scene", "unknown scene"},
+        ErrorCase{"UnknownAccel", {"--accel", "kdtree"}, 2, "--accel", "unknown acceleration"},
         ErrorCase{"LightTwoNumbers", {"--light", "1,2"}, 2, "--light", kVec3},
         ErrorCase{"LightNaN", {"--light", "1,nan,2"}, 2, "--light", kVec3},
         ErrorCase{"LightFourNumbers", {"--light", "1,2,3,4"}, 2, "--light", kVec3},
@@ -460,6 +466,65 @@ TEST_F(CliTest, FolderThatRefusesNewFilesIsARuntimeError) {
   const RunResult r = Run({"render", "--width", "16", "--height", "16", "-o", "/proc/x.png"});
   ExpectErrorLine(r, 1, "/proc/x.png", "cannot create");
   EXPECT_FALSE(fs::exists("/proc/x.png"));
+  ExpectOnlyFiles(work_, {});
+}
+
+// tritrace bench: the records a script reads, for every scene and accel asked for.
+TEST_F(CliTest, BenchWritesATableAndJsonRecords) {
+  const RunResult r = Run({"bench", "--scene", "cornell", "--scene", "terrain:2k", "--width", "64",
+                           "--height", "36", "--reps", "2", "--json", "b.json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.find("cornell"), std::string::npos);
+  EXPECT_NE(r.out.find("terrain:2k"), std::string::npos);
+  EXPECT_NE(r.out.find("peak RSS"), std::string::npos);
+  ExpectOnlyFiles(work_, {"b.json"});
+  const nlohmann::json records = nlohmann::json::parse(ReadFile(work_ / "b.json"));
+  ASSERT_TRUE(records.is_array());
+  std::set<std::string> accels;
+  for (const nlohmann::json& rec : records) {
+    for (const char* key : {"scene", "triangles", "accel", "build_ms", "bytes_per_tri",
+                            "frame_ms_median", "frame_ms_min", "frame_ms_max", "mrays_per_s",
+                            "ratio_to_embree", "threads", "width", "height"}) {
+      EXPECT_TRUE(rec.contains(key)) << key;
+    }
+    accels.insert(rec["accel"].get<std::string>());
+    EXPECT_EQ(rec["width"], 64);
+    EXPECT_EQ(rec["height"], 36);
+    EXPECT_GT(rec["mrays_per_s"].get<double>(), 0.0);
+    EXPECT_LE(rec["frame_ms_min"].get<double>(), rec["frame_ms_median"].get<double>());
+    EXPECT_LE(rec["frame_ms_median"].get<double>(), rec["frame_ms_max"].get<double>());
+    // cornell is the lab's 30 triangles; terrain:2k is a 32 x 32 grid of quads plus the room.
+    EXPECT_EQ(rec["triangles"], rec["scene"] == "cornell" ? 30 : 2 * 32 * 32 + 10);
+  }
+  EXPECT_TRUE(accels.count("bvh"));
+  EXPECT_TRUE(accels.count("brute"));
+#if TRITRACE_HAVE_EMBREE
+  EXPECT_TRUE(accels.count("embree"));
+  EXPECT_TRUE(accels.count("embree-single"));
+  // The faster Embree mode of each scene is the reference, so one of them has ratio 1.
+  for (const std::string scene : {"cornell", "terrain:2k"}) {
+    double best = 0.0;
+    for (const nlohmann::json& rec : records) {
+      if (rec["scene"] == scene && rec["accel"].get<std::string>().starts_with("embree")) {
+        best = std::max(best, rec["ratio_to_embree"].get<double>());
+      }
+    }
+    EXPECT_DOUBLE_EQ(best, 1.0) << scene;
+  }
+#endif
+}
+
+TEST_F(CliTest, BenchSkipsBruteForceWhereAFrameWouldTakeSeconds) {
+  const RunResult r = Run({"bench", "--scene", "terrain:1m", "--accel", "brute", "--width", "64",
+                           "--height", "36", "--reps", "1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("skipped"), std::string::npos) << r.out;
+}
+
+TEST_F(CliTest, BenchRejectsAnUnknownScene) {
+  const RunResult r = Run({"bench", "--scene", "teapot"});
+  ExpectErrorLine(r, 2, "--scene", "unknown scene");
   ExpectOnlyFiles(work_, {});
 }
 

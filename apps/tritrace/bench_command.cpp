@@ -1,0 +1,226 @@
+// The bench subcommand: for each scene, build every accel (timed), render one warm-up frame, then
+// `reps` timed frames; report medians and the ratio to the faster Embree mode of the same scene.
+#include "bench_command.h"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "flag_values.h"
+#include "tritrace/accel/make_accel.h"
+#include "tritrace/error.h"
+#include "tritrace/image/atomic_file.h"
+#include "tritrace/render/lab_integrator.h"
+#include "tritrace/render/renderer.h"
+#include "tritrace/scene/procedural.h"
+
+namespace tritrace::cli {
+namespace {
+
+// brute is skipped where a frame would take longer than this (estimated from its cost per test).
+constexpr double kBruteBudgetSeconds = 3.0;
+constexpr double kBruteNsPerTest = 4.0;  // Möller–Trumbore, measured in docs/PERFORMANCE.md
+
+struct Record {
+  std::string scene;
+  size_t triangles = 0;
+  std::string accel;
+  double build_ms = 0.0;
+  double bytes_per_tri = 0.0;
+  double copy_bytes_per_tri = 0.0;
+  double frame_ms_median = 0.0, frame_ms_min = 0.0, frame_ms_max = 0.0;
+  double mrays_per_s = 0.0;
+  std::optional<double> ratio_to_embree;
+  int threads = 0;
+  int width = 0, height = 0;
+};
+
+CLI::Validator validator(std::function<std::string(std::string&)> fn) {
+  return CLI::Validator(std::move(fn), "", "");
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+long peak_rss_mib() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024;  // kilobytes on Linux
+}
+
+nlohmann::json to_json(const Record& r) {
+  nlohmann::json j = {{"scene", r.scene},
+                      {"triangles", r.triangles},
+                      {"accel", r.accel},
+                      {"build_ms", r.build_ms},
+                      {"bytes_per_tri", r.bytes_per_tri},
+                      {"triangle_copy_bytes_per_tri", r.copy_bytes_per_tri},
+                      {"frame_ms_median", r.frame_ms_median},
+                      {"frame_ms_min", r.frame_ms_min},
+                      {"frame_ms_max", r.frame_ms_max},
+                      {"mrays_per_s", r.mrays_per_s},
+                      {"threads", r.threads},
+                      {"width", r.width},
+                      {"height", r.height}};
+  j["ratio_to_embree"] = r.ratio_to_embree ? nlohmann::json(*r.ratio_to_embree) : nlohmann::json();
+  return j;
+}
+
+}  // namespace
+
+CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
+  CLI::App* sub = app.add_subcommand(
+      "bench",
+      "Measure every acceleration structure on the lab workload, beside Embree, in one run");
+  sub->add_option("--scene", args.scenes,
+                  "Scene to measure, repeatable (default: cornell, terrain:1m, terrain:10m)")
+      ->type_name("NAME")
+      ->check(validator([](std::string& s) {
+        return s == "cornell" || parse_terrain_triangles(s)
+                   ? std::string()
+                   : "unknown scene '" + s + "' (use " + std::string(kBuiltinSceneHelp) + ")";
+      }));
+  sub->add_option("--accel", args.accels, "Acceleration structure, repeatable (default: all)")
+      ->type_name("NAME")
+      ->check(validator([](std::string& s) {
+        const std::optional<AccelKind> kind = parse_accel(s);
+        return kind && accel_available(*kind)
+                   ? std::string()
+                   : "unknown or unavailable acceleration structure '" + s + "'";
+      }));
+  auto side = validator([](std::string& s) { return check_integer_in(s, 1, 16384); });
+  sub->add_option("--width", args.width, "Frame width")
+      ->type_name("W")
+      ->capture_default_str()
+      ->check(side);
+  sub->add_option("--height", args.height, "Frame height")
+      ->type_name("H")
+      ->capture_default_str()
+      ->check(side);
+  sub->add_option("--reps", args.reps, "Timed frames per scene and accel, after one warm-up")
+      ->type_name("N")
+      ->capture_default_str()
+      ->check(validator([](std::string& s) { return check_integer_in(s, 1, 1000); }));
+  sub->add_option("--threads", args.threads, "Worker threads (default: all cores)")
+      ->type_name("N")
+      ->check(validator([](std::string& s) { return check_integer_in(s, 1, 1024); }));
+  sub->add_option("--kernel", args.kernel, "Ray/triangle kernel for bvh and brute")
+      ->type_name("NAME")
+      ->check(validator([](std::string& s) {
+        return parse_kernel(s) ? std::string() : "unknown kernel '" + s + "'";
+      }));
+  sub->add_option("--json", args.json, "Also write the records as a JSON array to PATH")
+      ->type_name("PATH");
+  sub->add_flag("-q,--quiet", args.quiet, "Print only the table");
+  return sub;
+}
+
+int run_bench(const BenchArgs& args) {
+  if (!args.json.empty()) check_writable_path(args.json);
+  const std::vector<std::string> scenes =
+      args.scenes.empty() ? std::vector<std::string>{"cornell", "terrain:1m", "terrain:10m"}
+                          : args.scenes;
+  std::vector<AccelKind> accels;
+  for (const std::string& name : args.accels) accels.push_back(*parse_accel(name));
+  if (accels.empty()) accels = available_accels();
+  const int width = static_cast<int>(*parse_integer(args.width));
+  const int height = static_cast<int>(*parse_integer(args.height));
+  const int reps = static_cast<int>(*parse_integer(args.reps));
+  const int threads = args.threads.empty() ? default_thread_count()
+                                           : static_cast<int>(*parse_integer(args.threads));
+  const Kernel kernel = args.kernel.empty() ? kDefaultKernel : *parse_kernel(args.kernel);
+
+  std::printf("%-13s %10s %-13s %10s %8s %8s %26s %9s %8s\n", "scene", "triangles", "accel",
+              "build ms", "B/tri", "+tri B", "frame ms median (min-max)", "Mrays/s", "/embree");
+  std::fflush(stdout);
+
+  std::vector<Record> records;
+  for (const std::string& scene_name : scenes) {
+    const Scene scene = make_builtin_scene(scene_name, {.width = width, .height = height});
+    const size_t first = records.size();
+    for (AccelKind kind : accels) {
+      Record r;
+      r.scene = scene_name;
+      r.triangles = scene.mesh.size();
+      r.accel = std::string(accel_name(kind));
+      r.threads = threads;
+      r.width = width;
+      r.height = height;
+      if (kind == AccelKind::kBrute) {
+        const double estimate = 2.0 * width * height * static_cast<double>(scene.mesh.size()) *
+                                kBruteNsPerTest * 1e-9 / threads;
+        if (estimate > kBruteBudgetSeconds) {
+          std::printf("%-13s %10zu %-13s skipped: about %.0f s per frame\n", scene_name.c_str(),
+                      r.triangles, r.accel.c_str(), estimate);
+          std::fflush(stdout);
+          continue;
+        }
+      }
+      AccelInfo info;
+      const std::unique_ptr<Accel> accel = make_accel(kind, scene.mesh, kernel, &info);
+      r.build_ms = info.build_ms;
+      r.bytes_per_tri =
+          static_cast<double>(info.structure_bytes) / std::max<size_t>(1, r.triangles);
+      r.copy_bytes_per_tri =
+          static_cast<double>(info.triangle_copy_bytes) / std::max<size_t>(1, r.triangles);
+      const LabIntegrator integrator;
+      std::vector<double> ms;
+      uint64_t rays = 0;
+      double total_ms = 0.0;
+      for (int i = 0; i <= reps; ++i) {  // frame 0 warms caches and threads up, untimed
+        RenderStats stats;
+        render(scene, *accel, integrator, {.threads = threads}, &stats);
+        if (i == 0) continue;
+        ms.push_back(stats.milliseconds);
+        rays += stats.rays;
+        total_ms += stats.milliseconds;
+      }
+      r.frame_ms_median = median(ms);
+      r.frame_ms_min = *std::min_element(ms.begin(), ms.end());
+      r.frame_ms_max = *std::max_element(ms.begin(), ms.end());
+      // Rays per frame are the same every frame; the rate uses the median frame.
+      r.mrays_per_s = static_cast<double>(rays) / reps / (r.frame_ms_median * 1e3);
+      records.push_back(r);
+    }
+    // Ratios against the faster Embree mode of this scene.
+    double embree_best = 0.0;
+    for (size_t i = first; i < records.size(); ++i) {
+      if (records[i].accel.starts_with("embree")) {
+        embree_best = std::max(embree_best, records[i].mrays_per_s);
+      }
+    }
+    for (size_t i = first; i < records.size(); ++i) {
+      Record& r = records[i];
+      if (embree_best > 0.0) r.ratio_to_embree = r.mrays_per_s / embree_best;
+      char ratio[16] = "-";
+      if (r.ratio_to_embree) std::snprintf(ratio, sizeof(ratio), "%.2fx", *r.ratio_to_embree);
+      char frame[64];
+      std::snprintf(frame, sizeof(frame), "%.1f (%.1f-%.1f)", r.frame_ms_median, r.frame_ms_min,
+                    r.frame_ms_max);
+      std::printf("%-13s %10zu %-13s %10.1f %8.1f %8.1f %26s %9.1f %8s\n", r.scene.c_str(),
+                  r.triangles, r.accel.c_str(), r.build_ms, r.bytes_per_tri, r.copy_bytes_per_tri,
+                  frame, r.mrays_per_s, ratio);
+    }
+    std::fflush(stdout);
+  }
+  if (!args.quiet) {
+    std::printf("%dx%d, %d thread%s, %d timed frames after one warm-up; peak RSS %ld MiB\n", width,
+                height, threads, threads == 1 ? "" : "s", reps, peak_rss_mib());
+  }
+  if (!args.json.empty()) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const Record& r : records) out.push_back(to_json(r));
+    const std::string text = out.dump(2) + "\n";
+    write_file_atomic(args.json,
+                      std::span(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
+  }
+  return 0;
+}
+
+}  // namespace tritrace::cli

@@ -1,0 +1,27 @@
+// `tritrace bench`: the lab workload (one primary and one shadow ray per pixel, all threads) on
+// several scenes and every acceleration structure, side by side in one run, with the ratio of each
+// to Embree's best mode. Prints a table; --json writes the same records for scripts.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+namespace tritrace::cli {
+
+struct BenchArgs {
+  std::vector<std::string> scenes;  // empty: cornell, terrain:1m, terrain:10m
+  std::vector<std::string> accels;  // empty: every accel this build has
+  std::string width = "1920";
+  std::string height = "1080";
+  std::string reps = "5";
+  std::string threads;  // empty: all cores
+  std::string kernel;   // empty: the default kernel
+  std::string json;     // empty: no JSON file
+  bool quiet = false;
+};
+
+CLI::App* add_bench_command(CLI::App& app, BenchArgs& args);
+int run_bench(const BenchArgs& args);
+
+}  // namespace tritrace::cli

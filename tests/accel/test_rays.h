@@ -1,0 +1,67 @@
+// Test inputs shared by the accel tests: random triangle soups and rays of every awkward kind.
+#pragma once
+
+#include <glm/geometric.hpp>
+#include <random>
+#include <vector>
+
+#include "tritrace/geometry/triangle_mesh.h"
+#include "tritrace/math/ray.h"
+
+namespace tritrace {
+
+inline TriangleMesh random_soup(int n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-1.0f, 1.0f), size(0.01f, 0.3f);
+  TriangleMesh m;
+  for (int i = 0; i < n; ++i) {
+    const glm::vec3 c(pos(rng), pos(rng), pos(rng));
+    const float s = size(rng);
+    m.add(c, c + s * glm::vec3(pos(rng), pos(rng), pos(rng)),
+          c + s * glm::vec3(pos(rng), pos(rng), pos(rng)), 0);
+  }
+  return m;
+}
+
+// Rays of every awkward kind: from outside and inside, aimed at vertices and edges, parallel to the
+// axes, with zero direction components, and grazing along a coordinate plane.
+inline std::vector<Ray> awkward_rays(const TriangleMesh& mesh, int n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-1.5f, 1.5f), unit(0.0f, 1.0f);
+  std::uniform_int_distribution<size_t> tri(0, mesh.size() - 1);
+  std::vector<Ray> rays;
+  for (int i = 0; i < n; ++i) {
+    Ray r;
+    r.origin = glm::vec3(pos(rng), pos(rng), pos(rng)) * (i % 3 == 0 ? 4.0f : 1.0f);
+    const size_t t = tri(rng);
+    glm::vec3 target;
+    switch (i % 6) {
+      case 0:  // a vertex
+        target = mesh.vertex(t, static_cast<int>(i % 3));
+        break;
+      case 1: {  // a point on an edge
+        const float a = unit(rng);
+        target = mesh.v0()[t] + a * mesh.e1()[t];
+        break;
+      }
+      default: {  // inside (or near) the triangle
+        const float a = unit(rng), b = unit(rng) * (1.0f - a);
+        target = mesh.v0()[t] + a * mesh.e1()[t] + b * mesh.e2()[t];
+      }
+    }
+    r.dir = target - r.origin;
+    if (i % 7 == 0) r.dir[i % 3] = 0.0f;  // a zero component
+    if (i % 11 == 0) {                    // parallel to an axis
+      r.dir = glm::vec3(0.0f);
+      r.dir[i % 3] = (i % 2) ? 1.0f : -1.0f;
+    }
+    if (i % 13 == 0) r.origin.y = target.y, r.dir.y = 0.0f;  // grazing a horizontal plane
+    if (glm::dot(r.dir, r.dir) == 0.0f) r.dir = {0.0f, 0.0f, 1.0f};
+    r.dir = glm::normalize(r.dir);
+    if (i % 5 == 0) r.tmax = unit(rng) * 3.0f;  // a bounded segment, like a shadow ray
+    rays.push_back(r);
+  }
+  return rays;
+}
+
+}  // namespace tritrace
