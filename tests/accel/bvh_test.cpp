@@ -22,9 +22,10 @@ namespace {
 using bvh::kLeafBit;
 using bvh::WideBvh;
 
-void expect_same_as_brute(const TriangleMesh& mesh, Kernel kernel, int rays_count, uint32_t seed) {
+void expect_same_as_brute(const TriangleMesh& mesh, Kernel kernel, int rays_count, uint32_t seed,
+                          BvhTraversal traversal = BvhTraversal::kAuto) {
   const BruteForceAccel brute(mesh, kernel);
-  const BvhAccel accel(mesh, kernel);
+  const BvhAccel accel(mesh, kernel, {}, traversal);
   const std::vector<Ray> rays = awkward_rays(mesh, rays_count, seed);
   std::vector<Hit> want(rays.size()), got(rays.size());
   std::vector<uint8_t> want_occ(rays.size()), got_occ(rays.size());
@@ -69,6 +70,16 @@ TEST_P(BvhVsBrute, CornellImageIsIdentical) {
   const Image b = render(scene, accel, LabIntegrator{}, {});
   EXPECT_EQ(
       std::memcmp(a.pixels().data(), b.pixels().data(), a.pixels().size() * sizeof(glm::vec3)), 0);
+}
+
+// kAuto uses packets for Möller–Trumbore; the single-ray path must agree as well.
+TEST(BvhSingleRayTraversal, SameHitsBitForBit) {
+  expect_same_as_brute(make_cornell_box().mesh, Kernel::kMollerTrumbore, 20000, 5,
+                       BvhTraversal::kSingle);
+  expect_same_as_brute(make_terrain_scene(20000).mesh, Kernel::kMollerTrumbore, 4000, 6,
+                       BvhTraversal::kSingle);
+  expect_same_as_brute(random_soup(3000, 7), Kernel::kMollerTrumbore, 4000, 8,
+                       BvhTraversal::kSingle);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllKernels, BvhVsBrute, ::testing::ValuesIn(kAllKernels),

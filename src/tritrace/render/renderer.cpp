@@ -14,6 +14,25 @@
 
 namespace tritrace {
 
+namespace {
+
+// Visits a tile's pixels in 4 x 4 blocks, row by row within a block, so that consecutive rays of a
+// batch are neighbours in both directions: packets of 8 or 16 of them stay coherent.
+template <typename Fn>
+void for_each_pixel_in_blocks(int x0, int y0, int x1, int y1, Fn&& fn) {
+  constexpr int kBlock = 4;
+  for (int by = y0; by < y1; by += kBlock) {
+    for (int bx = x0; bx < x1; bx += kBlock) {
+      const int ey = std::min(by + kBlock, y1), ex = std::min(bx + kBlock, x1);
+      for (int y = by; y < ey; ++y) {
+        for (int x = bx; x < ex; ++x) fn(x, y);
+      }
+    }
+  }
+}
+
+}  // namespace
+
 int default_thread_count() {
   return std::max(1, tbb::info::default_concurrency());
 }
@@ -43,15 +62,13 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
         const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
         const int x1 = std::min(x0 + tile, width), y1 = std::min(y0 + tile, height);
         size_t n = 0;
-        for (int y = y0; y < y1; ++y) {
-          for (int x = x0; x < x1; ++x) batch[n++] = camera.primary_ray(x, y);
-        }
+        for_each_pixel_in_blocks(x0, y0, x1, y1,
+                                 [&](int x, int y) { batch[n++] = camera.primary_ray(x, y); });
         traced += integrator.radiance(std::span<const Ray>(batch.data(), n),
                                       std::span(radiance).first(n), scene, accel);
         n = 0;
-        for (int y = y0; y < y1; ++y) {
-          for (int x = x0; x < x1; ++x) image.at(x, y) = radiance[n++];
-        }
+        for_each_pixel_in_blocks(x0, y0, x1, y1,
+                                 [&](int x, int y) { image.at(x, y) = radiance[n++]; });
       }
       rays.fetch_add(traced, std::memory_order_relaxed);
     });

@@ -3,6 +3,8 @@
 // only make a box look bigger and the BVH never misses a triangle that the kernel would hit.
 #include "tritrace/accel/bvh/bvh_accel.h"
 
+#include "tritrace/accel/bvh/packet_traversal.h"
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -258,16 +260,38 @@ bool any_hit(const WideBvh& tree, const Ray& ray) {
 
 }  // namespace
 
-BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConfig& config)
-    : bvh_(bvh::build_wide_bvh(mesh, config)), kernel_(kernel) {}
+BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConfig& config,
+                   BvhTraversal traversal)
+    : bvh_(bvh::build_wide_bvh(mesh, config)),
+      kernel_(kernel),
+      packets_(traversal == BvhTraversal::kAuto && bvh::kPacketSize > 0 &&
+               kernel == Kernel::kMollerTrumbore) {}
 
 void BvhAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
+  if constexpr (bvh::kPacketSize > 0) {
+    if (packets_) {
+      for (size_t first = 0; first < rays.size(); first += bvh::kPacketSize) {
+        const size_t n = std::min<size_t>(bvh::kPacketSize, rays.size() - first);
+        bvh::intersect_packet(bvh_, rays.subspan(first, n), hits.subspan(first, n));
+      }
+      return;
+    }
+  }
   with_kernel(kernel_, [&]<Kernel K>() {
     for (size_t i = 0; i < rays.size(); ++i) hits[i] = closest_hit<K>(bvh_, rays[i]);
   });
 }
 
 void BvhAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+  if constexpr (bvh::kPacketSize > 0) {
+    if (packets_) {
+      for (size_t first = 0; first < rays.size(); first += bvh::kPacketSize) {
+        const size_t n = std::min<size_t>(bvh::kPacketSize, rays.size() - first);
+        bvh::occluded_packet(bvh_, rays.subspan(first, n), occluded.subspan(first, n));
+      }
+      return;
+    }
+  }
   with_kernel(kernel_, [&]<Kernel K>() {
     for (size_t i = 0; i < rays.size(); ++i) occluded[i] = any_hit<K>(bvh_, rays[i]) ? 1 : 0;
   });

@@ -1,6 +1,7 @@
-// BvhAccel: tritrace's own acceleration structure, an eight-wide BVH traversed one ray at a time
-// with AVX2 box tests, nearest child first, and SIMD triangle blocks in the leaves. With the same
-// kernel it returns exactly the hits of BruteForceAccel, ties included.
+// BvhAccel: tritrace's own acceleration structure, an eight-wide BVH with SIMD triangle blocks in
+// the leaves, traversed nearest child first either one ray at a time (AVX2 box tests over the eight
+// children) or in packets of coherent rays (packet_traversal.h). With the same kernel it returns
+// exactly the hits of BruteForceAccel, ties included.
 #pragma once
 
 #include "tritrace/accel/accel.h"
@@ -9,9 +10,15 @@
 
 namespace tritrace {
 
+enum class BvhTraversal {
+  kAuto,    // packets of coherent rays where the kernel has a packet version, else single rays
+  kSingle,  // one ray at a time
+};
+
 class BvhAccel final : public Accel {
  public:
-  BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConfig& config = {});
+  BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConfig& config = {},
+           BvhTraversal traversal = BvhTraversal::kAuto);
 
   using Accel::intersect;
   using Accel::occluded;
@@ -24,6 +31,7 @@ class BvhAccel final : public Accel {
  private:
   bvh::WideBvh bvh_;
   Kernel kernel_;
+  bool packets_;
 };
 
 }  // namespace tritrace

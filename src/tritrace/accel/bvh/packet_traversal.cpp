@@ -1,0 +1,234 @@
+// The packet traversal. A child is entered when any active ray of the packet hits its box; the
+// packet visits children nearest first (by the nearest ray's entry distance) and skips a stacked
+// subtree when every ray already has a hit closer than where that subtree starts.
+#include "tritrace/accel/bvh/packet_traversal.h"
+
+#if defined(__AVX2__)
+
+// GCC 12's AVX-512 intrinsics read a deliberately undefined register and warn about it when
+// inlined (GCC bug 105593); the warning is about the compiler's own header, not this code.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace tritrace::bvh {
+namespace {
+
+using namespace simd;
+constexpr int W = kLanes;
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kGamma3 = 3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f);
+constexpr float kFarScale = 1.0f + 2.0f * kGamma3;  // Ize 2013, as in the single-ray test
+constexpr int kStackSize = 1024;
+
+struct Packet {
+  VF o[3], d[3], inv[3];
+  VF tmin, tmax;
+  VM negative[3];
+  // Per axis: 0 all directions positive, 1 all negative, -1 mixed (then blend per lane).
+  int sign[3];
+  uint32_t active;
+};
+
+bool traceable(const Ray& ray) {
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(ray.origin[a]) || !std::isfinite(ray.dir[a])) return false;
+  }
+  return ray.tmin <= ray.tmax;
+}
+
+// Lanes past the batch, or with a non-finite ray, get an empty interval and never hit anything.
+Packet load_packet(std::span<const Ray> rays) {
+  alignas(64) float o[3][W], d[3][W], tmin[W], tmax[W];
+  Packet p;
+  p.active = 0;
+  for (int l = 0; l < W; ++l) {
+    const bool used = l < static_cast<int>(rays.size()) && traceable(rays[l]);
+    const Ray r = used ? rays[l] : Ray{};
+    for (int a = 0; a < 3; ++a) o[a][l] = r.origin[a], d[a][l] = r.dir[a];
+    tmin[l] = used ? r.tmin : kInf;
+    tmax[l] = used ? r.tmax : -kInf;
+    if (used) p.active |= 1u << l;
+  }
+  const uint32_t all = W == 32 ? ~0u : (1u << W) - 1;
+  for (int a = 0; a < 3; ++a) {
+    p.o[a] = load(o[a]);
+    p.d[a] = load(d[a]);
+    p.inv[a] = splat(1.0f) / p.d[a];
+    p.negative[a] = signbit(p.inv[a]);
+    const uint32_t neg = bits(p.negative[a]);
+    p.sign[a] = neg == 0 ? 0 : neg == all ? 1 : -1;
+  }
+  p.tmin = load(tmin);
+  p.tmax = load(tmax);
+  return p;
+}
+
+// The packet against one child box; `tfar` is each ray's current far limit.
+inline VM hit_box(const WideNode& node, int c, const Packet& p, VF tfar, VF& tnear) {
+  const float lo[3] = {node.lo_x[c], node.lo_y[c], node.lo_z[c]};
+  const float hi[3] = {node.hi_x[c], node.hi_y[c], node.hi_z[c]};
+  VF tn = p.tmin, tf = tfar;
+  for (int a = 0; a < 3; ++a) {
+    VF near, far;
+    if (p.sign[a] >= 0) {
+      near = splat(p.sign[a] ? hi[a] : lo[a]);
+      far = splat(p.sign[a] ? lo[a] : hi[a]);
+    } else {
+      near = select(p.negative[a], splat(hi[a]), splat(lo[a]));
+      far = select(p.negative[a], splat(lo[a]), splat(hi[a]));
+    }
+    tn = vmax((near - p.o[a]) * p.inv[a], tn);  // a NaN slab distance leaves tn as it was
+    tf = vmin((far - p.o[a]) * p.inv[a], tf);
+  }
+  tnear = tn;
+  return tn <= tf * splat(kFarScale);
+}
+
+// Möller–Trumbore of one triangle against every ray of the packet, lane for lane the scalar
+// kernel's operations (intersect_moller_trumbore) in the same order.
+struct TriangleHits {
+  VM ok;
+  VF t, u, v;
+};
+inline TriangleHits moller_trumbore(const TriangleBlock& b, int l, const Packet& p) {
+  const VF e1x = splat(b.e1x[l]), e1y = splat(b.e1y[l]), e1z = splat(b.e1z[l]);
+  const VF e2x = splat(b.e2x[l]), e2y = splat(b.e2y[l]), e2z = splat(b.e2z[l]);
+  const VF &dx = p.d[0], &dy = p.d[1], &dz = p.d[2];
+  const VF px = dy * e2z - e2y * dz;
+  const VF py = dz * e2x - e2z * dx;
+  const VF pz = dx * e2y - e2x * dy;
+  const VF det = (e1x * px + e1y * py) + e1z * pz;
+  const VF inv_det = splat(1.0f) / det;
+  const VF sx = p.o[0] - splat(b.v0x[l]), sy = p.o[1] - splat(b.v0y[l]),
+           sz = p.o[2] - splat(b.v0z[l]);
+  const VF u = ((sx * px + sy * py) + sz * pz) * inv_det;
+  const VF qx = sy * e1z - e1y * sz;
+  const VF qy = sz * e1x - e1z * sx;
+  const VF qz = sx * e1y - e1x * sy;
+  const VF v = ((dx * qx + dy * qy) + dz * qz) * inv_det;
+  const VF t = ((e2x * qx + e2y * qy) + e2z * qz) * inv_det;
+  const VF zero = splat(0.0f), one = splat(1.0f);
+  const VM ok = not_equal(det, zero) & (u >= zero) & (u <= one) & (v >= zero) & (u + v <= one) &
+                (t >= p.tmin) & (t <= p.tmax);
+  return {ok, t, u, v};
+}
+
+struct Entry {
+  uint32_t ref;
+  float t;
+};
+
+}  // namespace
+
+void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<Hit> hits) {
+  const Packet p = load_packet(rays);
+  // Each lane's best hit so far; (t, prim) ordered lexicographically as in brute force. Starting
+  // at tmax makes the box test's far limit simply best_t.
+  VF best_t = p.tmax, best_u = splat(0.0f), best_v = splat(0.0f);
+  constexpr int32_t kNone = std::numeric_limits<int32_t>::max();
+  VI best_prim = splat_i(kNone);
+
+  if (!tree.nodes.empty() && p.active) {
+    Entry stack[kStackSize];
+    int sp = 0;
+    uint32_t ref = 0;
+    float farthest_best = hmax(best_t);
+    for (;;) {
+      if (ref & kLeafBit) {
+        const TriangleBlock& b = tree.blocks[ref & ~kLeafBit];
+        for (int l = 0; l < kWidth; ++l) {
+          if (b.prim[l] == kNoHit) continue;
+          const TriangleHits h = moller_trumbore(b, l, p);
+          if (!bits(h.ok)) continue;
+          const VI prim = splat_i(static_cast<int32_t>(b.prim[l]));
+          const VM closer = (h.t < best_t) | ((h.t == best_t) & (best_prim > prim));
+          const VM take = h.ok & closer;
+          best_t = select(take, h.t, best_t);
+          best_u = select(take, h.u, best_u);
+          best_v = select(take, h.v, best_v);
+          best_prim = select(take, prim, best_prim);
+        }
+        farthest_best = hmax(best_t);
+      } else {
+        const WideNode& node = tree.nodes[ref];
+        Entry near[kWidth];
+        int n = 0;
+        for (int c = 0; c < kWidth; ++c) {
+          if (node.child[c] == kEmptyChild) continue;
+          VF tn;
+          const VM hit = hit_box(node, c, p, best_t, tn);
+          if (!bits(hit)) continue;
+          Entry e{node.child[c], hmin(select(hit, tn, splat(kInf)))};
+          int j = n++;
+          for (; j > 0 && near[j - 1].t < e.t; --j) near[j] = near[j - 1];
+          near[j] = e;
+        }
+        if (n > 0) {
+          for (int i = 0; i < n - 1; ++i) stack[sp++] = near[i];
+          ref = near[n - 1].ref;
+          continue;
+        }
+      }
+      // Pop, skipping subtrees that start beyond every ray's closest hit (ties are kept).
+      do {
+        if (sp == 0) goto done;
+        --sp;
+      } while (stack[sp].t > farthest_best);
+      ref = stack[sp].ref;
+    }
+  }
+done:
+  alignas(64) float t[W], u[W], v[W];
+  alignas(64) int32_t prim[W];
+  store(t, best_t);
+  store(u, best_u);
+  store(v, best_v);
+  store(prim, best_prim);
+  for (size_t l = 0; l < rays.size(); ++l) {
+    hits[l] = prim[l] == kNone ? Hit{} : Hit{t[l], u[l], v[l], static_cast<uint32_t>(prim[l])};
+  }
+}
+
+void occluded_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<uint8_t> occluded) {
+  Packet p = load_packet(rays);
+  uint32_t blocked = 0;
+  if (!tree.nodes.empty() && p.active) {
+    uint32_t stack[kStackSize];
+    int sp = 0;
+    uint32_t ref = 0;
+    for (;;) {
+      if (ref & kLeafBit) {
+        const TriangleBlock& b = tree.blocks[ref & ~kLeafBit];
+        for (int l = 0; l < kWidth; ++l) {
+          if (b.prim[l] == kNoHit) continue;
+          const TriangleHits h = moller_trumbore(b, l, p);
+          const uint32_t now = bits(h.ok);
+          if (!now) continue;
+          blocked |= now;
+          // Blocked rays are done: an empty interval takes them out of every later test.
+          p.tmax = select(h.ok, splat(-kInf), p.tmax);
+        }
+        if ((blocked & p.active) == p.active) break;
+      } else {
+        const WideNode& node = tree.nodes[ref];
+        for (int c = 0; c < kWidth; ++c) {
+          if (node.child[c] == kEmptyChild) continue;
+          VF tn;
+          if (bits(hit_box(node, c, p, p.tmax, tn))) stack[sp++] = node.child[c];
+        }
+      }
+      if (sp == 0) break;
+      ref = stack[--sp];
+    }
+  }
+  for (size_t l = 0; l < rays.size(); ++l) occluded[l] = (blocked >> l) & 1u;
+}
+
+}  // namespace tritrace::bvh
+
+#endif  // __AVX2__

@@ -1,0 +1,25 @@
+// Packet traversal of the wide BVH: kPacketSize rays at a time, one SIMD lane per ray, for the
+// coherent batches a renderer's tiles produce (Wald, Slusallek, Benthin, Wagner, "Interactive
+// Rendering with Coherent Ray Tracing", 2001). Leaves run Möller–Trumbore on all rays of the
+// packet at once, lane for lane the same operations as the scalar kernel, so the hits are
+// bit-identical to single-ray traversal and to brute force.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "tritrace/accel/bvh/simd_lanes.h"
+#include "tritrace/accel/bvh/wide_bvh.h"
+#include "tritrace/geometry/hit.h"
+
+namespace tritrace::bvh {
+
+// 16 with AVX-512, 8 with AVX2, 0 (no packet path) otherwise.
+inline constexpr int kPacketSize = simd::kLanes;
+
+// rays.size() <= kPacketSize. Closest hits, ties to the earlier triangle, Möller–Trumbore.
+void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<Hit> hits);
+// 1 where any triangle is hit within the ray's interval.
+void occluded_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<uint8_t> occluded);
+
+}  // namespace tritrace::bvh
