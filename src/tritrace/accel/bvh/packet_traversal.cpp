@@ -123,6 +123,14 @@ struct Entry {
   float t;
 };
 
+// Starts loading a child that the packet will visit: a node is 224 bytes and a triangle block 320,
+// several cache lines each, and on big scenes traversal waits on memory more than on arithmetic.
+inline void prefetch_child(const WideBvh& tree, uint32_t ref) {
+  const char* p = (ref & kLeafBit) ? reinterpret_cast<const char*>(&tree.blocks[ref & ~kLeafBit])
+                                   : reinterpret_cast<const char*>(&tree.nodes[ref]);
+  for (int line = 0; line < 320; line += 64) _mm_prefetch(p + line, _MM_HINT_T0);
+}
+
 }  // namespace
 
 void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<Hit> hits) {
@@ -163,6 +171,7 @@ void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<
           VF tn;
           const VM hit = hit_box(node, c, p, best_t, tn);
           if (!bits(hit)) continue;
+          prefetch_child(tree, node.child[c]);
           Entry e{node.child[c], hmin(select(hit, tn, splat(kInf)))};
           int j = n++;
           for (; j > 0 && near[j - 1].t < e.t; --j) near[j] = near[j - 1];
@@ -219,7 +228,10 @@ void occluded_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<u
         for (int c = 0; c < kWidth; ++c) {
           if (node.child[c] == kEmptyChild) continue;
           VF tn;
-          if (bits(hit_box(node, c, p, p.tmax, tn))) stack[sp++] = node.child[c];
+          if (bits(hit_box(node, c, p, p.tmax, tn))) {
+            prefetch_child(tree, node.child[c]);
+            stack[sp++] = node.child[c];
+          }
         }
       }
       if (sp == 0) break;
