@@ -144,6 +144,7 @@ int run_bench(const BenchArgs& args) {
   for (const std::string& scene_name : scenes) {
     const Scene scene = make_builtin_scene(scene_name, {.width = width, .height = height});
     const size_t first = records.size();
+    std::vector<std::string> skipped;
     for (AccelKind kind : accels) {
       Record r;
       r.scene = scene_name;
@@ -156,9 +157,10 @@ int run_bench(const BenchArgs& args) {
         const double estimate = 2.0 * width * height * static_cast<double>(scene.mesh.size()) *
                                 kBruteNsPerTest * 1e-9 / threads;
         if (estimate > kBruteBudgetSeconds) {
-          std::printf("%-13s %10zu %-13s skipped: about %.0f s per frame\n", scene_name.c_str(),
-                      r.triangles, r.accel.c_str(), estimate);
-          std::fflush(stdout);
+          char line[160];
+          std::snprintf(line, sizeof(line), "%-13s %10zu %-13s skipped: about %.0f s per frame",
+                        scene_name.c_str(), r.triangles, r.accel.c_str(), estimate);
+          skipped.emplace_back(line);
           continue;
         }
       }
@@ -207,6 +209,7 @@ int run_bench(const BenchArgs& args) {
                   r.triangles, r.accel.c_str(), r.build_ms, r.bytes_per_tri, r.copy_bytes_per_tri,
                   frame, r.mrays_per_s, ratio);
     }
+    for (const std::string& line : skipped) std::printf("%s\n", line.c_str());
     std::fflush(stdout);
   }
   if (!args.quiet) {
