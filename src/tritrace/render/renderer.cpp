@@ -55,7 +55,7 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
   tbb::task_arena arena(threads);
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles_x * tiles_y), [&](const auto& range) {
-      std::array<Ray, kMaxBatch> batch;
+      thread_local std::array<Ray, kMaxBatch> batch;  // per thread: Ray initialises its members
       std::array<glm::vec3, kMaxBatch> radiance;
       uint64_t traced = 0;
       for (int t = range.begin(); t != range.end(); ++t) {

@@ -14,13 +14,4 @@ Camera::Camera(int width, int height, double yaw, float distance, float focal_px
       rot_(RotationY::from_angle(yaw)),
       position_(rot_.apply(glm::vec3(0.0f, 0.0f, -distance))) {}
 
-Ray Camera::primary_ray(int x, int y) const {
-  const glm::vec3 d(static_cast<float>(x - width_ / 2), static_cast<float>(y - height_ / 2),
-                    focal_);
-  Ray ray;
-  ray.origin = position_;
-  ray.dir = glm::normalize(rot_.apply(d));
-  return ray;
-}
-
 }  // namespace tritrace

@@ -3,6 +3,8 @@
 // W/2 and H/2 (the pixel corner, as the lab does) and f = H by default; world y points down.
 #pragma once
 
+#include <glm/geometric.hpp>
+
 #include "tritrace/math/ray.h"
 #include "tritrace/math/rotation.h"
 
@@ -22,7 +24,14 @@ class Camera {
   glm::vec3 position() const { return position_; }
 
   // The ray through pixel (x, y); its direction is normalised, so t is a distance.
-  Ray primary_ray(int x, int y) const;
+  Ray primary_ray(int x, int y) const {
+    const glm::vec3 d(static_cast<float>(x - width_ / 2), static_cast<float>(y - height_ / 2),
+                      focal_);
+    Ray ray;
+    ray.origin = position_;
+    ray.dir = glm::normalize(rot_.apply(d));
+    return ray;
+  }
 
  private:
   int width_, height_;

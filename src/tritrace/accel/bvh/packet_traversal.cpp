@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 
 namespace tritrace::bvh {
@@ -34,37 +35,40 @@ struct Packet {
   uint32_t active;
 };
 
-bool traceable(const Ray& ray) {
-  for (int a = 0; a < 3; ++a) {
-    if (!std::isfinite(ray.origin[a]) || !std::isfinite(ray.dir[a])) return false;
-  }
-  return ray.tmin <= ray.tmax;
-}
+static_assert(sizeof(Ray) == 8 * sizeof(float) && offsetof(Ray, dir) == 3 * sizeof(float) &&
+              offsetof(Ray, tmin) == 6 * sizeof(float) && offsetof(Ray, tmax) == 7 * sizeof(float));
 
-// Lanes past the batch, or with a non-finite ray, get an empty interval and never hit anything.
+inline VM finite(VF x) {
+  return (x - x) == splat(0.0f);
+}  // NaN and +-inf give NaN
+
+// Transposes up to W rays into lanes with gathers. Lanes past the batch, or with a non-finite ray
+// or an empty interval, get an empty interval and never hit anything.
 Packet load_packet(std::span<const Ray> rays) {
-  alignas(64) float o[3][W], d[3][W], tmin[W], tmax[W];
+  const float* base = reinterpret_cast<const float*>(rays.data());
+  const int count = static_cast<int>(rays.size());
   Packet p;
-  p.active = 0;
-  for (int l = 0; l < W; ++l) {
-    const bool used = l < static_cast<int>(rays.size()) && traceable(rays[l]);
-    const Ray r = used ? rays[l] : Ray{};
-    for (int a = 0; a < 3; ++a) o[a][l] = r.origin[a], d[a][l] = r.dir[a];
-    tmin[l] = used ? r.tmin : kInf;
-    tmax[l] = used ? r.tmax : -kInf;
-    if (used) p.active |= 1u << l;
-  }
-  const uint32_t all = W == 32 ? ~0u : (1u << W) - 1;
+  VF o[3], d[3];
   for (int a = 0; a < 3; ++a) {
-    p.o[a] = load(o[a]);
-    p.d[a] = load(d[a]);
+    o[a] = load_every_8th(base + a, count, 0.0f);
+    d[a] = load_every_8th(base + 3 + a, count, a == 2 ? 1.0f : 0.0f);
+  }
+  VF tmin = load_every_8th(base + 6, count, kInf);
+  VF tmax = load_every_8th(base + 7, count, -kInf);
+  VM ok = first_lanes(count) & (tmin <= tmax);
+  for (int a = 0; a < 3; ++a) ok = ok & finite(o[a]) & finite(d[a]);
+  p.active = bits(ok);
+  const uint32_t all = (1u << W) - 1;
+  for (int a = 0; a < 3; ++a) {
+    p.o[a] = select(ok, o[a], splat(0.0f));
+    p.d[a] = select(ok, d[a], splat(a == 2 ? 1.0f : 0.0f));
     p.inv[a] = splat(1.0f) / p.d[a];
     p.negative[a] = signbit(p.inv[a]);
     const uint32_t neg = bits(p.negative[a]);
     p.sign[a] = neg == 0 ? 0 : neg == all ? 1 : -1;
   }
-  p.tmin = load(tmin);
-  p.tmax = load(tmax);
+  p.tmin = select(ok, tmin, splat(kInf));
+  p.tmax = select(ok, tmax, splat(-kInf));
   return p;
 }
 

@@ -95,6 +95,16 @@ inline void store(int32_t* p, VI a) {
   _mm512_storeu_si512(p, a.v);
 }
 // Written out rather than _mm512_reduce_min_ps, which trips GCC 12's -Wmaybe-uninitialized.
+// Lane l reads base[8 * l] for l < count (eight floats apart: one Ray), else holds `fallback`.
+inline VF load_every_8th(const float* base, int count, float fallback) {
+  const __m512i index =
+      _mm512_setr_epi32(0, 8, 16, 24, 32, 40, 48, 56, 64, 72, 80, 88, 96, 104, 112, 120);
+  const __mmask16 lanes = count >= 16 ? 0xFFFF : static_cast<__mmask16>((1u << count) - 1);
+  return {_mm512_mask_i32gather_ps(_mm512_set1_ps(fallback), lanes, index, base, 4)};
+}
+inline VM first_lanes(int count) {
+  return {count >= 16 ? static_cast<__mmask16>(0xFFFF) : static_cast<__mmask16>((1u << count) - 1)};
+}
 inline float hmin(VF a) {
   __m512 m = _mm512_min_ps(a.v, _mm512_shuffle_f32x4(a.v, a.v, 0x4E));  // swap 256-bit halves
   m = _mm512_min_ps(m, _mm512_shuffle_f32x4(m, m, 0xB1));               // swap 128-bit quarters
@@ -194,6 +204,15 @@ inline VI select(VM m, VI if_true, VI if_false) {
 }
 inline void store(int32_t* p, VI a) {
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), a.v);
+}
+// Lane l reads base[8 * l] for l < count (eight floats apart: one Ray), else holds `fallback`.
+inline VM first_lanes(int count) {
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  return {_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(count), lane))};
+}
+inline VF load_every_8th(const float* base, int count, float fallback) {
+  const __m256i index = _mm256_setr_epi32(0, 8, 16, 24, 32, 40, 48, 56);
+  return {_mm256_mask_i32gather_ps(_mm256_set1_ps(fallback), base, index, first_lanes(count).m, 4)};
 }
 inline float hmin(VF a) {
   __m128 m = _mm_min_ps(_mm256_castps256_ps128(a.v), _mm256_extractf128_ps(a.v, 1));
