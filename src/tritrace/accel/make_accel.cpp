@@ -14,7 +14,7 @@
 namespace tritrace {
 namespace {
 constexpr AccelKind kAll[] = {AccelKind::kBvh, AccelKind::kBrute, AccelKind::kEmbree,
-                              AccelKind::kEmbreeSingle};
+                              AccelKind::kEmbreeSingle, AccelKind::kBvhSingle};
 }
 
 std::string_view accel_name(AccelKind kind) {
@@ -27,6 +27,8 @@ std::string_view accel_name(AccelKind kind) {
       return "embree";
     case AccelKind::kEmbreeSingle:
       return "embree-single";
+    case AccelKind::kBvhSingle:
+      return "bvh-single";
   }
   return "unknown";
 }
@@ -60,8 +62,11 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kern
     case AccelKind::kBrute:
       accel = std::make_unique<BruteForceAccel>(mesh, kernel);
       break;
-    case AccelKind::kBvh: {
-      auto bvh = std::make_unique<BvhAccel>(mesh, kernel);
+    case AccelKind::kBvh:
+    case AccelKind::kBvhSingle: {
+      auto bvh = std::make_unique<BvhAccel>(
+          mesh, kernel, bvh::BuildConfig{},
+          kind == AccelKind::kBvh ? BvhTraversal::kAuto : BvhTraversal::kSingle);
       local.structure_bytes = bvh->tree().node_bytes();
       local.triangle_copy_bytes = bvh->tree().block_bytes();
       accel = std::move(bvh);

@@ -13,11 +13,12 @@
 
 namespace tritrace {
 
-// kEmbree traces with Embree's fastest mode for coherent batches (packets); kEmbreeSingle with
-// rtcIntersect1, for the comparison.
-enum class AccelKind { kBvh, kBrute, kEmbree, kEmbreeSingle };
+// kBvh and kEmbree trace coherent batches as packets; kBvhSingle and kEmbreeSingle one ray at a
+// time, for comparison.
+enum class AccelKind { kBvh, kBrute, kEmbree, kEmbreeSingle, kBvhSingle };
 
-std::string_view accel_name(AccelKind kind);  // "bvh", "brute", "embree", "embree-single"
+// "bvh", "brute", "embree", "embree-single", "bvh-single"
+std::string_view accel_name(AccelKind kind);
 std::optional<AccelKind> parse_accel(std::string_view name);
 bool accel_available(AccelKind kind);  // Embree only when built with it
 std::vector<AccelKind> available_accels();
