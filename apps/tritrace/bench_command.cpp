@@ -174,14 +174,12 @@ int run_bench(const BenchArgs& args) {
       const LabIntegrator integrator;
       std::vector<double> ms;
       uint64_t rays = 0;
-      double total_ms = 0.0;
       for (int i = 0; i <= reps; ++i) {  // frame 0 warms caches and threads up, untimed
         RenderStats stats;
         render(scene, *accel, integrator, {.threads = threads}, &stats);
         if (i == 0) continue;
         ms.push_back(stats.milliseconds);
         rays += stats.rays;
-        total_ms += stats.milliseconds;
       }
       r.frame_ms_median = median(ms);
       r.frame_ms_min = *std::min_element(ms.begin(), ms.end());

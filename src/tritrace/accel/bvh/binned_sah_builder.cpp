@@ -127,7 +127,10 @@ class Builder {
   void build_node(uint32_t index, uint32_t begin, uint32_t end, uint32_t depth,
                   tbb::task_group& group) {
     const uint32_t count = end - begin;
-    const auto [cb, bounds] = range_bounds(begin, end);
+    // Not a structured binding: the lambda below captures `bounds`, which clang 14 refuses for one.
+    const std::pair<Bounds3, Bounds3> ranges = range_bounds(begin, end);
+    const Bounds3& cb = ranges.first;
+    const Bounds3& bounds = ranges.second;
 
     auto make_leaf = [&] {
       BinaryNode& node = nodes_[index];
