@@ -6,6 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config git
   libglm-dev libtbb-dev libcli11-dev libstb-dev libembree-dev nlohmann-json3-dev
+  libassimp-dev assimp-testmodels
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format clang-tidy
 )

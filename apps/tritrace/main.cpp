@@ -6,6 +6,7 @@
 #include <string>
 
 #include "bench_command.h"
+#include "info_command.h"
 #include "render_command.h"
 #include "tritrace/error.h"
 
@@ -25,9 +26,11 @@ std::string usage_message(const CLI::ParseError& e, int argc, char** argv) {
   if (dynamic_cast<const CLI::RequiredError*>(&e) && msg.find("subcommand") != std::string::npos) {
     if (argc > 1 && argv[1][0] != '-') {
       return std::string(argv[1]) +
-             ": unknown command (use 'tritrace render' or 'tritrace bench'; see --help)";
+             ": unknown command (use 'tritrace render', 'tritrace info' or 'tritrace bench'; see "
+             "--help)";
     }
-    return "missing command: use 'tritrace render' or 'tritrace bench' (see --help)";
+    return "missing command: use 'tritrace render', 'tritrace info' or 'tritrace bench' (see "
+           "--help)";
   }
   for (char& c : msg) {
     if (c == '\n') c = ' ';
@@ -44,6 +47,8 @@ int main(int argc, char** argv) {
   CLI::App* render = tritrace::cli::add_render_command(app, render_args);
   tritrace::cli::BenchArgs bench_args;
   CLI::App* bench = tritrace::cli::add_bench_command(app, bench_args);
+  tritrace::cli::InfoArgs info_args;
+  CLI::App* info = tritrace::cli::add_info_command(app, info_args);
 
   try {
     app.parse(argc, argv);
@@ -59,6 +64,7 @@ int main(int argc, char** argv) {
   try {
     if (render->parsed()) return tritrace::cli::run_render(render_args);
     if (bench->parsed()) return tritrace::cli::run_bench(bench_args);
+    if (info->parsed()) return tritrace::cli::run_info(info_args);
   } catch (const tritrace::Error& e) {
     std::fprintf(stderr, "tritrace: %s\n", e.what());
     return static_cast<int>(e.exit_code());

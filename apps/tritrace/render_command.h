@@ -1,4 +1,5 @@
-// `tritrace render`: renders a built-in scene with the lab integrator to an image file.
+// `tritrace render [FILE]`: renders a built-in scene, a JSON scene or a mesh file with the lab
+// integrator to an image file.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -7,14 +8,16 @@
 namespace tritrace::cli {
 
 struct RenderArgs {
-  std::string output = "cornell.png";
-  std::string width = "500";
-  std::string height = "500";
-  std::string scene = "cornell";
+  std::string file;           // empty: the built-in Cornell box
+  std::string output;         // the scene file's output, else <file stem>.png or cornell.png
+  bool output_given = false;  // -o was on the command line (its value may still be empty)
+  std::string width;          // empty: the scene's (500 for the built-in and for meshes)
+  std::string height;
+  std::string scene;  // a built-in scene name (make_builtin_scene); empty: cornell
   std::string accel = "bvh";
-  std::string kernel;  // empty: the default kernel
-  std::string yaw = "0";
-  std::string light;    // empty: the lab's light position
+  std::string kernel;   // empty: the default kernel
+  std::string yaw;      // empty: no orbit
+  std::string light;    // empty: the scene's light position
   std::string threads;  // empty: all cores
   bool quiet = false;
 };

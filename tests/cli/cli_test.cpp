@@ -379,7 +379,7 @@ INSTANTIATE_TEST_SUITE_P(
     Errors, CliErrorTest,
     ::testing::Values(
         ErrorCase{"UnknownFlag", {"--bogus"}, 2, "--bogus", "unknown option"},
-        ErrorCase{"UnexpectedPositional", {"extra"}, 2, "extra", "unknown option or argument"},
+        ErrorCase{"SecondPositional", {"a.obj", "extra"}, 2, "extra", "unknown option or argument"},
         ErrorCase{"WidthMissingValue", {"--width"}, 2, "--width", "missing value"},
         ErrorCase{"OutputMissingValue", {"-o"}, 2, "--output", "missing value"},
         ErrorCase{"WidthZero", {"--width", "0"}, 2, "--width", kSideRange},
@@ -526,6 +526,271 @@ TEST_F(CliTest, BenchRejectsAnUnknownScene) {
   const RunResult r = Run({"bench", "--scene", "teapot"});
   ExpectErrorLine(r, 2, "--scene", "unknown scene");
   ExpectOnlyFiles(work_, {});
+}
+
+// ---- Scene and mesh files --------------------------------------------------------------------
+
+const std::string kModels = "/usr/share/assimp/models/";
+const std::string kScenes = std::string(TRITRACE_SOURCE_DIR) + "/scenes/";
+
+// How many of an 8-bit image's bytes are not zero: a lit render has many.
+size_t NonZeroBytes(const fs::path& path) {
+  const tritrace::Rgb8Image image = tritrace::read_image_rgb8(path.string());
+  return image.rgb.size() - std::count(image.rgb.begin(), image.rgb.end(), 0);
+}
+
+TEST_F(CliTest, CornellJsonRendersByteIdenticalToTheBuiltInScene) {
+  const std::string built_in = RenderQuietly({}, "built_in.png");
+  const std::string from_json = RenderQuietly({kScenes + "cornell.json"}, "json.png");
+  EXPECT_FALSE(built_in.empty());
+  EXPECT_TRUE(built_in == from_json) << "scenes/cornell.json differs from the built-in scene";
+}
+
+TEST_F(CliTest, SceneFileOutputSettingNamesTheImage) {
+  const RunResult r = Run({"render", kScenes + "cornell.json", "--width", "32", "--height", "32"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find(" to cornell.png\n"), std::string::npos) << r.out;
+  ExpectOnlyFiles(work_, {"cornell.png"});
+  ExpectRgb8Image(work_ / "cornell.png", 32, 32);
+}
+
+TEST_F(CliTest, EveryExampleSceneRenders) {
+  for (const fs::directory_entry& e : fs::directory_iterator(kScenes)) {
+    if (e.path().extension() != ".json") continue;
+    SCOPED_TRACE(e.path());
+    RenderQuietly({e.path().string(), "--width", "48", "--height", "40"}, "x.png");
+    ExpectRgb8Image(work_ / "x.png", 48, 40);
+    EXPECT_GT(NonZeroBytes(work_ / "x.png"), 48u * 40u);
+  }
+}
+
+// Real third-party models render at a small size with the default camera and light, and the image
+// is neither black nor clipped to white everywhere.
+TEST_F(CliTest, RealModelsRenderWithDefaults) {
+  for (const std::string model :
+       {"OBJ/spider.obj", "PLY/Wuson.ply", "STL/Spider_binary.stl",
+        "glTF2/BoxTextured-glTF/BoxTextured.gltf", "glTF2/BoxTextured-glTF-Binary/BoxTextured.glb",
+        "Collada/duck.dae", "3DS/fels.3ds"}) {
+    SCOPED_TRACE(model);
+    if (!fs::exists(kModels + model)) {
+      ADD_FAILURE() << "missing test model (install assimp-testmodels)";
+      continue;
+    }
+    const RunResult r =
+        Run({"render", kModels + model, "--width", "40", "--height", "40", "-o", "m.png", "-q"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const tritrace::Rgb8Image image = tritrace::read_image_rgb8((work_ / "m.png").string());
+    const size_t zero = std::count(image.rgb.begin(), image.rgb.end(), 0);
+    const size_t full = std::count(image.rgb.begin(), image.rgb.end(), 255);
+    EXPECT_GT(image.rgb.size() - zero, 40u * 3u) << "almost black";
+    EXPECT_LT(full, image.rgb.size() / 2) << "blown out";
+  }
+}
+
+TEST_F(CliTest, MeshFileDefaultOutputIsItsNameAsPng) {
+  const RunResult r = Run({"render", kModels + "PLY/cube.ply", "--width", "16", "--height", "16"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  ExpectOnlyFiles(work_, {"cube.png"});
+}
+
+TEST_F(CliTest, DroppedTrianglesGiveOneWarningLineAndStillRender) {
+  // Two triangles, the second with a repeated vertex (zero area).
+  std::ofstream(work_ / "two.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 2\n";
+  const RunResult r = Run({"render", "two.obj", "--width", "16", "--height", "16"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "tritrace: two.obj: warning: dropped 1 degenerate and 0 non-finite triangles\n");
+  ExpectOnlyFiles(work_, {"two.obj", "two.png"});
+  const RunResult info = Run({"info", "two.obj"});
+  EXPECT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("triangles: 1\n"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("dropped: 1 degenerate, 0 non-finite triangles\n"), std::string::npos)
+      << info.out;
+}
+
+TEST_F(CliTest, InfoPrintsWhatWasLoaded) {
+  const RunResult r = Run({"info", kScenes + "cornell.json"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  for (const std::string line :
+       {"triangles: 30\n", "meshes: 7\n", "materials: 7\n", "bounds: (-1, -1, -1) to (1, 1, 1)\n",
+        "lights: 1\n", "dropped: 0 degenerate, 0 non-finite triangles\n"}) {
+    EXPECT_NE(r.out.find(line), std::string::npos) << line << " not in:\n" << r.out;
+  }
+  ExpectOnlyFiles(work_, {});
+}
+
+TEST_F(CliTest, InfoCountsTheStlHeadersTriangles) {
+  // The binary STL header's triangle count, read here independently of assimp.
+  const std::string bytes = ReadFile(kModels + "STL/Spider_binary.stl");
+  uint32_t count = 0;
+  std::memcpy(&count, bytes.data() + 80, 4);
+  const RunResult r = Run({"info", kModels + "STL/Spider_binary.stl"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const std::regex kept(R"(triangles: ([0-9]+)\n)"),
+      dropped(R"(dropped: ([0-9]+) degenerate, ([0-9]+) non-finite)");
+  std::smatch k, d;
+  ASSERT_TRUE(std::regex_search(r.out, k, kept)) << r.out;
+  ASSERT_TRUE(std::regex_search(r.out, d, dropped)) << r.out;
+  EXPECT_EQ(std::stoul(k[1]) + std::stoul(d[1]) + std::stoul(d[2]), count);
+}
+
+// Writes `text` to `name` in the work folder.
+void WriteText(const fs::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+struct FileErrorCase {
+  std::string name;
+  std::string file;                                        // the argument to render
+  std::vector<std::pair<std::string, std::string>> files;  // written first: name, contents
+  std::string subject;
+  std::string reason;
+};
+
+std::ostream& operator<<(std::ostream& os, const FileErrorCase& c) {
+  return os << c.file;
+}
+
+class CliFileErrorTest : public CliTest, public ::testing::WithParamInterface<FileErrorCase> {};
+
+TEST_P(CliFileErrorTest, PrintsOneLineExitsOneAndWritesNoImage) {
+  const FileErrorCase& c = GetParam();
+  std::vector<std::string> before;
+  for (const auto& [name, text] : c.files) {
+    WriteText(work_ / name, text);
+    before.push_back(name);
+  }
+  for (const std::string command : {"render", "info"}) {
+    SCOPED_TRACE(command);
+    const RunResult r = Run({command, c.file});
+    ExpectErrorLine(r, 1, c.subject, c.reason);
+    ExpectOnlyFiles(work_, before);
+  }
+}
+
+const char kTriangle[] = R"({"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2]]})";
+
+INSTANTIATE_TEST_SUITE_P(
+    Files, CliFileErrorTest,
+    ::testing::Values(
+        FileErrorCase{"MissingFile", "nothing.obj", {}, "nothing.obj", "file not found"},
+        FileErrorCase{"MissingScene", "nothing.json", {}, "nothing.json", "file not found"},
+        FileErrorCase{"FolderInsteadOfFile", "/tmp", {}, "/tmp", "is a folder, not a file"},
+        FileErrorCase{"DeviceInsteadOfFile", "/dev/zero", {}, "/dev/zero", "not a regular file"},
+        FileErrorCase{"EmptyMesh", "e.obj", {{"e.obj", ""}}, "e.obj", "is empty"},
+        FileErrorCase{"EmptyScene", "e.json", {{"e.json", ""}}, "e.json", "is empty"},
+        FileErrorCase{"UnknownFormat",
+                      "x.xyz",
+                      {{"x.xyz", "hello\n"}},
+                      "x.xyz",
+                      "cannot import: No suitable reader"},
+        FileErrorCase{"ObjWithOnlyLines",
+                      "l.obj",
+                      {{"l.obj", "v 0 0 0\nv 1 0 0\nl 1 2\n"}},
+                      "l.obj",
+                      "contains no triangles"},
+        FileErrorCase{"MalformedJson",
+                      "s.json",
+                      {{"s.json", "{\n  \"meshes\": [\n    ]]\n}"}},
+                      "s.json",
+                      "invalid JSON at line 3, column 6"},
+        FileErrorCase{"UnknownKey",
+                      "s.json",
+                      {{"s.json", "{\"mesh\": []}"}},
+                      "s.json",
+                      "unknown key 'mesh' (did you mean 'meshes'?)"},
+        FileErrorCase{"WrongType",
+                      "s.json",
+                      {{"s.json", "{\"meshes\": {}}"}},
+                      "s.json",
+                      "/meshes: must be an array, got an object"},
+        FileErrorCase{"NaNLiteral",
+                      "s.json",
+                      {{"s.json", "{\"ambient\": [NaN, 0, 0]}"}},
+                      "s.json",
+                      "invalid JSON at line 1, column 14"},
+        FileErrorCase{"InfiniteNumber",
+                      "s.json",
+                      {{"s.json", "{\"ambient\": [1e400, 0, 0]}"}},
+                      "s.json",
+                      "number 1e400 is out of range"},
+        FileErrorCase{"BeyondFloat",
+                      "s.json",
+                      {{"s.json", std::string("{\"ambient\": [1e300, 0, 0], \"meshes\": [") +
+                                      kTriangle + "]}"}},
+                      "s.json",
+                      "/ambient/0: is out of range for a 32-bit float"},
+        FileErrorCase{"NegativeWidth",
+                      "s.json",
+                      {{"s.json", std::string("{\"camera\": {\"width\": -640}, \"meshes\": [") +
+                                      kTriangle + "]}"}},
+                      "s.json",
+                      "/camera/width: must be an integer from 1 to 16384, got -640"},
+        FileErrorCase{"IndexOutOfRange",
+                      "s.json",
+                      {{"s.json", R"({"meshes": [{"positions": [[0,0,0],[1,0,0],[0,1,0]],
+                                       "triangles": [[0,1,7]]}]})"}},
+                      "s.json",
+                      "index 7 out of range (0 to 2)"},
+        FileErrorCase{"ZeroTriangleMesh",
+                      "s.json",
+                      {{"s.json", R"({"meshes": [{"positions": [], "triangles": []}]})"}},
+                      "s.json",
+                      "mesh has no triangles"},
+        FileErrorCase{
+            "NoGeometry", "s.json", {{"s.json", "{\"meshes\": []}"}}, "s.json", "no geometry"},
+        FileErrorCase{"MissingReferencedMesh",
+                      "s.json",
+                      {{"s.json", R"({"meshes": [{"file": "gone.obj"}]})"}},
+                      "gone.obj",
+                      "file not found (referenced by s.json at /meshes/0/file)"},
+        FileErrorCase{"SceneReferencingItself",
+                      "s.json",
+                      {{"s.json", R"({"meshes": [{"file": "s.json"}]})"}},
+                      "s.json",
+                      "is this scene file itself"},
+        FileErrorCase{"SceneReferencingAnotherScene",
+                      "s.json",
+                      {{"s.json", R"({"meshes": [{"file": "t.json"}]})"},
+                       {"t.json", R"({"meshes": [{"file": "s.json"}]})"}},
+                      "s.json",
+                      "a scene cannot include another scene"},
+        FileErrorCase{"AllTrianglesDegenerate",
+                      "d.obj",
+                      {{"d.obj", "v 0 0 0\nv 1 0 0\nf 1 2 2\n"}},
+                      "d.obj",
+                      "no geometry: every triangle was degenerate or non-finite (1 degenerate"},
+        FileErrorCase{"GltfIndexOutOfRange",
+                      kModels + "glTF2/IndexOutOfRange/IndexOutOfRange.gltf",
+                      {},
+                      kModels + "glTF2/IndexOutOfRange/IndexOutOfRange.gltf",
+                      "out of range"},
+        FileErrorCase{"GltfWrongTypes",
+                      kModels + "glTF2/wrongTypes/badArray.gltf",
+                      {},
+                      kModels + "glTF2/wrongTypes/badArray.gltf",
+                      "was not of type \"array\""},
+        FileErrorCase{"GltfInfiniteVertices",
+                      kModels + "glTF2/BoxWithInfinites-glTF-Binary/BoxWithInfinites.glb",
+                      {},
+                      kModels + "glTF2/BoxWithInfinites-glTF-Binary/BoxWithInfinites.glb",
+                      "12 non-finite"}),
+    [](const ::testing::TestParamInfo<FileErrorCase>& info) { return info.param.name; });
+
+TEST_F(CliTest, UnreadableSceneFileIsAnError) {
+  if (::geteuid() == 0) GTEST_SKIP() << "running as root, where permission bits do not stop reads";
+  WriteText(work_ / "s.json", "{}");
+  fs::permissions(work_ / "s.json", fs::perms::none);
+  const RunResult r = Run({"render", "s.json"});
+  ExpectErrorLine(r, 1, "s.json", "cannot read");
+  ExpectOnlyFiles(work_, {"s.json"});
+}
+
+TEST_F(CliTest, BadOutputInASceneFileNamesTheSceneFile) {
+  WriteText(work_ / "s.json",
+            std::string("{\"output\": {\"file\": \"x.gif\"}, \"meshes\": [") + kTriangle + "]}");
+  const RunResult r = Run({"render", "s.json"});
+  ExpectErrorLine(r, 1, "s.json", "/output/file: 'x.gif' has an unknown extension");
+  ExpectOnlyFiles(work_, {"s.json"});
 }
 
 }  // namespace

@@ -23,6 +23,14 @@ void TriangleMesh::reserve(size_t triangles) {
   material_.reserve(triangles);
 }
 
+void TriangleMesh::append(const TriangleMesh& other, uint32_t material_offset) {
+  v0_.insert(v0_.end(), other.v0_.begin(), other.v0_.end());
+  e1_.insert(e1_.end(), other.e1_.begin(), other.e1_.end());
+  e2_.insert(e2_.end(), other.e2_.begin(), other.e2_.end());
+  normal_.insert(normal_.end(), other.normal_.begin(), other.normal_.end());
+  for (uint32_t m : other.material_) material_.push_back(m + material_offset);
+}
+
 glm::vec3 TriangleMesh::vertex(size_t tri, int corner) const {
   if (corner == 1) return v0_[tri] + e1_[tri];
   if (corner == 2) return v0_[tri] + e2_[tri];

@@ -15,6 +15,8 @@ class TriangleMesh {
   // The normal follows the lab's convention, normalize(cross(e2, e1)); a zero-area triangle gets a
   // zero normal (it can never be hit).
   void add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, uint32_t material);
+  // Appends `other`'s triangles exactly as stored, adding `material_offset` to their material ids.
+  void append(const TriangleMesh& other, uint32_t material_offset);
 
   void reserve(size_t triangles);
   size_t size() const { return v0_.size(); }

@@ -50,6 +50,8 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
 
   Image image(width, height);
   std::atomic<uint64_t> rays{0};
+  std::atomic<int> tiles_done{0};
+  const int tiles_total = tiles_x * tiles_y;
   const auto start = std::chrono::steady_clock::now();
 
   tbb::task_arena arena(threads);
@@ -69,6 +71,10 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
         n = 0;
         for_each_pixel_in_blocks(x0, y0, x1, y1,
                                  [&](int x, int y) { image.at(x, y) = radiance[n++]; });
+        if (options.progress) {
+          options.progress->tiles_done(tiles_done.fetch_add(1, std::memory_order_relaxed) + 1,
+                                       tiles_total);
+        }
       }
       rays.fetch_add(traced, std::memory_order_relaxed);
     });

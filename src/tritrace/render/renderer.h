@@ -11,9 +11,19 @@
 
 namespace tritrace {
 
+// Told after every finished tile, from the worker thread that finished it: an implementation must
+// be thread-safe, must not throw, and should return quickly (a clock read and a compare), since it
+// runs once per tile inside the render loop.
+class RenderProgress {
+ public:
+  virtual ~RenderProgress() = default;
+  virtual void tiles_done(int done, int total) noexcept = 0;
+};
+
 struct RenderOptions {
-  int threads = 0;     // 0: all cores
-  int tile_size = 16;  // tile_size^2 must not exceed kMaxBatch
+  int threads = 0;                     // 0: all cores
+  int tile_size = 16;                  // tile_size^2 must not exceed kMaxBatch
+  RenderProgress* progress = nullptr;  // optional, not owned
 };
 
 struct RenderStats {

@@ -1,45 +1,63 @@
-// The lab's pinhole camera: it orbits the origin at `distance`, turned by `yaw` about the y axis,
-// and looks at the centre. Pixel (x, y) looks along R_y(yaw) * (x - W/2, y - H/2, f) with integer
-// W/2 and H/2 (the pixel corner, as the lab does) and f = H by default; world y points down.
+// The pinhole camera: a pose (origin and an orthonormal right/down/forward basis) and a focal
+// length in pixels. Pixel (x, y) looks along right * (x - W/2) + down * (y - H/2) + forward * f,
+// with integer W/2 and H/2 (the pixel corner, as the lab does); image rows grow downward.
 #pragma once
 
 #include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
 
 #include "tritrace/math/ray.h"
-#include "tritrace/math/rotation.h"
 
 namespace tritrace {
 
 class Camera {
  public:
   Camera() : Camera(500, 500) {}
+  // The lab's orbit camera: at R_y(yaw) * (0, 0, -distance), looking at the origin, world y down.
   // focal_px <= 0 means the lab's default, f = height.
   Camera(int width, int height, double yaw = 0.0, float distance = 3.0f, float focal_px = 0.0f);
 
+  // A camera at `position` looking at `target`; `up` is the world direction that appears upward
+  // in the image (the lab's is (0, -1, 0), since its world y points down). The caller guarantees
+  // position != target and up not parallel to the viewing direction (see is_valid_look_at).
+  static Camera look_at(int width, int height, glm::vec3 position, glm::vec3 target, glm::vec3 up,
+                        float focal_px);
+  static bool is_valid_look_at(glm::vec3 position, glm::vec3 target, glm::vec3 up);
+
+  // The focal length in pixels that gives an image `height` pixels tall a vertical field of view
+  // of `degrees`.
+  static float focal_for_vertical_fov(int height, double degrees);
+
   int width() const { return width_; }
   int height() const { return height_; }
-  double yaw() const { return yaw_; }
-  float distance() const { return distance_; }
   float focal_px() const { return focal_; }
   glm::vec3 position() const { return position_; }
+  glm::vec3 right() const { return right_; }
+  glm::vec3 down() const { return down_; }
+  glm::vec3 forward() const { return forward_; }
 
-  // The ray through pixel (x, y); its direction is normalised, so t is a distance.
+  // The ray through pixel (x, y); its direction is normalised, so t is a distance. Inline: the
+  // renderer calls it once per pixel.
   Ray primary_ray(int x, int y) const {
-    const glm::vec3 d(static_cast<float>(x - width_ / 2), static_cast<float>(y - height_ / 2),
-                      focal_);
+    const float dx = static_cast<float>(x - width_ / 2);
+    const float dy = static_cast<float>(y - height_ / 2);
+    const glm::vec3 d(right_.x * dx + down_.x * dy + forward_.x * focal_,
+                      right_.y * dx + down_.y * dy + forward_.y * focal_,
+                      right_.z * dx + down_.z * dy + forward_.z * focal_);
     Ray ray;
     ray.origin = position_;
-    ray.dir = glm::normalize(rot_.apply(d));
+    ray.dir = glm::normalize(d);
     return ray;
   }
 
  private:
+  Camera(int width, int height, glm::vec3 position, glm::vec3 right, glm::vec3 down,
+         glm::vec3 forward, float focal_px);
+
   int width_, height_;
-  double yaw_;
-  float distance_;
   float focal_;
-  RotationY rot_;
   glm::vec3 position_;
+  glm::vec3 right_, down_, forward_;
 };
 
 }  // namespace tritrace

@@ -1,0 +1,77 @@
+// Load, then render tiny, so that whatever the loaders let through also meets the camera, the
+// accelerator and the integrator.
+#include "fuzz_entries.h"
+
+#include <array>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "tritrace/accel/brute_force.h"
+#include "tritrace/error.h"
+#include "tritrace/render/lab_integrator.h"
+#include "tritrace/render/renderer.h"
+#include "tritrace/scene/io/scene_file.h"
+#include "tritrace/scene/io/scene_loader.h"
+
+namespace tritrace::fuzz {
+namespace {
+
+constexpr int kSide = 8;
+
+// Small enough to stay fast with the brute-force accelerator.
+constexpr size_t kMaxRenderedTriangles = 20000;
+
+void render_tiny(const Scene& scene) {
+  if (scene.mesh.size() > kMaxRenderedTriangles) return;
+  const BruteForceAccel accel(scene.mesh, kDefaultKernel);
+  RenderOptions options;
+  options.threads = 1;
+  const Image image = render(scene, accel, LabIntegrator(), options);
+  (void)image;
+}
+
+ImportedMesh fixed_mesh(const std::string&) {
+  ImportedMesh m;
+  m.corners = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 0}, {0, 1, 0}};
+  m.material = {0, 0};
+  m.materials = {{kNeutralGrey}};
+  m.material_names = {"fixed"};
+  m.meshes = 1;
+  return m;
+}
+
+}  // namespace
+
+void scene_json_one_input(const uint8_t* data, size_t size) {
+  try {
+    SceneFileOptions options;
+    options.read_mesh = fixed_mesh;
+    LoadedScene loaded = parse_scene_json(
+        std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.json", options);
+    SceneOverrides small;
+    small.width = kSide;
+    small.height = kSide;
+    apply_overrides(loaded, small);
+    render_tiny(loaded.scene);
+  } catch (const Error&) {
+  }
+}
+
+void mesh_memory_one_input(const uint8_t* data, size_t size) {
+  static constexpr std::array<const char*, 10> kHints = {"obj", "ply", "stl", "gltf", "glb",
+                                                         "off", "dae", "3ds", "fbx",  "x"};
+  if (size < 1) return;
+  const std::string hint = kHints[data[0] % kHints.size()];
+  try {
+    const ImportedMesh mesh =
+        import_mesh_memory(std::span<const uint8_t>(data + 1, size - 1), hint, "fuzz." + hint);
+    SceneOverrides small;
+    small.width = kSide;
+    small.height = kSide;
+    render_tiny(scene_from_mesh(mesh, small).scene);
+  } catch (const Error&) {
+  }
+}
+
+}  // namespace tritrace::fuzz

@@ -1,0 +1,19 @@
+// The code the fuzzers run on one input, shared by the libFuzzer targets (TRITRACE_FUZZ) and by
+// the regression test that replays every saved input in the normal build. Each returns normally
+// for any input: an Error is an accepted outcome, a crash or sanitizer report is a bug.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace tritrace::fuzz {
+
+// The bytes are a JSON scene file; "file" meshes resolve to a fixed small mesh, never the disk.
+// A scene that loads is rendered at 8 x 8.
+void scene_json_one_input(const uint8_t* data, size_t size);
+
+// The first byte picks the format hint given to assimp, the rest is the file; a mesh that imports
+// becomes a scene with the default camera and light and is rendered at 8 x 8.
+void mesh_memory_one_input(const uint8_t* data, size_t size);
+
+}  // namespace tritrace::fuzz

@@ -1,0 +1,69 @@
+// Input file checks with stat and open, so that each failure gets its own reason.
+#include "tritrace/scene/io/input_file.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "tritrace/error.h"
+
+namespace tritrace {
+namespace {
+
+// Opens read-only and checks the file is regular, non-empty and not too large; returns the fd.
+int open_checked(const std::string& path, size_t& size) {
+  if (path.empty()) throw Error("(empty path)", "no file name given");
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    const int err = errno;
+    if (err == ENOENT) throw Error(path, "file not found");
+    throw Error(path, std::string("cannot open: ") + std::strerror(err));
+  }
+  if (S_ISDIR(st.st_mode)) throw Error(path, "is a folder, not a file");
+  if (!S_ISREG(st.st_mode)) throw Error(path, "is not a regular file");
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw Error(path, std::string("cannot read: ") + std::strerror(errno));
+  if (st.st_size == 0) {
+    ::close(fd);
+    throw Error(path, "is empty");
+  }
+  if (static_cast<unsigned long long>(st.st_size) > kMaxInputBytes) {
+    ::close(fd);
+    throw Error(path, "is larger than 2 GiB");
+  }
+  size = static_cast<size_t>(st.st_size);
+  return fd;
+}
+
+}  // namespace
+
+size_t check_input_file(const std::string& path) {
+  size_t size = 0;
+  ::close(open_checked(path, size));
+  return size;
+}
+
+std::string read_input_file(const std::string& path) {
+  size_t size = 0;
+  const int fd = open_checked(path, size);
+  std::string bytes(size, '\0');
+  size_t got = 0;
+  while (got < size) {
+    const ssize_t n = ::read(fd, bytes.data() + got, size - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int err = n < 0 ? errno : 0;
+      ::close(fd);
+      throw Error(path, err ? std::string("read failed: ") + std::strerror(err)
+                            : std::string("file shrank while being read"));
+    }
+    got += static_cast<size_t>(n);
+  }
+  ::close(fd);
+  return bytes;
+}
+
+}  // namespace tritrace

@@ -1,0 +1,51 @@
+// What loading a scene file produces: the Scene itself plus the facts `tritrace info` reports
+// (meshes, dropped triangles) and the file's output settings, and the camera as a description that
+// command-line overrides can still change before it becomes a Camera.
+#pragma once
+
+#include <cstddef>
+#include <glm/vec3.hpp>
+#include <optional>
+#include <string>
+
+#include "tritrace/scene/scene.h"
+
+namespace tritrace {
+
+// The lab's image size, used when neither the scene nor the command line gives one.
+inline constexpr int kDefaultImageSide = 500;
+inline constexpr int kMaxImageSide = 16384;
+
+struct CameraSpec {
+  int width = kDefaultImageSide;
+  int height = kDefaultImageSide;
+  glm::vec3 position{0.0f, 0.0f, -3.0f};  // the lab's
+  glm::vec3 look_at{0.0f};
+  glm::vec3 up{0.0f, -1.0f, 0.0f};  // the lab's world y points down
+  // At most one is set; with neither, the focal length is the image height, as in the lab.
+  std::optional<double> vertical_fov_degrees;
+  std::optional<float> focal_length_px;
+};
+
+// Command-line values that replace the scene's own (see docs/SCENE_FORMAT.md).
+struct SceneOverrides {
+  std::optional<int> width;
+  std::optional<int> height;
+  std::optional<double> yaw;       // orbit about the vertical through look_at, radians
+  std::optional<glm::vec3> light;  // position of the first light
+};
+
+struct LoadStats {
+  size_t meshes = 0;              // mesh sources (files, inline meshes, generators) and file meshes
+  size_t dropped_degenerate = 0;  // zero-area triangles
+  size_t dropped_non_finite = 0;  // triangles with a NaN or infinite vertex, or that overflow
+};
+
+struct LoadedScene {
+  Scene scene;
+  CameraSpec camera;  // what scene.camera was built from
+  LoadStats stats;
+  std::string output;  // the scene file's output path; empty when it names none
+};
+
+}  // namespace tritrace

@@ -1,0 +1,39 @@
+// Mesh import through assimp: any format it reads (OBJ, PLY, STL, glTF 2, FBX, Collada, 3DS ...)
+// becomes a flat triangle list in world space (faces triangulated, node transforms applied) with
+// the file's diffuse or base colours, or a neutral grey where it has none.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <glm/vec3.hpp>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "tritrace/scene/scene.h"
+
+namespace tritrace {
+
+inline constexpr glm::vec3 kNeutralGrey{0.6f, 0.6f, 0.6f};
+
+struct ImportedMesh {
+  std::vector<glm::vec3> corners;   // three per triangle, node transforms applied
+  std::vector<uint32_t> material;   // one per triangle, an index into `materials`
+  std::vector<Material> materials;  // the file's, in its order
+  std::vector<std::string> material_names;
+  size_t meshes = 0;  // mesh instances (a mesh used by two nodes counts twice)
+
+  size_t triangles() const { return material.size(); }
+};
+
+// Reads a mesh file. Throws Error(path, reason) when the file is missing, unreadable or empty,
+// when assimp rejects it, or when it holds no triangles. Triangles are not yet checked for
+// degeneracy: add_checked does that when they join a scene.
+ImportedMesh import_mesh_file(const std::string& path);
+
+// The same from bytes in memory; `format_hint` is a file extension without the dot ("obj") and
+// `subject` names the data in error messages.
+ImportedMesh import_mesh_memory(std::span<const uint8_t> bytes, const std::string& format_hint,
+                                const std::string& subject);
+
+}  // namespace tritrace

@@ -1,0 +1,527 @@
+// The scene file parser: nlohmann-json reads the text, then one pass over the document checks
+// every key against the format's tables and converts values, naming the JSON location of any error.
+#include "tritrace/scene/io/scene_file.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <optional>
+
+#include "tritrace/error.h"
+#include "tritrace/image/image_io.h"
+#include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/io/triangle_filter.h"
+#include "tritrace/scene/procedural.h"
+
+namespace tritrace {
+namespace {
+
+using Json = nlohmann::json;
+namespace fs = std::filesystem;
+
+constexpr size_t kMaxShownChars = 60;
+
+// A user's string made safe for a one-line message: control characters become '?', long text is
+// cut.
+std::string shown(std::string_view s) {
+  std::string out;
+  for (char c : s.substr(0, kMaxShownChars)) {
+    out += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? '?' : c;
+  }
+  if (s.size() > kMaxShownChars) out += "...";
+  return out;
+}
+
+std::string describe(const Json& j) {
+  if (j.is_number() || j.is_boolean() || j.is_null()) return shown(j.dump());
+  if (j.is_string()) return "'" + shown(j.get_ref<const std::string&>()) + "'";
+  return std::string("an ") + (j.is_object() ? "object" : "array");
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// Line and column (1-based) of byte offset `pos` in `text`.
+std::string line_column(std::string_view text, size_t pos) {
+  pos = std::min(pos, text.size());
+  const size_t line = 1 + std::count(text.begin(), text.begin() + pos, '\n');
+  const size_t last_newline = text.substr(0, pos).rfind('\n');
+  const size_t column = pos - (last_newline == std::string_view::npos ? 0 : last_newline + 1) + 1;
+  return "line " + std::to_string(line) + ", column " + std::to_string(column);
+}
+
+Json parse_text(std::string_view text, const std::string& path) {
+  try {
+    return Json::parse(text, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+  } catch (const Json::parse_error& e) {
+    // nlohmann's message: "[json.exception.parse_error.101] parse error at line L, column C: why".
+    std::string what = e.what();
+    const size_t at = what.find(" at line ");
+    const size_t colon = what.find(": ", at == std::string::npos ? 0 : at);
+    std::string why = colon == std::string::npos ? what : what.substr(colon + 2);
+    if (why.rfind("syntax error while parsing ", 0) == 0) why = why.substr(27);
+    const size_t pos = e.byte > 0 ? e.byte - 1 : 0;
+    throw Error(path, "invalid JSON at " + line_column(text, pos) + ": " + shown(why));
+  } catch (const Json::out_of_range& e) {
+    // Number overflow (id 406) carries no position; the message quotes the number, so find it.
+    std::string what = e.what();
+    const size_t q1 = what.find('\'');
+    const size_t q2 = what.rfind('\'');
+    if (q1 != std::string::npos && q2 > q1) {
+      const std::string number = what.substr(q1 + 1, q2 - q1 - 1);
+      const size_t pos = text.find(number);
+      if (pos != std::string_view::npos) {
+        throw Error(path, "invalid JSON at " + line_column(text, pos) + ": number " +
+                              shown(number) + " is out of range");
+      }
+    }
+    throw Error(path, "invalid JSON: number out of range");
+  } catch (const Json::exception& e) {
+    throw Error(path, std::string("invalid JSON: ") + shown(e.what()));
+  }
+}
+
+glm::mat3 rotation_xyz_degrees(glm::vec3 degrees) {
+  const glm::vec3 r = degrees * static_cast<float>(std::numbers::pi / 180.0);
+  const float cx = std::cos(r.x), sx = std::sin(r.x);
+  const float cy = std::cos(r.y), sy = std::sin(r.y);
+  const float cz = std::cos(r.z), sz = std::sin(r.z);
+  // Column-major (glm): rotate about x first, then y, then z: R = Rz * Ry * Rx.
+  const glm::mat3 rx(1, 0, 0, 0, cx, sx, 0, -sx, cx);
+  const glm::mat3 ry(cy, 0, -sy, 0, 1, 0, sy, 0, cy);
+  const glm::mat3 rz(cz, sz, 0, -sz, cz, 0, 0, 0, 1);
+  return rz * ry * rx;
+}
+
+struct Transform {
+  glm::vec3 translate{0.0f};
+  glm::mat3 rotate{1.0f};
+  glm::vec3 scale{1.0f};
+
+  glm::vec3 apply(glm::vec3 p) const { return translate + rotate * (scale * p); }
+};
+
+class Parser {
+ public:
+  Parser(std::string_view text, const std::string& path, const SceneFileOptions& options)
+      : text_(text), path_(path), options_(options) {}
+
+  LoadedScene run() {
+    const Json doc = parse_text(text_, path_);
+    if (!doc.is_object()) fail("", "a scene must be a JSON object, got " + describe(doc));
+    check_keys(doc, "",
+               {"description", "camera", "lights", "ambient", "materials", "meshes", "output"});
+    if (doc.contains("description") && !doc["description"].is_string()) {
+      fail("/description", "must be a string, got " + describe(doc["description"]));
+    }
+    out_.scene.ambient = kLabAmbient;
+    if (doc.contains("camera")) parse_camera(doc["camera"]);
+    if (doc.contains("lights")) parse_lights(doc["lights"]);
+    if (doc.contains("ambient")) {
+      out_.scene.ambient = non_negative_vec3(doc["ambient"], "/ambient");
+    }
+    if (doc.contains("materials")) parse_materials(doc["materials"]);
+    if (!doc.contains("meshes")) fail("", "no geometry: the scene has no \"meshes\"");
+    parse_meshes(doc["meshes"]);
+    if (doc.contains("output")) parse_output(doc["output"]);
+    return std::move(out_);
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& where, const std::string& reason) const {
+    throw Error(path_, where.empty() ? reason : where + ": " + reason);
+  }
+
+  const Json& object(const Json& j, const std::string& where) const {
+    if (!j.is_object()) fail(where, "must be an object, got " + describe(j));
+    return j;
+  }
+  const Json& array(const Json& j, const std::string& where) const {
+    if (!j.is_array()) fail(where, "must be an array, got " + describe(j));
+    return j;
+  }
+
+  // Every key must be known; an unknown one is reported with the nearest known key.
+  void check_keys(const Json& obj, const std::string& where,
+                  std::initializer_list<std::string_view> known) const {
+    for (const auto& [key, value] : obj.items()) {
+      if (std::find(known.begin(), known.end(), key) != known.end()) continue;
+      std::string_view best;
+      size_t best_distance = std::numeric_limits<size_t>::max();
+      for (std::string_view k : known) {
+        const size_t d = edit_distance(lower(key), k);
+        if (d < best_distance) best_distance = d, best = k;
+      }
+      fail(where.empty() ? "/" : where,
+           "unknown key '" + shown(key) + "' (did you mean '" + std::string(best) + "'?)");
+    }
+  }
+
+  double number(const Json& j, const std::string& where) const {
+    if (!j.is_number()) fail(where, "must be a number, got " + describe(j));
+    const double v = j.get<double>();
+    if (!std::isfinite(v)) fail(where, "must be finite, got " + describe(j));
+    return v;
+  }
+
+  float single(const Json& j, const std::string& where) const {
+    const double v = number(j, where);
+    if (std::abs(v) > std::numeric_limits<float>::max()) {
+      fail(where, "is out of range for a 32-bit float, got " + describe(j));
+    }
+    return static_cast<float>(v);
+  }
+
+  long long integer_in(const Json& j, const std::string& where, long long lo, long long hi) const {
+    const std::string rule =
+        "must be an integer from " + std::to_string(lo) + " to " + std::to_string(hi);
+    if (j.is_number_unsigned()) {
+      const auto v = j.get<uint64_t>();
+      if (v <= static_cast<uint64_t>(hi) && static_cast<long long>(v) >= lo) {
+        return static_cast<long long>(v);
+      }
+    } else if (j.is_number_integer()) {
+      const auto v = j.get<int64_t>();
+      if (v >= lo && v <= hi) return v;
+    }
+    fail(where, rule + ", got " + describe(j));
+  }
+
+  glm::vec3 vec3(const Json& j, const std::string& where) const {
+    if (!j.is_array() || j.size() != 3) {
+      fail(where, "must be an array of 3 numbers, got " +
+                      (j.is_array() ? std::to_string(j.size()) + " elements" : describe(j)));
+    }
+    return {single(j[0], where + "/0"), single(j[1], where + "/1"), single(j[2], where + "/2")};
+  }
+
+  glm::vec3 non_negative_vec3(const Json& j, const std::string& where) const {
+    const glm::vec3 v = vec3(j, where);
+    for (int i = 0; i < 3; ++i) {
+      if (v[i] < 0.0f) fail(where + "/" + std::to_string(i), "must not be negative");
+    }
+    return v;
+  }
+
+  std::string string(const Json& j, const std::string& where) const {
+    if (!j.is_string()) fail(where, "must be a string, got " + describe(j));
+    return j.get<std::string>();
+  }
+
+  void parse_camera(const Json& j) {
+    object(j, "/camera");
+    check_keys(j, "/camera",
+               {"position", "look_at", "up", "vertical_fov", "focal_length", "width", "height"});
+    CameraSpec& c = out_.camera;
+    if (j.contains("width")) c.width = integer_in(j["width"], "/camera/width", 1, kMaxImageSide);
+    if (j.contains("height")) {
+      c.height = integer_in(j["height"], "/camera/height", 1, kMaxImageSide);
+    }
+    if (j.contains("position")) c.position = vec3(j["position"], "/camera/position");
+    if (j.contains("look_at")) c.look_at = vec3(j["look_at"], "/camera/look_at");
+    if (j.contains("up")) c.up = vec3(j["up"], "/camera/up");
+    if (j.contains("vertical_fov") && j.contains("focal_length")) {
+      fail("/camera", "give either \"vertical_fov\" or \"focal_length\", not both");
+    }
+    if (j.contains("vertical_fov")) {
+      const double fov = number(j["vertical_fov"], "/camera/vertical_fov");
+      if (!(fov > 0.0 && fov < 180.0)) {
+        fail("/camera/vertical_fov",
+             "must be between 0 and 180 degrees (exclusive), got " + describe(j["vertical_fov"]));
+      }
+      c.vertical_fov_degrees = fov;
+    }
+    if (j.contains("focal_length")) {
+      const float f = single(j["focal_length"], "/camera/focal_length");
+      if (!(f > 0.0f)) {
+        fail("/camera/focal_length", "must be positive, got " + describe(j["focal_length"]));
+      }
+      c.focal_length_px = f;
+    }
+    if (!Camera::is_valid_look_at(c.position, c.look_at, c.up)) {
+      fail("/camera",
+           "position and look_at must differ, and up must not be parallel to the "
+           "viewing direction");
+    }
+  }
+
+  void parse_lights(const Json& j) {
+    array(j, "/lights");
+    for (size_t i = 0; i < j.size(); ++i) {
+      const std::string where = "/lights/" + std::to_string(i);
+      object(j[i], where);
+      check_keys(j[i], where, {"position", "power"});
+      if (!j[i].contains("position")) fail(where, "missing \"position\"");
+      if (!j[i].contains("power")) fail(where, "missing \"power\"");
+      out_.scene.lights.push_back({vec3(j[i]["position"], where + "/position"),
+                                   non_negative_vec3(j[i]["power"], where + "/power")});
+    }
+  }
+
+  void parse_materials(const Json& j) {
+    array(j, "/materials");
+    for (size_t i = 0; i < j.size(); ++i) {
+      const std::string where = "/materials/" + std::to_string(i);
+      object(j[i], where);
+      check_keys(j[i], where, {"name", "albedo"});
+      if (!j[i].contains("name")) fail(where, "missing \"name\"");
+      if (!j[i].contains("albedo")) fail(where, "missing \"albedo\"");
+      const std::string name = string(j[i]["name"], where + "/name");
+      if (name.empty()) fail(where + "/name", "must not be empty");
+      const glm::vec3 albedo = non_negative_vec3(j[i]["albedo"], where + "/albedo");
+      for (int k = 0; k < 3; ++k) {
+        if (albedo[k] > 1.0f) fail(where + "/albedo/" + std::to_string(k), "must be at most 1");
+      }
+      if (named_.count(name)) fail(where + "/name", "duplicate material '" + shown(name) + "'");
+      named_[name] = add_material({albedo});
+    }
+  }
+
+  uint32_t add_material(const Material& m) {
+    out_.scene.materials.push_back(m);
+    return static_cast<uint32_t>(out_.scene.materials.size() - 1);
+  }
+
+  uint32_t material_named(const Json& j, const std::string& where) const {
+    const std::string name = string(j, where);
+    const auto it = named_.find(name);
+    if (it != named_.end()) return it->second;
+    if (named_.empty()) fail(where, "unknown material '" + shown(name) + "' (none are defined)");
+    std::string best;
+    size_t best_distance = std::numeric_limits<size_t>::max();
+    for (const auto& [known, id] : named_) {
+      const size_t d = edit_distance(name, known);
+      if (d < best_distance) best_distance = d, best = known;
+    }
+    fail(where, "unknown material '" + shown(name) + "' (did you mean '" + shown(best) + "'?)");
+  }
+
+  uint32_t default_material() {
+    if (!default_material_) default_material_ = add_material({kNeutralGrey});
+    return *default_material_;
+  }
+
+  std::optional<Transform> parse_transform(const Json& j, const std::string& where) const {
+    object(j, where);
+    check_keys(j, where, {"translate", "rotate", "scale"});
+    Transform t;
+    if (j.contains("translate")) t.translate = vec3(j["translate"], where + "/translate");
+    if (j.contains("rotate")) t.rotate = rotation_xyz_degrees(vec3(j["rotate"], where + "/rotate"));
+    if (j.contains("scale")) {
+      const Json& s = j["scale"];
+      t.scale = s.is_number() ? glm::vec3(single(s, where + "/scale")) : vec3(s, where + "/scale");
+      for (int k = 0; k < 3; ++k) {
+        if (t.scale[k] == 0.0f) fail(where + "/scale", "must not be zero");
+      }
+    }
+    return t;
+  }
+
+  void add(glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t material,
+           const std::optional<Transform>& t, const std::string& where) {
+    if (out_.scene.mesh.size() >= kMaxSceneTriangles) {
+      fail(where, "the scene has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
+    }
+    if (t) {
+      a = t->apply(a);
+      b = t->apply(b);
+      c = t->apply(c);
+    }
+    add_checked(out_.scene.mesh, a, b, c, material, out_.stats);
+  }
+
+  void parse_meshes(const Json& j) {
+    array(j, "/meshes");
+    if (j.empty()) fail("/meshes", "no geometry: the list is empty");
+    for (size_t i = 0; i < j.size(); ++i) {
+      const std::string where = "/meshes/" + std::to_string(i);
+      object(j[i], where);
+      check_keys(j[i], where,
+                 {"file", "generator", "positions", "triangles", "material", "transform"});
+      const int sources =
+          static_cast<int>(j[i].contains("file")) + static_cast<int>(j[i].contains("generator")) +
+          static_cast<int>(j[i].contains("positions") || j[i].contains("triangles"));
+      if (sources != 1) {
+        fail(where,
+             "needs exactly one source: \"file\", \"generator\", or \"positions\" with "
+             "\"triangles\"");
+      }
+      std::optional<uint32_t> material;
+      if (j[i].contains("material"))
+        material = material_named(j[i]["material"], where + "/material");
+      std::optional<Transform> transform;
+      if (j[i].contains("transform"))
+        transform = parse_transform(j[i]["transform"], where + "/transform");
+
+      if (j[i].contains("file")) {
+        add_file(j[i]["file"], where + "/file", material, transform);
+      } else if (j[i].contains("generator")) {
+        add_generated(j[i]["generator"], where + "/generator", material, transform);
+      } else {
+        add_inline(j[i], where, material ? *material : default_material(), transform);
+      }
+      ++out_.stats.meshes;
+    }
+    if (out_.scene.mesh.empty()) {
+      fail("", "no geometry: every triangle was degenerate or non-finite (" +
+                   std::to_string(out_.stats.dropped_degenerate) + " degenerate, " +
+                   std::to_string(out_.stats.dropped_non_finite) + " non-finite)");
+    }
+  }
+
+  void add_inline(const Json& j, const std::string& where, uint32_t material,
+                  const std::optional<Transform>& t) {
+    if (!j.contains("positions")) fail(where, "\"triangles\" needs \"positions\"");
+    if (!j.contains("triangles")) fail(where, "\"positions\" needs \"triangles\"");
+    const Json& p = array(j["positions"], where + "/positions");
+    const Json& tris = array(j["triangles"], where + "/triangles");
+    if (tris.empty()) fail(where + "/triangles", "mesh has no triangles");
+    std::vector<glm::vec3> positions;
+    positions.reserve(p.size());
+    for (size_t k = 0; k < p.size(); ++k) {
+      positions.push_back(vec3(p[k], where + "/positions/" + std::to_string(k)));
+    }
+    const long long last = static_cast<long long>(positions.size()) - 1;
+    for (size_t k = 0; k < tris.size(); ++k) {
+      const std::string at = where + "/triangles/" + std::to_string(k);
+      if (!tris[k].is_array() || tris[k].size() != 3) {
+        fail(at, "must be an array of 3 vertex indices, got " +
+                     (tris[k].is_array() ? std::to_string(tris[k].size()) + " elements"
+                                         : describe(tris[k])));
+      }
+      size_t idx[3];
+      for (int c = 0; c < 3; ++c) {
+        const Json& v = tris[k][c];
+        const std::string at_c = at + "/" + std::to_string(c);
+        if (last < 0) fail(at_c, "index out of range: \"positions\" is empty");
+        if (!v.is_number_integer() && !v.is_number_unsigned()) {
+          fail(at_c, "must be a vertex index (an integer from 0 to " + std::to_string(last) +
+                         "), got " + describe(v));
+        }
+        if (v.is_number_unsigned() ? v.get<uint64_t>() > static_cast<uint64_t>(last)
+                                   : (v.get<int64_t>() < 0 || v.get<int64_t>() > last)) {
+          fail(at_c, "index " + describe(v) + " out of range (0 to " + std::to_string(last) + ")");
+        }
+        idx[c] = static_cast<size_t>(v.get<uint64_t>());
+      }
+      add(positions[idx[0]], positions[idx[1]], positions[idx[2]], material, t, at);
+    }
+  }
+
+  void add_generated(const Json& j, const std::string& where, std::optional<uint32_t> material,
+                     const std::optional<Transform>& t) {
+    const std::string name = string(j, where);
+    // The extension point for procedural sources: each name maps to a function that builds a
+    // Scene; its triangles and materials join this scene (its camera and lights do not).
+    std::optional<Scene> generated;
+    try {
+      generated = make_builtin_scene(name);
+    } catch (const Error&) {
+      fail(where,
+           "unknown generator '" + shown(name) + "' (use " + std::string(kBuiltinSceneHelp) + ")");
+    }
+    const uint32_t offset = static_cast<uint32_t>(out_.scene.materials.size());
+    if (!material) {
+      for (const Material& m : generated->materials) add_material(m);
+    }
+    const TriangleMesh& g = generated->mesh;
+    if (!t && !material) {
+      // Copied as stored, so that a generated scene is bit-identical to the built-in one.
+      out_.scene.mesh.append(g, offset);
+      return;
+    }
+    for (size_t k = 0; k < g.size(); ++k) {
+      add(g.vertex(k, 0), g.vertex(k, 1), g.vertex(k, 2),
+          material ? *material : offset + g.material()[k], t, where);
+    }
+  }
+
+  void add_file(const Json& j, const std::string& where, std::optional<uint32_t> material,
+                const std::optional<Transform>& t) {
+    const std::string name = string(j, where);
+    if (name.empty()) fail(where, "must name a mesh file");
+    const fs::path base = fs::path(path_).parent_path();
+    const fs::path resolved = fs::path(name).is_absolute() ? fs::path(name) : base / name;
+    const std::string file = resolved.string();
+    const std::string referenced = " (referenced by " + path_ + " at " + where + ")";
+    std::error_code ec;
+    if (fs::equivalent(resolved, fs::path(path_), ec)) {
+      fail(where, "'" + shown(name) + "' is this scene file itself; meshes must be mesh files");
+    }
+    if (lower(resolved.extension().string()) == ".json") {
+      fail(where, "'" + shown(name) +
+                      "' is a scene file; a scene cannot include another scene, only mesh files");
+    }
+    ImportedMesh imported;
+    try {
+      imported = options_.read_mesh ? options_.read_mesh(file) : import_mesh_file(file);
+    } catch (const Error& e) {
+      throw Error(e.subject(), e.reason() + referenced, e.exit_code());
+    }
+    const uint32_t offset = static_cast<uint32_t>(out_.scene.materials.size());
+    if (!material) {
+      for (const Material& m : imported.materials) add_material(m);
+    }
+    for (size_t k = 0; k < imported.triangles(); ++k) {
+      if (!material && imported.material[k] >= imported.materials.size()) {
+        fail(where, "mesh material index out of range");
+      }
+      add(imported.corners[3 * k], imported.corners[3 * k + 1], imported.corners[3 * k + 2],
+          material ? *material : offset + imported.material[k], t, where);
+    }
+    out_.stats.meshes += imported.meshes > 0 ? imported.meshes - 1 : 0;
+  }
+
+  void parse_output(const Json& j) {
+    object(j, "/output");
+    check_keys(j, "/output", {"file"});
+    if (j.contains("file")) {
+      const std::string file = string(j["file"], "/output/file");
+      if (!image_format_for(file)) {
+        fail("/output/file",
+             "'" + shown(file) + "' has an unknown extension (use .png, .ppm or .pfm)");
+      }
+      out_.output = file;
+    }
+  }
+
+  std::string_view text_;
+  const std::string& path_;
+  const SceneFileOptions& options_;
+  LoadedScene out_;
+  std::map<std::string, uint32_t> named_;
+  std::optional<uint32_t> default_material_;
+};
+
+}  // namespace
+
+size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+LoadedScene parse_scene_json(std::string_view text, const std::string& path,
+                             const SceneFileOptions& options) {
+  return Parser(text, path, options).run();
+}
+
+}  // namespace tritrace

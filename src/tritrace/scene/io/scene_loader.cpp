@@ -1,0 +1,131 @@
+// Dispatch by extension, the default camera and light for a bare mesh, and command-line overrides.
+#include "tritrace/scene/io/scene_loader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <glm/geometric.hpp>
+#include <numbers>
+
+#include "tritrace/error.h"
+#include "tritrace/math/rotation.h"
+#include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/io/input_file.h"
+#include "tritrace/scene/io/scene_file.h"
+#include "tritrace/scene/io/triangle_filter.h"
+#include "tritrace/scene/procedural.h"
+
+namespace tritrace {
+namespace {
+
+bool finite(glm::dvec3 v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::abs(v.x) <= 3e38 &&
+         std::abs(v.y) <= 3e38 && std::abs(v.z) <= 3e38;
+}
+
+}  // namespace
+
+void apply_overrides(LoadedScene& loaded, const SceneOverrides& overrides) {
+  CameraSpec& c = loaded.camera;
+  if (overrides.width) c.width = *overrides.width;
+  if (overrides.height) c.height = *overrides.height;
+  if (overrides.yaw) {
+    const RotationY r = RotationY::from_angle(*overrides.yaw);
+    c.position = c.look_at + r.apply(c.position - c.look_at);
+    if (!Camera::is_valid_look_at(c.position, c.look_at, c.up)) {
+      throw Error("--yaw", "turns the camera to look along its up direction", ExitCode::kUsage);
+    }
+  }
+  if (overrides.light) {
+    if (loaded.scene.lights.empty()) {
+      loaded.scene.lights.push_back({*overrides.light, kLabLightPower});
+    } else {
+      loaded.scene.lights.front().position = *overrides.light;
+    }
+  }
+  float focal = 0.0f;  // the lab's default: the image height
+  if (c.vertical_fov_degrees)
+    focal = Camera::focal_for_vertical_fov(c.height, *c.vertical_fov_degrees);
+  if (c.focal_length_px) focal = *c.focal_length_px;
+  loaded.scene.camera = Camera::look_at(c.width, c.height, c.position, c.look_at, c.up, focal);
+}
+
+bool is_scene_file(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  return ext == ".json";
+}
+
+LoadedScene load_builtin_scene(const std::string& name, const SceneOverrides& overrides) {
+  CornellOptions options;
+  if (overrides.width) options.width = *overrides.width;
+  if (overrides.height) options.height = *overrides.height;
+  if (overrides.yaw) options.yaw = *overrides.yaw;
+  if (overrides.light) options.light_position = *overrides.light;
+  LoadedScene loaded;
+  loaded.scene = make_builtin_scene(name, options);
+  loaded.camera.width = options.width;
+  loaded.camera.height = options.height;
+  loaded.camera.position = loaded.scene.camera.position();
+  loaded.stats.meshes = 1;
+  return loaded;
+}
+
+LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& overrides) {
+  LoadedScene loaded;
+  Scene& scene = loaded.scene;
+  scene.materials = mesh.materials;
+  for (size_t k = 0; k < mesh.triangles(); ++k) {
+    add_checked(scene.mesh, mesh.corners[3 * k], mesh.corners[3 * k + 1], mesh.corners[3 * k + 2],
+                mesh.material[k], loaded.stats);
+  }
+  loaded.stats.meshes = mesh.meshes;
+  if (scene.mesh.empty()) {
+    throw Error("", "no geometry: every triangle was degenerate or non-finite (" +
+                        std::to_string(loaded.stats.dropped_degenerate) + " degenerate, " +
+                        std::to_string(loaded.stats.dropped_non_finite) + " non-finite)");
+  }
+  scene.ambient = kLabAmbient;
+
+  // Frame the bounding sphere in the vertical field of view, seen from the front (+z) and a
+  // little above, with y up.
+  const Bounds3 b = scene.mesh.bounds();
+  const glm::dvec3 lo(b.lo), hi(b.hi);
+  const glm::dvec3 centre = 0.5 * (lo + hi);
+  const double radius = std::max(0.5 * glm::length(hi - lo), 1e-30);
+  const double half_fov = kFramingFovDegrees * std::numbers::pi / 360.0;
+  const double distance = 1.1 * radius / std::sin(half_fov);
+  const glm::dvec3 view_dir = glm::normalize(glm::dvec3(0.0, 0.35, 1.0));
+  const glm::dvec3 eye = centre + distance * view_dir;
+  const glm::dvec3 light = eye + radius * glm::dvec3(-0.3, 0.5, 0.0);
+  const double to_surface = std::max(glm::length(light - centre) - radius, 0.1 * radius);
+  const double power = kFramingIrradiance * 4.0 * std::numbers::pi * to_surface * to_surface;
+  if (!finite(eye) || !finite(light) || !std::isfinite(power) || power > 3e38 || power <= 0.0) {
+    throw Error("", "the mesh's bounds are too large or too small to frame a camera on");
+  }
+  loaded.camera.position = glm::vec3(eye);
+  loaded.camera.look_at = glm::vec3(centre);
+  loaded.camera.up = glm::vec3(0.0f, 1.0f, 0.0f);
+  loaded.camera.vertical_fov_degrees = kFramingFovDegrees;
+  scene.lights.push_back({glm::vec3(light), glm::vec3(static_cast<float>(power))});
+  apply_overrides(loaded, overrides);
+  return loaded;
+}
+
+LoadedScene load_scene(const std::string& path, const SceneOverrides& overrides) {
+  if (is_scene_file(path)) {
+    LoadedScene loaded = parse_scene_json(read_input_file(path), path);
+    apply_overrides(loaded, overrides);
+    return loaded;
+  }
+  const ImportedMesh mesh = import_mesh_file(path);
+  try {
+    return scene_from_mesh(mesh, overrides);
+  } catch (const Error& e) {
+    if (!e.subject().empty()) throw;
+    throw Error(path, e.reason(), e.exit_code());
+  }
+}
+
+}  // namespace tritrace

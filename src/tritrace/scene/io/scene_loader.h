@@ -1,0 +1,35 @@
+// The one entry point front ends use to turn a file into a Scene: .json files are scene files,
+// anything else is a mesh for assimp, rendered with defaults framed on its bounds.
+#pragma once
+
+#include <string>
+
+#include "tritrace/scene/io/loaded_scene.h"
+#include "tritrace/scene/io/mesh_import.h"
+
+namespace tritrace {
+
+// Vertical field of view of the camera framed on an imported mesh.
+inline constexpr double kFramingFovDegrees = 40.0;
+// The framed mesh's nearest surface receives about this much direct light (before the cosine),
+// so that with the lab's ambient 0.5 and a grey albedo the image is neither black nor clipped.
+inline constexpr float kFramingIrradiance = 0.8f;
+
+// Applies `overrides` to the camera description and the first light, then builds scene.camera
+// from the description. Throws Error naming the flag when the result is not a valid camera.
+void apply_overrides(LoadedScene& loaded, const SceneOverrides& overrides);
+
+bool is_scene_file(const std::string& path);  // by extension: .json, any case
+
+// Loads a scene file or a mesh file and applies `overrides`. Throws Error(file, reason).
+LoadedScene load_scene(const std::string& path, const SceneOverrides& overrides = {});
+
+// A built-in scene by name (make_builtin_scene: "cornell", "terrain:1m" ...) as a LoadedScene,
+// with the same overrides. Throws Error(name, reason, kUsage) for an unknown name.
+LoadedScene load_builtin_scene(const std::string& name, const SceneOverrides& overrides = {});
+
+// A scene holding an imported mesh with the defaults: a camera framed on its bounds (y up, as
+// most mesh formats have it), a point light near the camera and the lab's ambient term.
+LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& overrides = {});
+
+}  // namespace tritrace

@@ -1,0 +1,44 @@
+// Triangle validity in the same float arithmetic TriangleMesh::add uses, so an accepted triangle
+// has finite edges and a finite, non-zero normal.
+#include "tritrace/scene/io/triangle_filter.h"
+
+#include <cmath>
+#include <glm/geometric.hpp>
+
+namespace tritrace {
+namespace {
+
+bool finite(glm::vec3 v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+}  // namespace
+
+TriangleCheck check_triangle(glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+  if (!finite(a) || !finite(b) || !finite(c)) return TriangleCheck::kNonFinite;
+  const glm::vec3 e1 = b - a;
+  const glm::vec3 e2 = c - a;
+  if (!finite(e1) || !finite(e2)) return TriangleCheck::kNonFinite;
+  const glm::vec3 n = glm::cross(e2, e1);
+  const float len = glm::length(n);
+  if (!std::isfinite(len)) return TriangleCheck::kNonFinite;
+  return len > 0.0f ? TriangleCheck::kOk : TriangleCheck::kDegenerate;
+}
+
+bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t material,
+                 LoadStats& stats) {
+  switch (check_triangle(a, b, c)) {
+    case TriangleCheck::kOk:
+      mesh.add(a, b, c, material);
+      return true;
+    case TriangleCheck::kDegenerate:
+      ++stats.dropped_degenerate;
+      return false;
+    case TriangleCheck::kNonFinite:
+      ++stats.dropped_non_finite;
+      return false;
+  }
+  return false;
+}
+
+}  // namespace tritrace

@@ -1,0 +1,28 @@
+// The one gate every loaded triangle passes: triangles with a NaN or infinite vertex (or whose
+// edges or area overflow a float) and zero-area triangles are dropped and counted, so that a
+// render never sees them and `tritrace info` can report how many there were.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <glm/vec3.hpp>
+
+#include "tritrace/geometry/triangle_mesh.h"
+#include "tritrace/scene/io/loaded_scene.h"
+
+namespace tritrace {
+
+// A scene larger than this is refused at load time rather than exhausting memory (about 64 bytes
+// per triangle).
+inline constexpr size_t kMaxSceneTriangles = size_t{64} << 20;
+
+enum class TriangleCheck { kOk, kDegenerate, kNonFinite };
+
+TriangleCheck check_triangle(glm::vec3 a, glm::vec3 b, glm::vec3 c);
+
+// Adds the triangle when check_triangle accepts it, else counts it in `stats`. Returns whether it
+// was added.
+bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t material,
+                 LoadStats& stats);
+
+}  // namespace tritrace

@@ -1,0 +1,234 @@
+// JSON scene files: the lab scene written out loads bit for bit like the built-in one, and each
+// kind of mistake gets its own message, with the location computed by hand from the test's text.
+#include "tritrace/scene/io/scene_file.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <numbers>
+#include <string>
+
+#include "tritrace/error.h"
+#include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/io/scene_loader.h"
+#include "tritrace/scene/procedural.h"
+
+#ifndef TRITRACE_SOURCE_DIR
+#error "TRITRACE_SOURCE_DIR must name the source tree"
+#endif
+
+namespace tritrace {
+namespace {
+
+const std::string kCornellJson = std::string(TRITRACE_SOURCE_DIR) + "/scenes/cornell.json";
+
+// A valid scene with one inline triangle, for tests that change one thing.
+constexpr char kOneTriangle[] =
+    R"("meshes": [{"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2]]}])";
+
+LoadedScene parse(const std::string& text) {
+  LoadedScene s = parse_scene_json(text, "test.json");
+  apply_overrides(s, {});
+  return s;
+}
+
+// The reason of the Error parsing `text` throws.
+std::string error_of(const std::string& text) {
+  try {
+    parse(text);
+  } catch (const Error& e) {
+    EXPECT_EQ(e.subject(), "test.json");
+    EXPECT_EQ(e.reason().find('\n'), std::string::npos);
+    return e.reason();
+  }
+  ADD_FAILURE() << "no error for: " << text;
+  return "";
+}
+
+void expect_bits_equal(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(std::memcmp(&a[i], &b[i], sizeof(glm::vec3)), 0) << "triangle " << i;
+  }
+}
+
+TEST(SceneFile, CornellJsonIsTheBuiltInSceneBitForBit) {
+  const LoadedScene loaded = load_scene(kCornellJson);
+  const Scene built_in = make_cornell_box();
+  const Scene& s = loaded.scene;
+  ASSERT_EQ(s.mesh.size(), 30u);
+  expect_bits_equal(s.mesh.v0(), built_in.mesh.v0());
+  expect_bits_equal(s.mesh.e1(), built_in.mesh.e1());
+  expect_bits_equal(s.mesh.e2(), built_in.mesh.e2());
+  expect_bits_equal(s.mesh.normal(), built_in.mesh.normal());
+  for (size_t i = 0; i < 30; ++i) {
+    EXPECT_EQ(s.materials[s.mesh.material()[i]].albedo,
+              built_in.materials[built_in.mesh.material()[i]].albedo)
+        << "triangle " << i;
+  }
+  ASSERT_EQ(s.lights.size(), 1u);
+  EXPECT_EQ(s.lights[0].position, kLabLightPosition);
+  EXPECT_EQ(s.lights[0].power, kLabLightPower);
+  EXPECT_EQ(s.ambient, kLabAmbient);
+  for (int y = 0; y < 500; y += 7) {
+    for (int x = 0; x < 500; x += 7) {
+      const Ray a = s.camera.primary_ray(x, y), b = built_in.camera.primary_ray(x, y);
+      ASSERT_EQ(a.origin, b.origin);
+      ASSERT_EQ(a.dir, b.dir) << x << "," << y;
+    }
+  }
+  EXPECT_EQ(loaded.output, "cornell.png");
+}
+
+TEST(SceneFile, CornellGeneratorCopiesTheBuiltInTriangles) {
+  const LoadedScene s = parse(R"({"meshes": [{"generator": "cornell"}]})");
+  expect_bits_equal(s.scene.mesh.e1(), make_cornell_box().mesh.e1());
+}
+
+TEST(SceneFile, DefaultsAreTheLabsCameraAndAmbient) {
+  const LoadedScene s = parse(std::string("{") + kOneTriangle + "}");
+  EXPECT_EQ(s.scene.camera.width(), 500);
+  EXPECT_EQ(s.scene.camera.focal_px(), 500.0f);
+  EXPECT_EQ(s.scene.camera.position(), glm::vec3(0, 0, -3));
+  EXPECT_EQ(s.scene.ambient, kLabAmbient);
+  EXPECT_TRUE(s.scene.lights.empty());
+  ASSERT_EQ(s.scene.materials.size(), 1u);  // the neutral grey default
+  EXPECT_EQ(s.scene.materials[0].albedo, kNeutralGrey);
+}
+
+TEST(SceneFile, VerticalFovSetsTheFocalLength) {
+  // 90 degrees over 400 rows: f = 200 / tan(45 degrees) = 200.
+  const LoadedScene s = parse(std::string(R"({"camera": {"vertical_fov": 90, "height": 400}, )") +
+                              kOneTriangle + "}");
+  EXPECT_NEAR(s.scene.camera.focal_px(), 200.0f, 1e-3f);
+}
+
+TEST(SceneFile, LookAtCameraPointsAtTheTarget) {
+  const LoadedScene s =
+      parse(std::string(R"({"camera": {"position": [5, 0, 0], "look_at": [0, 0, 0], "up": [0, 1, 0],
+                     "width": 100, "height": 100}, )") +
+            kOneTriangle + "}");
+  const Ray centre = s.scene.camera.primary_ray(50, 50);
+  EXPECT_EQ(centre.origin, glm::vec3(5, 0, 0));
+  EXPECT_NEAR(centre.dir.x, -1.0f, 1e-6f);
+  // Up is +y, so the top row looks upward.
+  EXPECT_GT(s.scene.camera.primary_ray(50, 0).dir.y, 0.0f);
+}
+
+TEST(SceneFile, TransformScalesRotatesThenTranslates) {
+  // (1,0,0) scaled by 2 -> (2,0,0), rotated 90 degrees about z -> (0,2,0), translated -> (1,2,3).
+  const LoadedScene s = parse(R"({"meshes": [{"positions": [[0,0,0],[1,0,0],[0,1,0]],
+      "triangles": [[0,1,2]],
+      "transform": {"scale": 2, "rotate": [0, 0, 90], "translate": [1, 0, 3]}}]})");
+  const glm::vec3 v0 = s.scene.mesh.vertex(0, 0), v1 = s.scene.mesh.vertex(0, 1);
+  EXPECT_NEAR(v0.x, 1.0f, 1e-6f);
+  EXPECT_NEAR(v0.z, 3.0f, 1e-6f);
+  EXPECT_NEAR(v1.x, 1.0f, 1e-6f);
+  EXPECT_NEAR(v1.y, 2.0f, 1e-6f);
+  EXPECT_NEAR(v1.z, 3.0f, 1e-6f);
+}
+
+TEST(SceneFile, MaterialsAreFoundByName) {
+  const LoadedScene s = parse(R"({"materials": [{"name": "a", "albedo": [1, 0, 0]},
+      {"name": "b", "albedo": [0, 1, 0]}],
+      "meshes": [{"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2]], "material": "b"}]})");
+  EXPECT_EQ(s.scene.materials[s.scene.mesh.material()[0]].albedo, glm::vec3(0, 1, 0));
+}
+
+TEST(SceneFile, DegenerateAndNonFiniteTrianglesAreDroppedAndCounted) {
+  // Triangle 1 repeats a vertex; triangle 2 spans 3e38 to -3e38, whose edge overflows a float.
+  const LoadedScene s = parse(R"({"meshes": [{"positions": [[0,0,0],[1,0,0],[0,1,0],
+      [3e38,0,0],[-3e38,0,0]], "triangles": [[0,1,2],[0,1,1],[3,4,2]]}]})");
+  EXPECT_EQ(s.scene.mesh.size(), 1u);
+  EXPECT_EQ(s.stats.dropped_degenerate, 1u);
+  EXPECT_EQ(s.stats.dropped_non_finite, 1u);
+}
+
+TEST(SceneFileErrors, MalformedJsonReportsLineAndColumn) {
+  // The stray comma is on line 3, column 14 (1-based).
+  const std::string reason = error_of("{\n  \"meshes\": [\n    {\"file\": ,}\n  ]\n}");
+  EXPECT_NE(reason.find("invalid JSON at line 3, column 14"), std::string::npos) << reason;
+}
+
+TEST(SceneFileErrors, OverflowingNumberReportsItsPosition) {
+  const std::string reason = error_of("{\"ambient\": [1, 1e999, 1]}");
+  EXPECT_NE(reason.find("line 1, column 17"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("1e999 is out of range"), std::string::npos) << reason;
+}
+
+TEST(SceneFileErrors, UnknownKeySuggestsTheNearestKnownKey) {
+  EXPECT_EQ(error_of("{\"camra\": {}}"), "/: unknown key 'camra' (did you mean 'camera'?)");
+  EXPECT_EQ(error_of("{\"camera\": {\"lookat\": [0,0,0]}}"),
+            "/camera: unknown key 'lookat' (did you mean 'look_at'?)");
+}
+
+TEST(SceneFileErrors, EachRuleHasItsMessage) {
+  const std::string tri = kOneTriangle;
+  EXPECT_EQ(error_of("[1, 2]"), "a scene must be a JSON object, got an array");
+  EXPECT_EQ(error_of("{\"ambient\": \"bright\", " + tri + "}"),
+            "/ambient: must be an array of 3 numbers, got 'bright'");
+  EXPECT_EQ(error_of("{\"ambient\": [1, true, 1], " + tri + "}"),
+            "/ambient/1: must be a number, got true");
+  EXPECT_EQ(error_of("{\"ambient\": [1, -1, 1], " + tri + "}"), "/ambient/1: must not be negative");
+  EXPECT_EQ(error_of("{\"ambient\": [1, 1e39, 1], " + tri + "}"),
+            "/ambient/1: is out of range for a 32-bit float, got 1e+39");
+  EXPECT_EQ(error_of("{\"camera\": {\"width\": -5}, " + tri + "}"),
+            "/camera/width: must be an integer from 1 to 16384, got -5");
+  EXPECT_EQ(error_of("{\"camera\": {\"height\": 2.5}, " + tri + "}"),
+            "/camera/height: must be an integer from 1 to 16384, got 2.5");
+  EXPECT_EQ(error_of("{\"camera\": {\"vertical_fov\": 180}, " + tri + "}"),
+            "/camera/vertical_fov: must be between 0 and 180 degrees (exclusive), got 180");
+  EXPECT_EQ(error_of("{\"camera\": {\"look_at\": [0, 0, -3]}, " + tri + "}"),
+            "/camera: position and look_at must differ, and up must not be parallel to the "
+            "viewing direction");
+  EXPECT_EQ(error_of("{\"lights\": [{\"position\": [0,0,0], \"power\": [1,-2,1]}], " + tri + "}"),
+            "/lights/0/power/1: must not be negative");
+  EXPECT_EQ(error_of("{}"), "no geometry: the scene has no \"meshes\"");
+  EXPECT_EQ(error_of("{\"meshes\": []}"), "/meshes: no geometry: the list is empty");
+  EXPECT_EQ(error_of(R"({"meshes": [{"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": []}]})"),
+            "/meshes/0/triangles: mesh has no triangles");
+  EXPECT_EQ(
+      error_of(R"({"meshes": [{"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,3]]}]})"),
+      "/meshes/0/triangles/0/2: index 3 out of range (0 to 2)");
+  EXPECT_EQ(
+      error_of(R"({"meshes": [{"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,1]]}]})"),
+      "no geometry: every triangle was degenerate or non-finite (1 degenerate, 0 non-finite)");
+  EXPECT_EQ(error_of(R"({"meshes": [{"generator": "terrian"}]})"),
+            "/meshes/0/generator: unknown generator 'terrian' (use " +
+                std::string(kBuiltinSceneHelp) + ")");
+  EXPECT_EQ(error_of(R"({"materials": [{"name": "red", "albedo": [1,0,0]}],
+      "meshes": [{"generator": "cornell", "material": "rde"}]})"),
+            "/meshes/0/material: unknown material 'rde' (did you mean 'red'?)");
+  EXPECT_EQ(error_of(R"({"meshes": [{"generator": "cornell", "file": "x.obj"}]})"),
+            "/meshes/0: needs exactly one source: \"file\", \"generator\", or \"positions\" with "
+            "\"triangles\"");
+  EXPECT_EQ(error_of(R"({"meshes": [{"file": "other.json"}]})"),
+            "/meshes/0/file: 'other.json' is a scene file; a scene cannot include another "
+            "scene, only mesh files");
+  EXPECT_EQ(error_of(R"({"output": {"file": "x.jpg"}, )" + tri + "}"),
+            "/output/file: 'x.jpg' has an unknown extension (use .png, .ppm or .pfm)");
+}
+
+TEST(SceneFileErrors, MissingMeshFileNamesTheFileAndTheScene) {
+  try {
+    parse_scene_json(R"({"meshes": [{"file": "gone.obj"}]})", "dir/test.json");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.subject(), "dir/gone.obj");
+    EXPECT_EQ(e.reason(), "file not found (referenced by dir/test.json at /meshes/0/file)");
+  }
+}
+
+TEST(EditDistance, CountsInsertionsDeletionsAndSubstitutions) {
+  EXPECT_EQ(edit_distance("", ""), 0u);
+  EXPECT_EQ(edit_distance("camra", "camera"), 1u);
+  EXPECT_EQ(edit_distance("kitten", "sitting"), 3u);
+  EXPECT_EQ(edit_distance("abc", ""), 3u);
+}
+
+}  // namespace
+}  // namespace tritrace
