@@ -247,3 +247,24 @@ TEST(SceneFromMesh, FramesTheMeshInsideTheImage) {
 
 }  // namespace
 }  // namespace tritrace
+
+namespace tritrace {
+namespace {
+
+// Model files wind front faces counter-clockwise; the lab's normal is cross(e2, e1). Imported
+// triangles must come out with the lab's normal pointing out of the model, or the side facing the
+// camera (and the light beside it) would get only the ambient term.
+TEST(SceneFromMesh, OutsideOfAClosedModelFacesOutward) {
+  const LoadedScene loaded = load_scene("/usr/share/assimp/models/OBJ/box.obj");
+  const TriangleMesh& mesh = loaded.scene.mesh;
+  ASSERT_GT(mesh.size(), 0u);
+  const Bounds3 b = mesh.bounds();
+  const glm::vec3 centre = b.centre();
+  for (size_t i = 0; i < mesh.size(); ++i) {
+    const glm::vec3 mid = (mesh.vertex(i, 0) + mesh.vertex(i, 1) + mesh.vertex(i, 2)) / 3.0f;
+    EXPECT_GT(glm::dot(mesh.normal()[i], mid - centre), 0.0f) << "triangle " << i;
+  }
+}
+
+}  // namespace
+}  // namespace tritrace

@@ -69,7 +69,9 @@ void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t mate
     if (out.triangles() >= kMaxSceneTriangles) {
       throw Error(subject, "has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
     }
-    out.corners.insert(out.corners.end(), corner, corner + 3);
+    // Model files wind front faces counter-clockwise (outward normal e1 x e2); the lab's normal is
+    // cross(e2, e1), so the second and third corners swap to keep the lit side outside.
+    out.corners.insert(out.corners.end(), {corner[0], corner[2], corner[1]});
     out.material.push_back(material);
   }
 }
