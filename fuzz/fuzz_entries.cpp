@@ -58,14 +58,19 @@ void scene_json_one_input(const uint8_t* data, size_t size) {
   }
 }
 
-void mesh_memory_one_input(const uint8_t* data, size_t size) {
+void mesh_memory_one_input(const uint8_t* data, size_t size, bool isolate_assimp) {
   static constexpr std::array<const char*, 10> kHints = {"obj", "ply", "stl", "gltf", "glb",
                                                          "off", "dae", "3ds", "fbx",  "x"};
   if (size < 1) return;
   const std::string hint = kHints[data[0] % kHints.size()];
   try {
-    const ImportedMesh mesh =
-        import_mesh_memory(std::span<const uint8_t>(data + 1, size - 1), hint, "fuzz." + hint);
+    const std::span<const uint8_t> bytes(data + 1, size - 1);
+    // Under libFuzzer assimp must run in this process, where coverage is counted; the replay
+    // (and tritrace itself) goes through the isolated importer, which turns assimp's crashes into
+    // errors.
+    const ImportedMesh mesh = isolate_assimp
+                                  ? import_mesh_memory(bytes, hint, "fuzz." + hint)
+                                  : import_mesh_memory_in_process(bytes, hint, "fuzz." + hint);
     SceneOverrides small;
     small.width = kSide;
     small.height = kSide;

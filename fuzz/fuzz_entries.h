@@ -14,6 +14,8 @@ void scene_json_one_input(const uint8_t* data, size_t size);
 
 // The first byte picks the format hint given to assimp, the rest is the file; a mesh that imports
 // becomes a scene with the default camera and light and is rendered at 8 x 8.
-void mesh_memory_one_input(const uint8_t* data, size_t size);
+// isolate_assimp: import through the child-process importer, as tritrace does (the replay), or in
+// this process, where libFuzzer sees assimp's coverage (the fuzzer).
+void mesh_memory_one_input(const uint8_t* data, size_t size, bool isolate_assimp);
 
 }  // namespace tritrace::fuzz

@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
     if (scene) {
       tritrace::fuzz::scene_json_one_input(data, bytes.size());
     } else {
-      tritrace::fuzz::mesh_memory_one_input(data, bytes.size());
+      tritrace::fuzz::mesh_memory_one_input(data, bytes.size(), /*isolate_assimp=*/true);
     }
   }
   std::printf("replayed %zu inputs\n", files.size());

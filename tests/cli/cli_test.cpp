@@ -793,4 +793,21 @@ TEST_F(CliTest, BadOutputInASceneFileNamesTheSceneFile) {
   ExpectOnlyFiles(work_, {"s.json"});
 }
 
+// A malformed binary PLY that makes assimp segfault (found by the mesh fuzzer): assimp runs in a
+// child process, so tritrace reports it and exits 1 instead of crashing.
+TEST_F(CliTest, ModelThatCrashesTheImporterIsAnError) {
+  const std::string corpus = ReadFile(std::string(TRITRACE_SOURCE_DIR) +
+                                      "/tests/fuzz_corpus/mesh_memory/ply_binary_header_segv");
+  ASSERT_GT(corpus.size(), 1u);
+  {
+    std::ofstream out(work_ / "crash.ply", std::ios::binary);
+    out << corpus.substr(1);  // the fuzzer's first byte picks the format; the rest is the file
+  }
+  const RunResult render = Run({"render", "crash.ply", "-o", "crash.png"});
+  ExpectErrorLine(render, 1, "crash.ply", "the importer crashed");
+  ExpectOnlyFiles(work_, {"crash.ply"});
+  const RunResult info = Run({"info", "crash.ply"});
+  ExpectErrorLine(info, 1, "crash.ply", "the importer crashed");
+}
+
 }  // namespace

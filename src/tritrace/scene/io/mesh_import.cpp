@@ -6,6 +6,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <unistd.h>
 #include <algorithm>
 #include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
@@ -13,11 +14,13 @@
 #include <cmath>
 #include <cstring>
 #include <exception>
-#include <mutex>
+#include <functional>
+#include <stdexcept>
 #include <utility>
 
 #include "tritrace/error.h"
 #include "tritrace/scene/io/input_file.h"
+#include "tritrace/scene/io/isolated_call.h"
 #include "tritrace/scene/io/triangle_filter.h"
 
 namespace tritrace {
@@ -125,15 +128,9 @@ class LogWatch final : public Assimp::LogStream {
   bool index_out_of_range = false;
 };
 
-// assimp's logger is one global object, so imports that watch it take turns.
-std::mutex& import_mutex() {
-  static std::mutex mutex;
-  return mutex;
-}
-
+// Runs in the importer process (import_isolated), which has assimp's global logger to itself.
 template <typename ReadFn>
 ImportedMesh import_with(const std::string& subject, ReadFn&& read) {
-  const std::lock_guard lock(import_mutex());
   try {
     Assimp::Importer importer;
     Assimp::DefaultLogger::create(nullptr, Assimp::Logger::NORMAL, 0);
@@ -144,7 +141,10 @@ ImportedMesh import_with(const std::string& subject, ReadFn&& read) {
     } kill_logger;
     const aiScene* scene = read(importer);
     if (scene == nullptr) {
-      throw Error(subject, "cannot import: " + one_line(importer.GetErrorString()));
+      const std::string why = one_line(importer.GetErrorString());
+      // assimp turns std::bad_alloc into its own error string.
+      if (why.find("bad_alloc") != std::string::npos) throw std::bad_alloc();
+      throw Error(subject, "cannot import: " + why);
     }
     if (watch->index_out_of_range) {
       throw Error(subject, "cannot import: face indices out of range of the vertex data");
@@ -162,16 +162,117 @@ ImportedMesh import_with(const std::string& subject, ReadFn&& read) {
   }
 }
 
+// ImportedMesh to bytes and back, for the trip from the importer process.
+class Bytes {
+ public:
+  template <typename T>
+  void put(const T& value) {
+    const auto* p = reinterpret_cast<const uint8_t*>(&value);
+    out.insert(out.end(), p, p + sizeof(T));
+  }
+  template <typename T>
+  void put_array(const std::vector<T>& values) {
+    put<uint64_t>(values.size());
+    const auto* p = reinterpret_cast<const uint8_t*>(values.data());
+    out.insert(out.end(), p, p + values.size() * sizeof(T));
+  }
+  std::vector<uint8_t> out;
+};
+
+class Unbytes {
+ public:
+  explicit Unbytes(const std::vector<uint8_t>& bytes) : in_(bytes) {}
+  template <typename T>
+  T get() {
+    T value{};
+    need(sizeof(T));
+    std::memcpy(&value, in_.data() + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return value;
+  }
+  template <typename T>
+  std::vector<T> get_array() {
+    const uint64_t n = get<uint64_t>();
+    if (n > (in_.size() - pos_) / sizeof(T)) throw std::runtime_error("truncated");
+    std::vector<T> values(n);
+    std::memcpy(values.data(), in_.data() + pos_, n * sizeof(T));
+    pos_ += n * sizeof(T);
+    return values;
+  }
+
+ private:
+  void need(size_t n) const {
+    if (in_.size() - pos_ < n) throw std::runtime_error("truncated");
+  }
+  const std::vector<uint8_t>& in_;
+  size_t pos_ = 0;
+};
+
+std::vector<uint8_t> to_bytes(const ImportedMesh& mesh) {
+  Bytes b;
+  b.put_array(mesh.corners);
+  b.put_array(mesh.material);
+  b.put_array(mesh.materials);
+  b.put<uint64_t>(mesh.material_names.size());
+  for (const std::string& name : mesh.material_names)
+    b.put_array(std::vector<char>(name.begin(), name.end()));
+  b.put<uint64_t>(mesh.meshes);
+  return std::move(b.out);
+}
+
+ImportedMesh from_bytes(const std::vector<uint8_t>& bytes, const std::string& subject) {
+  try {
+    Unbytes in(bytes);
+    ImportedMesh mesh;
+    mesh.corners = in.get_array<glm::vec3>();
+    mesh.material = in.get_array<uint32_t>();
+    mesh.materials = in.get_array<Material>();
+    const uint64_t names = in.get<uint64_t>();
+    for (uint64_t i = 0; i < names; ++i) {
+      const std::vector<char> name = in.get_array<char>();
+      mesh.material_names.emplace_back(name.begin(), name.end());
+    }
+    mesh.meshes = static_cast<size_t>(in.get<uint64_t>());
+    return mesh;
+  } catch (const std::exception&) {
+    throw Error(subject, "cannot import: the importer process returned damaged data");
+  }
+}
+
+// The importer process may use at most half of this machine's memory; a file that asks for more
+// (assimp trusts counts in headers) fails there with "out of memory" instead of swapping here.
+uint64_t importer_memory_limit() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  const uint64_t physical = pages > 0 && page > 0 ? static_cast<uint64_t>(pages) * page : 0;
+  return std::max<uint64_t>(physical / 2, uint64_t{2} << 30);
+}
+
+ImportedMesh import_isolated(const std::string& subject, const std::function<ImportedMesh()>& fn) {
+  return from_bytes(call_isolated(
+                        subject, [&] { return to_bytes(fn()); }, importer_memory_limit()),
+                    subject);
+}
+
 }  // namespace
 
 ImportedMesh import_mesh_file(const std::string& path) {
   check_input_file(path);
-  return import_with(
-      path, [&](Assimp::Importer& importer) { return importer.ReadFile(path, kImportFlags); });
+  return import_isolated(path, [&] {
+    return import_with(
+        path, [&](Assimp::Importer& importer) { return importer.ReadFile(path, kImportFlags); });
+  });
 }
 
 ImportedMesh import_mesh_memory(std::span<const uint8_t> bytes, const std::string& format_hint,
                                 const std::string& subject) {
+  if (bytes.empty()) throw Error(subject, "is empty");
+  return import_isolated(
+      subject, [&] { return import_mesh_memory_in_process(bytes, format_hint, subject); });
+}
+
+ImportedMesh import_mesh_memory_in_process(std::span<const uint8_t> bytes,
+                                           const std::string& format_hint,
+                                           const std::string& subject) {
   if (bytes.empty()) throw Error(subject, "is empty");
   return import_with(subject, [&](Assimp::Importer& importer) {
     return importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags,

@@ -36,4 +36,11 @@ ImportedMesh import_mesh_file(const std::string& path);
 ImportedMesh import_mesh_memory(std::span<const uint8_t> bytes, const std::string& format_hint,
                                 const std::string& subject);
 
+// Both functions above run assimp in a child process (isolated_call.h): assimp has crashed on
+// malformed files, and a crash there becomes an Error here. The fuzzer needs assimp in its own
+// process, where coverage is counted, so it calls this variant; nothing else should.
+ImportedMesh import_mesh_memory_in_process(std::span<const uint8_t> bytes,
+                                           const std::string& format_hint,
+                                           const std::string& subject);
+
 }  // namespace tritrace
