@@ -178,7 +178,7 @@ int run_render(const RenderArgs& args) {
   write_image(image, output);
 
   if (!args.quiet) {
-    std::printf("rendered %dx%d in %.1f ms (%.1f Mrays/s, %d thread%s) to %s\n", image.width(),
+    std::printf("rendered %dx%d in %.1f ms (%.3g Mrays/s, %d thread%s) to %s\n", image.width(),
                 image.height(), stats.milliseconds, stats.mrays_per_second(), stats.threads,
                 stats.threads == 1 ? "" : "s", output.c_str());
   }

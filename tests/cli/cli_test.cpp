@@ -810,4 +810,31 @@ TEST_F(CliTest, ModelThatCrashesTheImporterIsAnError) {
   ExpectErrorLine(info, 1, "crash.ply", "the importer crashed");
 }
 
+// With stderr on a terminal, a render that takes more than about a second shows a progress bar
+// with percentage, elapsed time and ETA. `script` (util-linux) gives the command a terminal. The
+// render is sized to take a few seconds: brute force, one thread.
+TEST_F(CliTest, SlowRenderOnATerminalShowsProgress) {
+  const std::string log = (capture_ / "terminal.log").string();
+  const std::string command = std::string("cd '") + work_.string() + "' && script -qec \"" +
+                              TRITRACE_CLI_PATH +
+                              " render --scene terrain:20k --accel brute --threads 1 --width 160"
+                              " --height 120 -o p.png\" /dev/null > '" +
+                              log + "' 2>&1";
+  if (std::system("command -v script > /dev/null") != 0) GTEST_SKIP() << "no script(1)";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  const std::string screen = ReadFile(log);
+  EXPECT_NE(screen.find("% "), std::string::npos) << screen;
+  EXPECT_NE(screen.find("elapsed"), std::string::npos) << screen;
+  EXPECT_NE(screen.find("ETA"), std::string::npos) << screen;
+  EXPECT_NE(screen.find("rendered 160x120"), std::string::npos) << screen;
+}
+
+// Without a terminal (as in every other test here) no bar is drawn: stderr stays empty.
+TEST_F(CliTest, SlowRenderWithoutATerminalPrintsNoProgress) {
+  const RunResult r = Run({"render", "--scene", "terrain:20k", "--accel", "brute", "--threads", "1",
+                           "--width", "160", "--height", "120", "-o", "p.png"});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.err, "");
+}
+
 }  // namespace
