@@ -1,5 +1,5 @@
 // The bench subcommand: for each scene, build every accel (timed), render one warm-up frame, then
-// `reps` timed frames; report medians and the ratio to the faster Embree mode of the same scene.
+// `reps` timed frames; report medians and the ratio to the fastest Embree mode of the same scene.
 #include "bench_command.h"
 
 #include <sys/resource.h>
@@ -188,7 +188,7 @@ int run_bench(const BenchArgs& args) {
       r.mrays_per_s = static_cast<double>(rays) / reps / (r.frame_ms_median * 1e3);
       records.push_back(r);
     }
-    // Ratios against the faster Embree mode of this scene.
+    // Ratios against the fastest Embree mode of this scene.
     double embree_best = 0.0;
     for (size_t i = first; i < records.size(); ++i) {
       if (records[i].accel.starts_with("embree")) {

@@ -13,8 +13,8 @@
 
 namespace tritrace {
 namespace {
-constexpr AccelKind kAll[] = {AccelKind::kBvh, AccelKind::kBrute, AccelKind::kEmbree,
-                              AccelKind::kEmbreeSingle, AccelKind::kBvhSingle};
+constexpr AccelKind kAll[] = {AccelKind::kBvh,          AccelKind::kBrute,     AccelKind::kEmbree,
+                              AccelKind::kEmbreeSingle, AccelKind::kBvhSingle, AccelKind::kEmbree8};
 }
 
 std::string_view accel_name(AccelKind kind) {
@@ -29,6 +29,8 @@ std::string_view accel_name(AccelKind kind) {
       return "embree-single";
     case AccelKind::kBvhSingle:
       return "bvh-single";
+    case AccelKind::kEmbree8:
+      return "embree8";
   }
   return "unknown";
 }
@@ -41,7 +43,8 @@ std::optional<AccelKind> parse_accel(std::string_view name) {
 }
 
 bool accel_available(AccelKind kind) {
-  const bool embree = kind == AccelKind::kEmbree || kind == AccelKind::kEmbreeSingle;
+  const bool embree =
+      kind == AccelKind::kEmbree || kind == AccelKind::kEmbreeSingle || kind == AccelKind::kEmbree8;
   return !embree || TRITRACE_HAVE_EMBREE;
 }
 
@@ -73,9 +76,11 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kern
       break;
     }
     case AccelKind::kEmbree:
-    case AccelKind::kEmbreeSingle: {
+    case AccelKind::kEmbreeSingle:
+    case AccelKind::kEmbree8: {
 #if TRITRACE_HAVE_EMBREE
       const EmbreeMode mode = kind == AccelKind::kEmbreeSingle ? EmbreeMode::kSingle
+                              : kind == AccelKind::kEmbree8    ? EmbreeMode::kPacket8
                               : EmbreeAccel::native_packet16() ? EmbreeMode::kPacket16
                                                                : EmbreeMode::kPacket8;
       auto embree = std::make_unique<EmbreeAccel>(mesh, mode);
