@@ -2,11 +2,22 @@
 #   make run   installs missing packages, builds Release, renders out/cornell.png
 #   make test  the same set-up, then the whole test suite through ctest
 # CMake stays the real build; BUILD_DIR and CMAKE_FLAGS can be overridden.
+#   make test-asan  the test suite built with AddressSanitizer + UndefinedBehaviorSanitizer
+#   make test-tsan  the multi-threaded tests built with ThreadSanitizer
+#   make leaks      the full closed-mesh leak count for every kernel (docs/RELIABILITY.md)
+#   make lint       clang-tidy over src/ and apps/ (.clang-tidy)
 BUILD_DIR ?= build
 CMAKE_FLAGS ?=
 JOBS ?= $(shell nproc)
+ASAN_DIR ?= build-asan
+TSAN_DIR ?= build-tsan
+# Sanitized builds: optimised (the tests trace millions of rays) with debug info for reports; no
+# benchmarks.
+SANITIZE_FLAGS = -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRITRACE_BUILD_BENCH=OFF
+# The multi-threaded renderer tests: thread-count invariance, statistics, whole images.
+TSAN_TESTS = Renderer.*:Placements/*
 
-.PHONY: all deps configure build run test bench format lint clean
+.PHONY: all deps configure build run test test-asan test-tsan leaks bench format lint clean
 
 all: build
 
@@ -26,6 +37,21 @@ run: build
 test: build
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
+test-asan: deps
+	@cmake -S . -B $(ASAN_DIR) $(SANITIZE_FLAGS) -DTRITRACE_SANITIZE=address,undefined >/dev/null
+	@cmake --build $(ASAN_DIR) -j $(JOBS)
+	@cd $(ASAN_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+	  UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
+
+test-tsan: deps
+	@cmake -S . -B $(TSAN_DIR) $(SANITIZE_FLAGS) -DTRITRACE_SANITIZE=thread >/dev/null
+	@cmake --build $(TSAN_DIR) -j $(JOBS) --target tritrace_tests
+	@TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/.ci/tsan.supp" \
+	  $(TSAN_DIR)/tests/tritrace_tests --gtest_filter='$(TSAN_TESTS)'
+
+leaks: build
+	@$(BUILD_DIR)/tritrace_leaks
+
 bench: build
 	@$(BUILD_DIR)/bench/tritrace_bench
 
@@ -37,4 +63,4 @@ lint: configure
 	@git ls-files 'src/*.cpp' 'apps/*.cpp' | xargs clang-tidy -p $(BUILD_DIR) --quiet
 
 clean:
-	@rm -rf $(BUILD_DIR) out
+	@rm -rf $(BUILD_DIR) $(ASAN_DIR) $(TSAN_DIR) out

@@ -1,5 +1,6 @@
-// Micro benchmarks for the lab's question, inverse versus Cramer (and Möller–Trumbore): the cost of
-// one ray/triangle test, and of a whole lab frame per kernel, single-threaded and on all cores.
+// Micro benchmarks for the lab's question, inverse versus Cramer (and Möller–Trumbore, watertight):
+// the cost of one ray/triangle test, and of a whole lab frame per kernel, single-threaded and on
+// all cores.
 #include <benchmark/benchmark.h>
 
 #include <random>
@@ -54,6 +55,44 @@ void BM_RayTriangle(benchmark::State& state) {
 BENCHMARK(BM_RayTriangle<Kernel::kInverse>)->Name("RayTriangle/inverse");
 BENCHMARK(BM_RayTriangle<Kernel::kCramer>)->Name("RayTriangle/cramer");
 BENCHMARK(BM_RayTriangle<Kernel::kMollerTrumbore>)->Name("RayTriangle/moller-trumbore");
+// The watertight kernel's per-ray set-up (axis choice, shear, one division) is inside this loop.
+BENCHMARK(BM_RayTriangle<Kernel::kWatertight>)->Name("RayTriangle/watertight");
+
+// The same tests as a mesh loop runs them: each ray's per-ray work (PreparedRay) done beforehand,
+// as it is once per ray and amortised over many triangles, and triangles read from the mesh's
+// arrays (vertices for the watertight kernel, v0 and edges for the others).
+template <Kernel K>
+void BM_RayTrianglePrepared(benchmark::State& state) {
+  const std::vector<TestCase> cases = random_cases();
+  std::vector<glm::vec3> v0, v1, v2, e1, e2;
+  std::vector<PreparedRay<K>> rays;
+  for (const TestCase& c : cases) {
+    v0.push_back(c.v0);
+    v1.push_back(c.v0 + c.e1);
+    v2.push_back(c.v0 + c.e2);
+    e1.push_back(c.e1);
+    e2.push_back(c.e2);
+    rays.emplace_back(c.ray);
+  }
+  const TriangleArrays tris{v0.data(), v1.data(), v2.data(), e1.data(), e2.data()};
+  int64_t hits = 0;
+  for (auto _ : state) {
+    for (size_t i = 0; i < cases.size(); ++i) {
+      TriangleHit h;
+      const bool hit = rays[i].intersect(tris, i, h);
+      hits += hit;
+      benchmark::DoNotOptimize(h);
+    }
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(cases.size()));
+  state.counters["hit_rate"] =
+      static_cast<double>(hits) / (static_cast<double>(state.iterations()) * cases.size());
+}
+BENCHMARK(BM_RayTrianglePrepared<Kernel::kInverse>)->Name("RayTrianglePrepared/inverse");
+BENCHMARK(BM_RayTrianglePrepared<Kernel::kCramer>)->Name("RayTrianglePrepared/cramer");
+BENCHMARK(BM_RayTrianglePrepared<Kernel::kMollerTrumbore>)
+    ->Name("RayTrianglePrepared/moller-trumbore");
+BENCHMARK(BM_RayTrianglePrepared<Kernel::kWatertight>)->Name("RayTrianglePrepared/watertight");
 
 // range(0): kernel index, range(1): image side, range(2): threads (0 = all cores).
 void BM_LabFrame(benchmark::State& state) {
@@ -77,7 +116,7 @@ void BM_LabFrame(benchmark::State& state) {
 }
 BENCHMARK(BM_LabFrame)
     ->ArgNames({"kernel", "side", "threads"})
-    ->ArgsProduct({{0, 1, 2}, {50, 500}, {1, 0}})
+    ->ArgsProduct({{0, 1, 2, 3}, {50, 500}, {1, 0}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -40,6 +40,9 @@ std::string usage_message(const CLI::ParseError& e, int argc, char** argv) {
 
 }  // namespace
 
+// Setting up the parser can only throw std::bad_alloc, for which terminating is the right answer;
+// everything after it runs inside the try blocks below.
+// NOLINTNEXTLINE(bugprone-exception-escape)
 int main(int argc, char** argv) {
   CLI::App app("tritrace: a fast ray tracer for triangle scenes", "tritrace");
   app.require_subcommand(1);

@@ -146,6 +146,35 @@ TEST_P(KernelTest, TinyButValidTriangleIsHit) {
   EXPECT_NEAR(h.u, 0.25f, 1e-4f);
 }
 
+TEST_P(KernelTest, MeshLoopEntryPointAgreesWithSingleTriangleEntryPoint) {
+  // PreparedRay reads the mesh's arrays (the watertight kernel its exact vertices); on triangles
+  // whose vertices are exact sums v0 + e1, v0 + e2 it must answer as the (v0, e1, e2) form does.
+  const glm::vec3 v0s[2] = {kV0, glm::vec3(1.0f)};
+  const glm::vec3 e1s[2] = {kE1, glm::vec3(2.0f, 0.0f, 0.0f)};
+  const glm::vec3 e2s[2] = {kE2, glm::vec3(0.0f, 2.0f, 2.0f)};
+  const glm::vec3 v1s[2] = {v0s[0] + e1s[0], v0s[1] + e1s[1]};
+  const glm::vec3 v2s[2] = {v0s[0] + e2s[0], v0s[1] + e2s[1]};
+  const TriangleArrays tris{v0s, v1s, v2s, e1s, e2s};
+  for (float x : {-0.5f, 0.0f, 0.3f, 1.0f, 1.5f}) {
+    for (float y : {-0.5f, 0.0f, 0.4f, 1.0f, 2.5f}) {
+      Ray r = ray_down_z(x, y, -3.0f);
+      r.dir = glm::normalize(glm::vec3(0.1f, 0.2f, 1.0f));
+      for (size_t i = 0; i < 2; ++i) {
+        TriangleHit single{}, looped{};
+        const bool a = intersect_triangle(GetParam(), r, v0s[i], e1s[i], e2s[i], single);
+        const bool b = with_kernel(
+            GetParam(), [&]<Kernel K>() { return PreparedRay<K>(r).intersect(tris, i, looped); });
+        ASSERT_EQ(a, b) << x << "," << y << " triangle " << i;
+        if (a) {
+          EXPECT_EQ(single.t, looped.t);
+          EXPECT_EQ(single.u, looped.u);
+          EXPECT_EQ(single.v, looped.v);
+        }
+      }
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(AllKernels, KernelTest, ::testing::ValuesIn(kAllKernels),
                          [](const auto& info) {
                            std::string name(kernel_name(info.param));
@@ -156,6 +185,7 @@ INSTANTIATE_TEST_SUITE_P(AllKernels, KernelTest, ::testing::ValuesIn(kAllKernels
 TEST(KernelNames, RoundTripAndRejectUnknown) {
   for (Kernel k : kAllKernels) EXPECT_EQ(parse_kernel(kernel_name(k)), k);
   EXPECT_EQ(parse_kernel("moller-trumbore"), Kernel::kMollerTrumbore);
+  EXPECT_EQ(parse_kernel("watertight"), Kernel::kWatertight);
   EXPECT_FALSE(parse_kernel("Cramer").has_value());
   EXPECT_FALSE(parse_kernel("").has_value());
 }

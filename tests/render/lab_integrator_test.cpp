@@ -8,9 +8,11 @@
 #include <cmath>
 #include <numbers>
 
+#include "lab_view.h"
 #include "tritrace/accel/brute_force.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/transform.h"
 
 namespace tritrace {
 namespace {
@@ -124,6 +126,108 @@ INSTANTIATE_TEST_SUITE_P(AllKernels, LabPixels, ::testing::ValuesIn(kAllKernels)
                            std::erase(name, '-');
                            return name;
                          });
+
+// The lab scene moved as a whole (geometry, camera, light, power * scale^2) must render the same
+// picture: shadow rays are offset relative to the scene's size and position, not by a constant.
+struct Placement {
+  const char* name;
+  Similarity xf;
+};
+const Placement kPlacements[] = {{"ScaledDownBy1000", {1e-3f, glm::vec3(0.0f)}},
+                                 {"ScaledUpBy10000", {1e4f, glm::vec3(0.0f)}},
+                                 {"TranslatedBy10000", {1.0f, glm::vec3(1e4f)}}};
+
+class MovedLabScene : public ::testing::TestWithParam<Placement> {};
+
+TEST_P(MovedLabScene, RendersTheSameImageApartFromEdgePixels) {
+  const Scene base = make_cornell_box();
+  const Scene moved = transformed(base, GetParam().xf);
+  const BruteForceAccel base_accel(base.mesh, kDefaultKernel),
+      moved_accel(moved.mesh, kDefaultKernel);
+  const std::vector<uint8_t> want = to_rgb8_lab(render(base, base_accel, LabIntegrator{}, {}));
+  const std::vector<uint8_t> got = to_rgb8_lab(render(moved, moved_accel, LabIntegrator{}, {}));
+  ASSERT_EQ(got.size(), want.size());
+  // A scaled scene keeps float's relative precision: off the room's corner edges (exact ties, see
+  // lab_view.h), at most 0.1% of pixels may differ at all. Translated by 1e4, positions are known
+  // to float's resolution there, 2^-10 (a 2000th of the box): every shading term is off by up to
+  // one level of 255, and geometric and shadow edges move by up to half a pixel (vertices round by
+  // 2^-11, shadow rays start 4 ULPs = 2^-8 off the surface), so at most 0.2% of pixels may differ
+  // by more than one level. Measured: 4 pixels at 1e-3, 0 at 1e4, 247 translated.
+  const bool translated = GetParam().xf.scale == 1.0f;
+  const int tolerance = translated ? 1 : 0;
+  int differing = 0;
+  for (int y = 0; y < 500; ++y) {
+    for (int x = 0; x < 500; ++x) {
+      if (testing_lab::on_room_corner_edge(x, y)) continue;
+      const size_t p = 3 * (static_cast<size_t>(y) * 500 + x);
+      for (int c = 0; c < 3; ++c) {
+        if (std::abs(int{got[p + c]} - int{want[p + c]}) > tolerance) {
+          ++differing;
+          break;
+        }
+      }
+    }
+  }
+  std::printf("%s: %d pixels differ off the room's corner edges\n", GetParam().name, differing);
+  EXPECT_LE(differing, (translated ? 2 : 1) * 500 * 500 / 1000);
+}
+
+TEST_P(MovedLabScene, NoShadowRayHitsTheFaceItStartsOn) {
+  // Acne: a shadow ray that hits its own triangle, or the other half of the same wall or block
+  // face (the lab's faces are consecutive triangle pairs). Every pixel's ray is checked against
+  // all triangles, and the one it hits first is looked at.
+  for (const Scene& s : {make_cornell_box(), transformed(make_cornell_box(), GetParam().xf)}) {
+    const BruteForceAccel accel(s.mesh, kDefaultKernel);
+    int traced = 0, acne = 0;
+    for (int y = 0; y < 500; y += 2) {
+      for (int x = 0; x < 500; x += 2) {
+        const Hit hit = accel.intersect(s.camera.primary_ray(x, y));
+        if (!hit.found()) continue;
+        const ShadowRay shadow = lab_shadow_ray(s.mesh, hit, s.lights[0].position);
+        if (shadow.kind != ShadowRay::Kind::kTrace) continue;
+        ++traced;
+        const Hit blocker = accel.intersect(shadow.ray);
+        acne += blocker.found() && blocker.prim / 2 == hit.prim / 2;
+      }
+    }
+    EXPECT_GT(traced, 30'000);
+    EXPECT_EQ(acne, 0);
+  }
+}
+
+TEST_P(MovedLabScene, NoLightLeaksIntoAClosedRoomThroughItsCorners) {
+  // The room closed by a front wall, the camera inside it, and the light outside, beyond the edge
+  // where the floor meets the yellow wall: every shadow ray must be stopped by a wall, so every
+  // pixel shows the indirect term only. A shadow ray starting behind a neighbouring wall, or
+  // slipping through the seam between two walls, would light a pixel.
+  Scene room = make_cornell_box();
+  const glm::vec3 a(1.0f, 1.0f, -1.0f), b(-1.0f, 1.0f, -1.0f), e(1.0f, -1.0f, -1.0f),
+      f(-1.0f, -1.0f, -1.0f);
+  room.mesh.add(a, b, f, 6);  // white front wall at z = -1
+  room.mesh.add(a, f, e, 6);
+  room.lights[0].position = {-1.2f, 1.3f, 0.4f};
+  // Wide (f = 80 for 200 pixels), from just inside the front wall: sees all four walls' corners.
+  room.camera = Camera::look_at(200, 200, {0.0f, 0.0f, -0.95f}, {0.0f, 0.0f, 1.0f},
+                                {0.0f, -1.0f, 0.0f}, 80.0f);
+  const Scene s = transformed(room, GetParam().xf);
+  const BruteForceAccel accel(s.mesh, kDefaultKernel);
+  const Image img = render(s, accel, LabIntegrator{}, {});
+  int lit = 0, seen = 0;
+  for (int y = 0; y < img.height(); ++y) {
+    for (int x = 0; x < img.width(); ++x) {
+      const Hit hit = accel.intersect(s.camera.primary_ray(x, y));
+      ASSERT_TRUE(hit.found()) << "closed room, pixel " << x << "," << y;
+      ++seen;
+      const glm::vec3 albedo = s.materials[s.mesh.material()[hit.prim]].albedo;
+      lit += img.at(x, y) != albedo * s.ambient;
+    }
+  }
+  EXPECT_EQ(seen, 200 * 200);
+  EXPECT_EQ(lit, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Placements, MovedLabScene, ::testing::ValuesIn(kPlacements),
+                         [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace
 }  // namespace tritrace

@@ -62,5 +62,19 @@ TEST(Camera, SmallYawMatchesTheRotationMatrixByHand) {
   EXPECT_NEAR(r.origin.z, -3.0f * c, 1e-6f);
 }
 
+TEST(Camera, WithPositionMovesTheCameraAndKeepsItsView) {
+  const Camera cam(321, 123, 0.7);
+  const Camera moved = cam.with_position({5.0f, 6.0f, 7.0f});
+  EXPECT_EQ(moved.position(), glm::vec3(5.0f, 6.0f, 7.0f));
+  EXPECT_EQ(moved.width(), 321);
+  EXPECT_EQ(moved.focal_px(), cam.focal_px());
+  for (int y : {0, 61, 122}) {
+    for (int x : {0, 160, 320}) {
+      EXPECT_EQ(moved.primary_ray(x, y).dir, cam.primary_ray(x, y).dir);
+      EXPECT_EQ(moved.primary_ray(x, y).origin, glm::vec3(5.0f, 6.0f, 7.0f));
+    }
+  }
+}
+
 }  // namespace
 }  // namespace tritrace

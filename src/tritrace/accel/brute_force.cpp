@@ -6,17 +6,15 @@ namespace {
 
 template <Kernel K>
 void intersect_all(const TriangleMesh& mesh, std::span<const Ray> rays, std::span<Hit> hits) {
-  const glm::vec3* v0 = mesh.v0().data();
-  const glm::vec3* e1 = mesh.e1().data();
-  const glm::vec3* e2 = mesh.e2().data();
+  const TriangleArrays tris = mesh.arrays();
   const uint32_t n = static_cast<uint32_t>(mesh.size());
   for (size_t r = 0; r < rays.size(); ++r) {
-    const Ray& ray = rays[r];
+    const PreparedRay<K> ray(rays[r]);
     Hit best;
     TriangleHit h;
     for (uint32_t i = 0; i < n; ++i) {
       // Strictly closer: on an exact tie the earlier triangle keeps the hit.
-      if (intersect_triangle<K>(ray, v0[i], e1[i], e2[i], h) && h.t < best.t) {
+      if (ray.intersect(tris, i, h) && h.t < best.t) {
         best = {h.t, h.u, h.v, i};
       }
     }
@@ -27,15 +25,14 @@ void intersect_all(const TriangleMesh& mesh, std::span<const Ray> rays, std::spa
 template <Kernel K>
 void occluded_all(const TriangleMesh& mesh, std::span<const Ray> rays,
                   std::span<uint8_t> occluded) {
-  const glm::vec3* v0 = mesh.v0().data();
-  const glm::vec3* e1 = mesh.e1().data();
-  const glm::vec3* e2 = mesh.e2().data();
+  const TriangleArrays tris = mesh.arrays();
   const uint32_t n = static_cast<uint32_t>(mesh.size());
   for (size_t r = 0; r < rays.size(); ++r) {
+    const PreparedRay<K> ray(rays[r]);
     uint8_t blocked = 0;
     TriangleHit h;
     for (uint32_t i = 0; i < n; ++i) {
-      if (intersect_triangle<K>(rays[r], v0[i], e1[i], e2[i], h)) {
+      if (ray.intersect(tris, i, h)) {
         blocked = 1;
         break;
       }

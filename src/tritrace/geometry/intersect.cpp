@@ -11,6 +11,8 @@ std::string_view kernel_name(Kernel kernel) {
       return "cramer";
     case Kernel::kMollerTrumbore:
       return "moller-trumbore";
+    case Kernel::kWatertight:
+      return "watertight";
   }
   return "unknown";
 }

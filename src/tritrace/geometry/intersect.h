@@ -4,7 +4,11 @@
 // is written so that a NaN fails it.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <bit>
+#include <cmath>
+#include <cstddef>
 #include <glm/glm.hpp>
 #include <optional>
 #include <string_view>
@@ -13,15 +17,17 @@
 
 namespace tritrace {
 
-enum class Kernel { kInverse, kCramer, kMollerTrumbore };
+enum class Kernel { kInverse, kCramer, kMollerTrumbore, kWatertight };
 
-inline constexpr std::array<Kernel, 3> kAllKernels = {Kernel::kInverse, Kernel::kCramer,
-                                                      Kernel::kMollerTrumbore};
+inline constexpr std::array<Kernel, 4> kAllKernels = {Kernel::kInverse, Kernel::kCramer,
+                                                      Kernel::kMollerTrumbore, Kernel::kWatertight};
 
-// Measured fastest on the lab scene (docs/PERFORMANCE.md).
-inline constexpr Kernel kDefaultKernel = Kernel::kMollerTrumbore;
+// The only kernel that never lets a ray slip between triangles sharing an edge or vertex
+// (docs/RELIABILITY.md), at a cost within 15% of Möller–Trumbore (docs/PERFORMANCE.md).
+inline constexpr Kernel kDefaultKernel = Kernel::kWatertight;
 
-std::string_view kernel_name(Kernel kernel);  // "inverse", "cramer", "moller-trumbore"
+// "inverse", "cramer", "moller-trumbore", "watertight"
+std::string_view kernel_name(Kernel kernel);
 std::optional<Kernel> parse_kernel(std::string_view name);
 
 struct TriangleHit {
@@ -87,6 +93,148 @@ inline bool intersect_moller_trumbore(const Ray& ray, const glm::vec3& v0, const
   return true;
 }
 
+// Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013.
+//
+// The ray is turned into the +z axis by a permutation (kz = the largest |dir| component) and a
+// shear, so that each triangle reduces to a 2D point-in-triangle test of the origin against the
+// sheared vertices. The three edge functions U, V, W are computed from the vertices alone, and
+// swapping an edge's two vertices negates its edge function exactly, so two triangles sharing an
+// edge always put a ray on opposite sides of it, or on it (and edges are inclusive): no ray slips
+// through. That needs the vertices themselves (v0 + e1 is not v1 in float) and no fused
+// multiply-add in the edge functions or the shear (the project builds with -ffp-contract=off;
+// fusing one product of a difference but not the other breaks the exact negation).
+struct WatertightRay {
+  int kz = 2;  // the dominant axis of dir; kx = kz + 1 and ky = kz + 2 (mod 3)
+  // The origin's coordinates in permuted order (kx, ky, kz).
+  float ox = 0.0f, oy = 0.0f, oz = 0.0f;
+  float sx = 0.0f, sy = 0.0f, sz = 1.0f;  // shear: dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz]
+  float tmin = 0.0f;
+  float tmax = kRayTMax;
+};
+
+// Per-ray work, done once and reused for every triangle. The paper also swaps kx and ky when
+// dir[kz] < 0 to keep each triangle's winding; both sides count as hits here and t, u, v do not
+// depend on it, so the swap is left out.
+inline WatertightRay prepare_watertight(const Ray& ray) {
+  WatertightRay w;
+  w.tmin = ray.tmin;
+  w.tmax = ray.tmax;
+  const std::array<float, 3> d = std::bit_cast<std::array<float, 3>>(ray.dir);
+  const std::array<float, 3> o = std::bit_cast<std::array<float, 3>>(ray.origin);
+  // Written as selects rather than nested branches: rays come in any direction, and a mispredicted
+  // branch per ray costs more than the selects.
+  const float largest_xy = std::max(std::abs(d[0]), std::abs(d[1]));
+  w.kz = std::abs(d[1]) > std::abs(d[0]) ? 1 : 0;
+  w.kz = std::abs(d[2]) > largest_xy ? 2 : w.kz;
+  const int kx = w.kz == 2 ? 0 : w.kz + 1;
+  const int ky = kx == 2 ? 0 : kx + 1;
+  w.ox = o[kx];
+  w.oy = o[ky];
+  w.oz = o[w.kz];
+  w.sz = 1.0f / d[w.kz];
+  w.sx = d[kx] * w.sz;
+  w.sy = d[ky] * w.sz;
+  const bool finite = std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]) &&
+                      std::isfinite(w.sx) && std::isfinite(w.sy) && std::isfinite(w.sz) &&
+                      w.sz != 0.0f;
+  // A zero, infinite or NaN direction (or origin) hits nothing: an empty t interval says so
+  // without a branch in the per-triangle test.
+  if (!finite) {
+    w.tmin = kRayTMax;
+    w.tmax = -kRayTMax;
+  }
+  return w;
+}
+
+namespace detail {
+// The sheared position of a vertex relative to the ray origin.
+struct Sheared {
+  float x, y, z;
+};
+// One function for all three vertices, so a vertex shared by two triangles gets the same bits in
+// both. The axis is a template parameter so that the permutation costs nothing per triangle.
+template <int Kz>
+inline Sheared shear(const WatertightRay& r, const glm::vec3& p) {
+  constexpr int kKx = (Kz + 1) % 3, kKy = (Kz + 2) % 3;
+  const float qx = p[kKx] - r.ox, qy = p[kKy] - r.oy, qz = p[Kz] - r.oz;
+  return {qx - r.sx * qz, qy - r.sy * qz, qz};
+}
+// The 2D edge function a.x*b.y - a.y*b.x; edge(b, a) == -edge(a, b) exactly.
+inline float edge(const Sheared& a, const Sheared& b) {
+  return a.x * b.y - a.y * b.x;
+}
+// Float products of floats are exact in double (24 + 24 bits < 53), so the difference is rounded
+// once and its sign is the true sign: the paper's fallback when the float result is exactly 0.
+inline double edge_exact(const Sheared& a, const Sheared& b) {
+  return static_cast<double>(a.x) * static_cast<double>(b.y) -
+         static_cast<double>(a.y) * static_cast<double>(b.x);
+}
+
+template <int Kz>
+inline bool intersect_watertight_axis(const WatertightRay& ray, const glm::vec3& v0,
+                                      const glm::vec3& v1, const glm::vec3& v2, TriangleHit& out) {
+  const Sheared a = shear<Kz>(ray, v0);
+  const Sheared b = shear<Kz>(ray, v1);
+  const Sheared c = shear<Kz>(ray, v2);
+  // Early out: all three vertices strictly on one side of the ray in x or in y. This is exact on
+  // the sheared vertices, and the edge test below would reject the same triangle, so it changes
+  // no answer (watertightness included); it only spares most far-away triangles the edge functions.
+  if ((a.x > 0.0f && b.x > 0.0f && c.x > 0.0f) || (a.x < 0.0f && b.x < 0.0f && c.x < 0.0f) ||
+      (a.y > 0.0f && b.y > 0.0f && c.y > 0.0f) || (a.y < 0.0f && b.y < 0.0f && c.y < 0.0f)) {
+    return false;
+  }
+  // U weighs v0, V weighs v1, W weighs v2.
+  float u = edge(c, b);
+  float v = edge(a, c);
+  float w = edge(b, a);
+  // A float edge function has the true sign or is 0 (rounding is monotonic), so only a 0 needs
+  // the exact value; the neighbour sharing that edge gets the same 0 and takes this path too.
+  if (u == 0.0f || v == 0.0f || w == 0.0f) [[unlikely]] {
+    const double ud = edge_exact(c, b);
+    const double vd = edge_exact(a, c);
+    const double wd = edge_exact(b, a);
+    if ((ud < 0.0 || vd < 0.0 || wd < 0.0) && (ud > 0.0 || vd > 0.0 || wd > 0.0)) return false;
+    u = static_cast<float>(ud);
+    v = static_cast<float>(vd);
+    w = static_cast<float>(wd);
+  }
+  // Inside when all three have the same sign (zero counts as either: edges are inclusive). Written
+  // so that a NaN fails it.
+  const bool all_nonneg = u >= 0.0f && v >= 0.0f && w >= 0.0f;
+  const bool all_nonpos = u <= 0.0f && v <= 0.0f && w <= 0.0f;
+  if (!(all_nonneg || all_nonpos)) return false;
+  const float det = u + v + w;
+  if (!(det != 0.0f)) return false;  // the ray lies in the triangle's plane, or it is degenerate
+  // t = sz * (U az + V bz + W cz) / det: the distance along the sheared z axis, rescaled.
+  const float inv_det = 1.0f / det;
+  const float t = (u * a.z + v * b.z + w * c.z) * (ray.sz * inv_det);
+  if (!(t >= ray.tmin && t <= ray.tmax)) return false;
+  out = {t, v * inv_det, w * inv_det};
+  return true;
+}
+}  // namespace detail
+
+inline bool intersect_watertight(const WatertightRay& ray, const glm::vec3& v0, const glm::vec3& v1,
+                                 const glm::vec3& v2, TriangleHit& out) {
+  // In a loop over one ray's triangles this switch always goes the same way.
+  switch (ray.kz) {
+    case 0:
+      return detail::intersect_watertight_axis<0>(ray, v0, v1, v2, out);
+    case 1:
+      return detail::intersect_watertight_axis<1>(ray, v0, v1, v2, out);
+    default:
+      return detail::intersect_watertight_axis<2>(ray, v0, v1, v2, out);
+  }
+}
+
+// The same contract as the other kernels, from v0, e1, e2. v0 + e1 rounds, so triangles meeting
+// this way are only as watertight as that rounding allows: loops over a mesh use the vertex form
+// through PreparedRay below.
+inline bool intersect_watertight(const Ray& ray, const glm::vec3& v0, const glm::vec3& e1,
+                                 const glm::vec3& e2, TriangleHit& out) {
+  return intersect_watertight(prepare_watertight(ray), v0, v0 + e1, v0 + e2, out);
+}
+
 template <Kernel K>
 inline bool intersect_triangle(const Ray& ray, const glm::vec3& v0, const glm::vec3& e1,
                                const glm::vec3& e2, TriangleHit& out) {
@@ -94,10 +242,50 @@ inline bool intersect_triangle(const Ray& ray, const glm::vec3& v0, const glm::v
     return intersect_inverse(ray, v0, e1, e2, out);
   } else if constexpr (K == Kernel::kCramer) {
     return intersect_cramer(ray, v0, e1, e2, out);
-  } else {
+  } else if constexpr (K == Kernel::kMollerTrumbore) {
     return intersect_moller_trumbore(ray, v0, e1, e2, out);
+  } else {
+    return intersect_watertight(ray, v0, e1, e2, out);
   }
 }
+
+// The triangle arrays a loop over a mesh reads (TriangleMesh::arrays()). Each kernel reads only
+// what it needs: the watertight kernel the vertices, the others v0 and the edges; unused loads
+// vanish once the kernel is inlined.
+struct TriangleArrays {
+  const glm::vec3* v0 = nullptr;
+  const glm::vec3* v1 = nullptr;
+  const glm::vec3* v2 = nullptr;
+  const glm::vec3* e1 = nullptr;
+  const glm::vec3* e2 = nullptr;
+};
+
+// A ray with kernel K's per-ray work done, for loops that test one ray against many triangles:
+//   const PreparedRay<K> pr(ray);
+//   for (i ...) if (pr.intersect(tris, i, hit)) ...
+template <Kernel K>
+class PreparedRay {
+ public:
+  explicit PreparedRay(const Ray& ray) : ray_(ray) {}
+  bool intersect(const TriangleArrays& tris, size_t i, TriangleHit& out) const {
+    return intersect_triangle<K>(ray_, tris.v0[i], tris.e1[i], tris.e2[i], out);
+  }
+
+ private:
+  Ray ray_;
+};
+
+template <>
+class PreparedRay<Kernel::kWatertight> {
+ public:
+  explicit PreparedRay(const Ray& ray) : ray_(prepare_watertight(ray)) {}
+  bool intersect(const TriangleArrays& tris, size_t i, TriangleHit& out) const {
+    return intersect_watertight(ray_, tris.v0[i], tris.v1[i], tris.v2[i], out);
+  }
+
+ private:
+  WatertightRay ray_;
+};
 
 // Calls fn.template operator()<K>() with the compile-time kernel matching `kernel`, so that a loop
 // over triangles is instantiated once per kernel and the kernel inlines into it. Adding a kernel
@@ -110,12 +298,14 @@ decltype(auto) with_kernel(Kernel kernel, Fn&& fn) {
     case Kernel::kCramer:
       return fn.template operator()<Kernel::kCramer>();
     case Kernel::kMollerTrumbore:
+      return fn.template operator()<Kernel::kMollerTrumbore>();
+    case Kernel::kWatertight:
       break;
   }
-  return fn.template operator()<Kernel::kMollerTrumbore>();
+  return fn.template operator()<Kernel::kWatertight>();
 }
 
-// Runtime dispatch for tests and tools; hot loops use the template above.
+// Runtime dispatch for tests and tools; hot loops use the templates above.
 bool intersect_triangle(Kernel kernel, const Ray& ray, const glm::vec3& v0, const glm::vec3& e1,
                         const glm::vec3& e2, TriangleHit& out);
 

@@ -12,6 +12,8 @@ void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& 
   const glm::vec3 n = glm::cross(e2, e1);
   const float len = glm::length(n);
   v0_.push_back(a);
+  v1_.push_back(b);
+  v2_.push_back(c);
   e1_.push_back(e1);
   e2_.push_back(e2);
   normal_.push_back(len > 0.0f ? n / len : glm::vec3(0.0f));
@@ -19,12 +21,14 @@ void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& 
 }
 
 void TriangleMesh::reserve(size_t triangles) {
-  for (auto* v : {&v0_, &e1_, &e2_, &normal_}) v->reserve(triangles);
+  for (auto* v : {&v0_, &v1_, &v2_, &e1_, &e2_, &normal_}) v->reserve(triangles);
   material_.reserve(triangles);
 }
 
 void TriangleMesh::append(const TriangleMesh& other, uint32_t material_offset) {
   v0_.insert(v0_.end(), other.v0_.begin(), other.v0_.end());
+  v1_.insert(v1_.end(), other.v1_.begin(), other.v1_.end());
+  v2_.insert(v2_.end(), other.v2_.begin(), other.v2_.end());
   e1_.insert(e1_.end(), other.e1_.begin(), other.e1_.end());
   e2_.insert(e2_.end(), other.e2_.begin(), other.e2_.end());
   normal_.insert(normal_.end(), other.normal_.begin(), other.normal_.end());
@@ -32,8 +36,8 @@ void TriangleMesh::append(const TriangleMesh& other, uint32_t material_offset) {
 }
 
 glm::vec3 TriangleMesh::vertex(size_t tri, int corner) const {
-  if (corner == 1) return v0_[tri] + e1_[tri];
-  if (corner == 2) return v0_[tri] + e2_[tri];
+  if (corner == 1) return v1_[tri];
+  if (corner == 2) return v2_[tri];
   return v0_[tri];
 }
 

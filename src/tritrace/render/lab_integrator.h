@@ -3,18 +3,42 @@
 // indirect term (the scene's ambient). A missed ray is black.
 #pragma once
 
+#include "tritrace/geometry/hit.h"
+#include "tritrace/geometry/triangle_mesh.h"
+#include "tritrace/math/offset_ray.h"
 #include "tritrace/render/integrator.h"
 
 namespace tritrace {
 
-// The shadow ray starts this far from the hit point, toward the light, so that it cannot hit the
-// surface it starts on (as the lab solutions do; see ../shared/lab-cornell-box.md).
-inline constexpr float kLabShadowOffset = 1e-3f;
+// The shadow ray from a primary hit to a point light. It runs from the hit point (from the
+// barycentrics), moved off its surface on the light's side by offset_ray_origin (after Wächter
+// and Binder 2019), to the light moved towards it the same way, so a surface the light sits on
+// does not shadow it. Unlike the lab's fixed 1e-3 along the light direction, this works at any
+// scale and position, never starts the ray behind a neighbouring wall, and never lets it hit its
+// own surface.
+struct ShadowRay {
+  enum class Kind {
+    kBehind,  // the light is behind the surface (or on its plane): no direct light
+    kLit,     // the light is nearer than the offsets: nothing can be in between
+    kTrace,   // trace `ray`: lit when it hits nothing
+  };
+  Kind kind = Kind::kBehind;
+  Ray ray;
+  float cos_theta = 0.0f;  // between the lab normal and the direction to the light
+  float dist2 = 0.0f;      // squared distance from the hit point to the light
+};
+ShadowRay lab_shadow_ray(const TriangleMesh& mesh, const Hit& hit, glm::vec3 light,
+                         const RayOffsetParams& offset = {});
 
 class LabIntegrator final : public Integrator {
  public:
+  explicit LabIntegrator(const RayOffsetParams& offset = {}) : offset_(offset) {}
+
   uint64_t radiance(std::span<const Ray> rays, std::span<glm::vec3> radiance, const Scene& scene,
                     const Accel& accel) const override;
+
+ private:
+  RayOffsetParams offset_;
 };
 
 }  // namespace tritrace

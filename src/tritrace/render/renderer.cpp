@@ -1,7 +1,6 @@
 // Tiles over a TBB task arena limited to the requested thread count.
 #include "tritrace/render/renderer.h"
 
-#include <tbb/blocked_range.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -12,7 +11,64 @@
 #include <cassert>
 #include <chrono>
 
+// ThreadSanitizer cannot see the synchronisation inside Debian's libtbb.so (it is not built with
+// TSan), so in a TSan build the hand-over of work that tbb::parallel_for guarantees is told to it
+// explicitly (TsanVisibleBody below): everything before a task is handed over happens before it
+// runs, and every task before the loop returns. Races between concurrently running tasks are
+// still found.
+#if defined(__SANITIZE_THREAD__)
+#define TRITRACE_TSAN 1
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define TRITRACE_TSAN 1
+#endif
+#endif
+#ifdef TRITRACE_TSAN
+extern "C" void __tsan_acquire(void* addr);
+extern "C" void __tsan_release(void* addr);
+#endif
+
 namespace tritrace {
+namespace {
+
+[[maybe_unused]] void tsan_release(void* addr) {
+#ifdef TRITRACE_TSAN
+  __tsan_release(addr);
+#else
+  (void)addr;
+#endif
+}
+
+[[maybe_unused]] void tsan_acquire(void* addr) {
+#ifdef TRITRACE_TSAN
+  __tsan_acquire(addr);
+#else
+  (void)addr;
+#endif
+}
+
+// The loop body handed to TBB. TBB copies it into each task and hands the task to a worker inside
+// libtbb.so; the copy constructor releases and the call acquires, so that TSan sees the copy (and
+// everything its thread did before) happen before the worker uses it, as TBB guarantees. The end of
+// each call releases into a second address, which render() acquires after the loop: the join. The
+// addresses are fixed (not read from the body) so that the acquire reads nothing TSan has not been
+// told about yet.
+template <typename Fn>
+struct TsanVisibleBody {
+  static inline char fork_sync = 0, join_sync = 0;
+  Fn* fn;
+  explicit TsanVisibleBody(Fn* f) : fn(f) { tsan_release(&fork_sync); }
+  TsanVisibleBody(const TsanVisibleBody& other) : fn(other.fn) { tsan_release(&fork_sync); }
+  TsanVisibleBody& operator=(const TsanVisibleBody&) = delete;
+  ~TsanVisibleBody() = default;
+  void operator()(int /*thread*/) const {
+    tsan_acquire(&fork_sync);
+    (*fn)();
+    tsan_release(&join_sync);
+  }
+};
+
+}  // namespace
 
 namespace {
 
@@ -43,7 +99,7 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
   const int width = camera.width();
   const int height = camera.height();
   const int tile = std::clamp(options.tile_size, 1, 16);
-  static_assert(16 * 16 <= kMaxBatch);
+  static_assert(size_t{16} * 16 <= kMaxBatch);
   const int tiles_x = (width + tile - 1) / tile;
   const int tiles_y = (height + tile - 1) / tile;
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
@@ -54,31 +110,37 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
   const int tiles_total = tiles_x * tiles_y;
   const auto start = std::chrono::steady_clock::now();
 
-  tbb::task_arena arena(threads);
-  arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<int>(0, tiles_x * tiles_y), [&](const auto& range) {
-      thread_local std::array<Ray, kMaxBatch> batch;  // per thread: Ray initialises its members
-      std::array<glm::vec3, kMaxBatch> radiance;
-      uint64_t traced = 0;
-      for (int t = range.begin(); t != range.end(); ++t) {
-        const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
-        const int x1 = std::min(x0 + tile, width), y1 = std::min(y0 + tile, height);
-        size_t n = 0;
-        for_each_pixel_in_blocks(x0, y0, x1, y1,
-                                 [&](int x, int y) { batch[n++] = camera.primary_ray(x, y); });
-        traced += integrator.radiance(std::span<const Ray>(batch.data(), n),
-                                      std::span(radiance).first(n), scene, accel);
-        n = 0;
-        for_each_pixel_in_blocks(x0, y0, x1, y1,
-                                 [&](int x, int y) { image.at(x, y) = radiance[n++]; });
-        if (options.progress) {
-          options.progress->tiles_done(tiles_done.fetch_add(1, std::memory_order_relaxed) + 1,
-                                       tiles_total);
-        }
+  // One task per thread, each taking tiles from a shared counter until none are left: tiles go to
+  // whichever thread is free (balanced whatever each tile costs), and every pixel is still written
+  // by exactly one tile.
+  std::atomic<int> next_tile{0};
+  auto run_tiles = [&] {
+    thread_local std::array<Ray, kMaxBatch> batch;  // per thread: Ray initialises its members
+    std::array<glm::vec3, kMaxBatch> radiance;
+    uint64_t traced = 0;
+    for (int t = next_tile.fetch_add(1, std::memory_order_relaxed); t < tiles_total;
+         t = next_tile.fetch_add(1, std::memory_order_relaxed)) {
+      const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
+      const int x1 = std::min(x0 + tile, width), y1 = std::min(y0 + tile, height);
+      size_t n = 0;
+      for_each_pixel_in_blocks(x0, y0, x1, y1,
+                               [&](int x, int y) { batch[n++] = camera.primary_ray(x, y); });
+      traced += integrator.radiance(std::span<const Ray>(batch.data(), n),
+                                    std::span(radiance).first(n), scene, accel);
+      n = 0;
+      for_each_pixel_in_blocks(x0, y0, x1, y1,
+                               [&](int x, int y) { image.at(x, y) = radiance[n++]; });
+      if (options.progress) {
+        options.progress->tiles_done(tiles_done.fetch_add(1, std::memory_order_relaxed) + 1,
+                                     tiles_total);
       }
-      rays.fetch_add(traced, std::memory_order_relaxed);
-    });
-  });
+    }
+    rays.fetch_add(traced, std::memory_order_relaxed);
+  };
+  using Body = TsanVisibleBody<decltype(run_tiles)>;
+  tbb::task_arena arena(threads);
+  arena.execute([&] { tbb::parallel_for(0, threads, Body(&run_tiles)); });
+  tsan_acquire(&Body::join_sync);
 
   const auto stop = std::chrono::steady_clock::now();
   if (stats) {

@@ -28,6 +28,14 @@ class Camera {
   // of `degrees`.
   static float focal_for_vertical_fov(int height, double degrees);
 
+  // The same camera (orientation, focal length, image size) at another position: how a scene
+  // moved by a translation and uniform scale keeps its view (scene/transform.h).
+  Camera with_position(glm::vec3 position) const {
+    Camera moved = *this;
+    moved.position_ = position;
+    return moved;
+  }
+
   int width() const { return width_; }
   int height() const { return height_; }
   float focal_px() const { return focal_; }
