@@ -109,7 +109,7 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
   sub->add_option("--kernel", args.kernel,
                   "Ray/triangle intersection: " + kernel_list() + " (default " +
                       std::string(kernel_name(kDefaultKernel)) +
-                      ", watertight and within 15% of the fastest)")
+                      ", the fastest; watertight lets no ray through shared edges)")
       ->type_name("NAME")
       ->check(validator("", [](std::string& s) {
         return parse_kernel(s) ? std::string()

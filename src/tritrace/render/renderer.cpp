@@ -1,6 +1,7 @@
 // Tiles over a TBB task arena limited to the requested thread count.
 #include "tritrace/render/renderer.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -61,7 +62,9 @@ struct TsanVisibleBody {
   TsanVisibleBody(const TsanVisibleBody& other) : fn(other.fn) { tsan_release(&fork_sync); }
   TsanVisibleBody& operator=(const TsanVisibleBody&) = delete;
   ~TsanVisibleBody() = default;
-  void operator()(int /*thread*/) const {
+  // Takes the range (unread: one call per thread, tiles come from a counter) rather than an index,
+  // so that TBB calls it directly instead of through a wrapper that reads its own fields first.
+  void operator()(const tbb::blocked_range<int>& /*threads*/) const {
     tsan_acquire(&fork_sync);
     (*fn)();
     tsan_release(&join_sync);
@@ -139,7 +142,10 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
   };
   using Body = TsanVisibleBody<decltype(run_tiles)>;
   tbb::task_arena arena(threads);
-  arena.execute([&] { tbb::parallel_for(0, threads, Body(&run_tiles)); });
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<int>(0, threads, 1), Body(&run_tiles),
+                      tbb::simple_partitioner());
+  });
   tsan_acquire(&Body::join_sync);
 
   const auto stop = std::chrono::steady_clock::now();
