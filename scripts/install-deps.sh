@@ -9,6 +9,8 @@ packages=(
   libassimp-dev assimp-testmodels
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format clang-tidy
+  # The sanitizer runtimes for make test-asan / test-tsan (g++ pulls them in; named for clarity).
+  libasan8 libubsan1 libtsan2
 )
 
 missing=()
