@@ -195,7 +195,8 @@ class Unbytes {
     const uint64_t n = get<uint64_t>();
     if (n > (in_.size() - pos_) / sizeof(T)) throw std::runtime_error("truncated");
     std::vector<T> values(n);
-    std::memcpy(values.data(), in_.data() + pos_, n * sizeof(T));
+    // memcpy from or to a null pointer is undefined even for 0 bytes (an empty vector's data()).
+    if (n > 0) std::memcpy(values.data(), in_.data() + pos_, n * sizeof(T));
     pos_ += n * sizeof(T);
     return values;
   }
