@@ -14,6 +14,11 @@ TSAN_DIR ?= build-tsan
 # Sanitized builds: optimised (the tests trace millions of rays) with debug info for reports; no
 # benchmarks.
 SANITIZE_FLAGS = -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRITRACE_BUILD_BENCH=OFF
+# Left out under ASan: this test feeds libassimp a file that crashes it, on purpose, in the isolated
+# importer's child process; ASan then prints its report of that (third-party) crash on the stderr
+# the test checks holds exactly one line. The parent's behaviour is still right (exit 1, one
+# 'cannot import' line); the test runs in the normal build.
+ASAN_EXCLUDE = CliTest.ModelThatCrashesTheImporterIsAnError
 # The multi-threaded renderer tests: thread-count invariance, statistics, whole images.
 TSAN_TESTS = Renderer.*:Placements/*
 
@@ -41,7 +46,7 @@ test-asan: deps
 	@cmake -S . -B $(ASAN_DIR) $(SANITIZE_FLAGS) -DTRITRACE_SANITIZE=address,undefined >/dev/null
 	@cmake --build $(ASAN_DIR) -j $(JOBS)
 	@cd $(ASAN_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
-	  UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
+	  UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS) -E '$(ASAN_EXCLUDE)'
 
 test-tsan: deps
 	@cmake -S . -B $(TSAN_DIR) $(SANITIZE_FLAGS) -DTRITRACE_SANITIZE=thread >/dev/null
