@@ -59,8 +59,16 @@ struct TsanVisibleBody {
   static inline char fork_sync = 0, join_sync = 0;
   Fn* fn;
   explicit TsanVisibleBody(Fn* f) : fn(f) { tsan_release(&fork_sync); }
-  TsanVisibleBody(const TsanVisibleBody& other) : fn(other.fn) { tsan_release(&fork_sync); }
+  // A thread that copies a body (when TBB splits work) got the task holding it through TBB too:
+  // acquire before reading it.
+  TsanVisibleBody(const TsanVisibleBody& other) : fn(acquired(other.fn)) {
+    tsan_release(&fork_sync);
+  }
   TsanVisibleBody& operator=(const TsanVisibleBody&) = delete;
+  static Fn* acquired(Fn* const& source) {
+    tsan_acquire(&fork_sync);
+    return source;
+  }
   ~TsanVisibleBody() = default;
   // Takes the range (unread: one call per thread, tiles come from a counter) rather than an index,
   // so that TBB calls it directly instead of through a wrapper that reads its own fields first.
