@@ -110,7 +110,8 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
   sub->add_option("--threads", args.threads, "Worker threads (default: all cores)")
       ->type_name("N")
       ->check(validator([](std::string& s) { return check_integer_in(s, 1, 1024); }));
-  sub->add_option("--kernel", args.kernel, "Ray/triangle kernel for bvh and brute")
+  sub->add_option("--kernel", args.kernel,
+                  "Ray/triangle kernel for bvh and brute (default: each one's own, as in render)")
       ->type_name("NAME")
       ->check(validator([](std::string& s) {
         return parse_kernel(s) ? std::string() : "unknown kernel '" + s + "'";
@@ -134,7 +135,9 @@ int run_bench(const BenchArgs& args) {
   const int reps = static_cast<int>(*parse_integer(args.reps));
   const int threads = args.threads.empty() ? default_thread_count()
                                            : static_cast<int>(*parse_integer(args.threads));
-  const Kernel kernel = args.kernel.empty() ? kDefaultKernel : *parse_kernel(args.kernel);
+  // Empty: each accel's default kernel (default_kernel_for).
+  const std::optional<Kernel> chosen_kernel =
+      args.kernel.empty() ? std::nullopt : parse_kernel(args.kernel);
 
   std::printf("%-13s %10s %-13s %10s %8s %8s %26s %9s %8s\n", "scene", "triangles", "accel",
               "build ms", "B/tri", "+tri B", "frame ms median (min-max)", "Mrays/s", "/embree");
@@ -165,7 +168,8 @@ int run_bench(const BenchArgs& args) {
         }
       }
       AccelInfo info;
-      const std::unique_ptr<Accel> accel = make_accel(kind, scene.mesh, kernel, &info);
+      const std::unique_ptr<Accel> accel =
+          make_accel(kind, scene.mesh, chosen_kernel.value_or(default_kernel_for(kind)), &info);
       r.build_ms = info.build_ms;
       r.bytes_per_tri =
           static_cast<double>(info.structure_bytes) / std::max<size_t>(1, r.triangles);

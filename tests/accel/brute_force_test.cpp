@@ -1,6 +1,7 @@
 // BruteForceAccel: the closest hit wins, exact ties go to the earlier triangle, occlusion honours
 // the ray's interval, and the batch and single-ray entry points agree.
 #include "tritrace/accel/brute_force.h"
+#include "tritrace/accel/make_accel.h"
 
 #include <gtest/gtest.h>
 
@@ -108,6 +109,20 @@ INSTANTIATE_TEST_SUITE_P(AllKernels, BruteForceTest, ::testing::ValuesIn(kAllKer
                            std::erase(name, '-');
                            return name;
                          });
+
+}  // namespace
+}  // namespace tritrace
+
+namespace tritrace {
+namespace {
+
+// Issue 6's rule: watertight where it costs within 15% of Möller–Trumbore (brute force), the
+// SIMD Möller–Trumbore where the BVH has nothing else yet (docs/PERFORMANCE.md).
+TEST(DefaultKernel, WatertightForBruteForceMollerTrumboreForTheBvh) {
+  EXPECT_EQ(default_kernel_for(AccelKind::kBrute), Kernel::kWatertight);
+  EXPECT_EQ(default_kernel_for(AccelKind::kBvh), Kernel::kMollerTrumbore);
+  EXPECT_EQ(default_kernel_for(AccelKind::kBvhSingle), Kernel::kMollerTrumbore);
+}
 
 }  // namespace
 }  // namespace tritrace

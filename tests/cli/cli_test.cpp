@@ -837,4 +837,20 @@ TEST_F(CliTest, SlowRenderWithoutATerminalPrintsNoProgress) {
   EXPECT_EQ(r.err, "");
 }
 
+// Without --kernel, brute force renders with the watertight kernel: the same bytes as asking for
+// it.
+TEST_F(CliTest, BruteForceDefaultsToTheWatertightKernel) {
+  const std::vector<std::string> size = {"--width", "96", "--height", "96", "--accel", "brute"};
+  auto with = [&](std::vector<std::string> extra, const std::string& out) {
+    std::vector<std::string> args = {"render", "-o", out};
+    args.insert(args.end(), size.begin(), size.end());
+    args.insert(args.end(), extra.begin(), extra.end());
+    EXPECT_EQ(Run(args).exit_code, 0);
+    return ReadFile(work_ / out);
+  };
+  const std::string by_default = with({}, "default.ppm");
+  EXPECT_EQ(by_default, with({"--kernel", "watertight"}, "watertight.ppm"));
+  EXPECT_FALSE(by_default.empty());
+}
+
 }  // namespace

@@ -56,6 +56,10 @@ std::vector<AccelKind> available_accels() {
   return out;
 }
 
+Kernel default_kernel_for(AccelKind kind) {
+  return kind == AccelKind::kBrute ? Kernel::kWatertight : kDefaultKernel;
+}
+
 std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kernel kernel,
                                   AccelInfo* info) {
   const auto start = std::chrono::steady_clock::now();

@@ -22,10 +22,11 @@ enum class Kernel { kInverse, kCramer, kMollerTrumbore, kWatertight };
 inline constexpr std::array<Kernel, 4> kAllKernels = {Kernel::kInverse, Kernel::kCramer,
                                                       Kernel::kMollerTrumbore, Kernel::kWatertight};
 
-// Measured fastest (docs/PERFORMANCE.md). The watertight kernel costs within 15% of it in a
-// loop that prepares each ray once (brute force: 1.06x), but the BVH still calls it through the
-// per-triangle entry point and has packet code for Möller–Trumbore only (4x slower frames), so it
-// becomes the default once the BVH's leaves use PreparedRay<Kernel::kWatertight>.
+// Measured fastest (docs/PERFORMANCE.md), and the BVH's default. The watertight kernel costs
+// within 15% of it in a loop that prepares each ray once, so brute force defaults to it
+// (default_kernel_for in accel/make_accel.h); the BVH calls it through the per-triangle entry point
+// and has packet code for Möller–Trumbore only (4x slower frames), so it stays on Möller–Trumbore
+// until its leaves get a SIMD watertight version.
 inline constexpr Kernel kDefaultKernel = Kernel::kMollerTrumbore;
 
 // "inverse", "cramer", "moller-trumbore", "watertight"
