@@ -128,9 +128,10 @@ EmbreeAccel::EmbreeAccel(const TriangleMesh& mesh, EmbreeMode mode)
     for (size_t i = 0; i < n; ++i) {
       for (int c = 0; c < 3; ++c) {
         const glm::vec3 p = mesh.vertex(i, c);
-        vertices[9 * i + 3 * c + 0] = p.x;
-        vertices[9 * i + 3 * c + 1] = p.y;
-        vertices[9 * i + 3 * c + 2] = p.z;
+        const size_t k = 9 * i + 3 * static_cast<size_t>(c);
+        vertices[k + 0] = p.x;
+        vertices[k + 1] = p.y;
+        vertices[k + 2] = p.z;
         indices[3 * i + c] = static_cast<unsigned>(3 * i + c);
       }
     }

@@ -47,8 +47,10 @@ class Camera {
   // The ray through pixel (x, y); its direction is normalised, so t is a distance. Inline: the
   // renderer calls it once per pixel.
   Ray primary_ray(int x, int y) const {
-    const float dx = static_cast<float>(x - width_ / 2);
-    const float dy = static_cast<float>(y - height_ / 2);
+    // The lab's integer halves: the pixel corner, not its centre.
+    const int half_width = width_ / 2, half_height = height_ / 2;
+    const float dx = static_cast<float>(x - half_width);
+    const float dy = static_cast<float>(y - half_height);
     const glm::vec3 d(right_.x * dx + down_.x * dy + forward_.x * focal_,
                       right_.y * dx + down_.y * dy + forward_.y * focal_,
                       right_.z * dx + down_.z * dy + forward_.z * focal_);

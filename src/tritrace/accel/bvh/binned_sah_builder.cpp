@@ -61,8 +61,8 @@ class Builder {
 
  private:
   float leaf_cost(uint32_t count) const {
-    return config_.block_cost *
-           static_cast<float>((count + config_.block_size - 1) / config_.block_size);
+    const uint32_t blocks = (count + config_.block_size - 1) / config_.block_size;  // rounded up
+    return config_.block_cost * static_cast<float>(blocks);
   }
 
   // Centroid bounds and primitive bounds of a range.

@@ -83,11 +83,11 @@ ImportedMesh convert_scene(const aiScene& scene, const std::string& subject) {
   ImportedMesh out;
   for (unsigned i = 0; i < scene.mNumMaterials; ++i) {
     out.materials.push_back(convert_material(*scene.mMaterials[i]));
-    out.material_names.push_back(scene.mMaterials[i]->GetName().C_Str());
+    out.material_names.emplace_back(scene.mMaterials[i]->GetName().C_Str());
   }
   if (out.materials.empty()) {
     out.materials.push_back({kNeutralGrey});
-    out.material_names.push_back("default");
+    out.material_names.emplace_back("default");
   }
   if (scene.mRootNode == nullptr) throw Error(subject, "has no scene graph (no root node)");
 

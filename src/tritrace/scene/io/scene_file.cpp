@@ -222,9 +222,10 @@ class Parser {
     check_keys(j, "/camera",
                {"position", "look_at", "up", "vertical_fov", "focal_length", "width", "height"});
     CameraSpec& c = out_.camera;
-    if (j.contains("width")) c.width = integer_in(j["width"], "/camera/width", 1, kMaxImageSide);
+    if (j.contains("width"))
+      c.width = static_cast<int>(integer_in(j["width"], "/camera/width", 1, kMaxImageSide));
     if (j.contains("height")) {
-      c.height = integer_in(j["height"], "/camera/height", 1, kMaxImageSide);
+      c.height = static_cast<int>(integer_in(j["height"], "/camera/height", 1, kMaxImageSide));
     }
     if (j.contains("position")) c.position = vec3(j["position"], "/camera/position");
     if (j.contains("look_at")) c.look_at = vec3(j["look_at"], "/camera/look_at");
