@@ -15,6 +15,7 @@
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/renderer.h"
+#include "tritrace/scene/io/loaded_scene.h"
 #include "tritrace/scene/procedural.h"
 
 namespace tritrace::cli {
@@ -37,10 +38,6 @@ struct Record {
   int threads = 0;
   int width = 0, height = 0;
 };
-
-CLI::Validator validator(std::function<std::string(std::string&)> fn) {
-  return CLI::Validator(std::move(fn), "", "");
-}
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -81,20 +78,11 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
   sub->add_option("--scene", args.scenes,
                   "Scene to measure, repeatable (default: cornell, terrain:1m, terrain:10m)")
       ->type_name("NAME")
-      ->check(validator([](std::string& s) {
-        return s == "cornell" || parse_terrain_triangles(s)
-                   ? std::string()
-                   : "unknown scene '" + s + "' (use " + std::string(kBuiltinSceneHelp) + ")";
-      }));
+      ->check(checked(check_builtin_scene));
   sub->add_option("--accel", args.accels, "Acceleration structure, repeatable (default: all)")
       ->type_name("NAME")
-      ->check(validator([](std::string& s) {
-        const std::optional<AccelKind> kind = parse_accel(s);
-        return kind && accel_available(*kind)
-                   ? std::string()
-                   : "unknown or unavailable acceleration structure '" + s + "'";
-      }));
-  auto side = validator([](std::string& s) { return check_integer_in(s, 1, 16384); });
+      ->check(checked(check_accel));
+  auto side = checked([](std::string& s) { return check_integer_in(s, 1, kMaxImageSide); });
   sub->add_option("--width", args.width, "Frame width")
       ->type_name("W")
       ->capture_default_str()
@@ -106,16 +94,14 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
   sub->add_option("--reps", args.reps, "Timed frames per scene and accel, after one warm-up")
       ->type_name("N")
       ->capture_default_str()
-      ->check(validator([](std::string& s) { return check_integer_in(s, 1, 1000); }));
+      ->check(checked([](std::string& s) { return check_integer_in(s, 1, 1000); }));
   sub->add_option("--threads", args.threads, "Worker threads (default: all cores)")
       ->type_name("N")
-      ->check(validator([](std::string& s) { return check_integer_in(s, 1, 1024); }));
+      ->check(checked([](std::string& s) { return check_integer_in(s, 1, kMaxThreads); }));
   sub->add_option("--kernel", args.kernel,
                   "Ray/triangle kernel for bvh and brute (default: each one's own, as in render)")
       ->type_name("NAME")
-      ->check(validator([](std::string& s) {
-        return parse_kernel(s) ? std::string() : "unknown kernel '" + s + "'";
-      }));
+      ->check(checked(check_kernel));
   sub->add_option("--json", args.json, "Also write the records as a JSON array to PATH")
       ->type_name("PATH");
   sub->add_flag("-q,--quiet", args.quiet, "Print only the table");

@@ -3,8 +3,12 @@
 #include "flag_values.h"
 
 #include <charconv>
+
 #include <cmath>
 #include <limits>
+#include "tritrace/accel/make_accel.h"
+#include "tritrace/geometry/intersect.h"
+#include "tritrace/scene/procedural.h"
 
 namespace tritrace::cli {
 
@@ -54,6 +58,45 @@ std::string check_finite(const std::string& text) {
 std::string check_vec3(const std::string& text) {
   if (parse_vec3(text)) return "";
   return "must be three finite numbers X,Y,Z, got '" + text + "'";
+}
+
+std::string kernel_list() {
+  std::string names;
+  for (Kernel k : kAllKernels) {
+    if (!names.empty()) names += "|";
+    names += kernel_name(k);
+  }
+  return names;
+}
+
+std::string accel_list() {
+  std::string names;
+  for (AccelKind k : available_accels()) {
+    if (!names.empty()) names += "|";
+    names += accel_name(k);
+  }
+  return names;
+}
+
+std::string check_builtin_scene(const std::string& name) {
+  if (is_builtin_scene(name)) return "";
+  return "unknown scene '" + name + "' (use " + std::string(kBuiltinSceneHelp) + ")";
+}
+
+std::string check_accel(const std::string& name) {
+  const std::optional<AccelKind> kind = parse_accel(name);
+  if (kind && accel_available(*kind)) return "";
+  if (kind) return "'" + name + "' is not built in (this build has " + accel_list() + ")";
+  return "unknown acceleration structure '" + name + "' (use " + accel_list() + ")";
+}
+
+std::string check_kernel(const std::string& name) {
+  if (parse_kernel(name)) return "";
+  return "unknown kernel '" + name + "' (use " + kernel_list() + ")";
+}
+
+CLI::Validator checked(std::function<std::string(std::string&)> check) {
+  return CLI::Validator(std::move(check), "", "");
 }
 
 }  // namespace tritrace::cli

@@ -3,6 +3,8 @@
 // (the form CLI11 validators use), so that every bad value gets a message naming the rule it broke.
 #pragma once
 
+#include <CLI/CLI.hpp>
+#include <functional>
 #include <glm/vec3.hpp>
 #include <optional>
 #include <string>
@@ -17,5 +19,17 @@ std::optional<glm::vec3> parse_vec3(const std::string& text);
 std::string check_integer_in(const std::string& text, long long lo, long long hi);
 std::string check_finite(const std::string& text);
 std::string check_vec3(const std::string& text);
+
+inline constexpr long long kMaxThreads = 1024;
+
+// The names the render and bench commands accept, and the checks on them.
+std::string kernel_list();  // "inverse|cramer|..."
+std::string accel_list();   // the accels this build has
+std::string check_builtin_scene(const std::string& name);
+std::string check_accel(const std::string& name);
+std::string check_kernel(const std::string& name);
+
+// A checker as a CLI11 validator (no description of its own: --help shows the option's text).
+CLI::Validator checked(std::function<std::string(std::string&)> check);
 
 }  // namespace tritrace::cli

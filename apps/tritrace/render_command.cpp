@@ -22,30 +22,6 @@
 namespace tritrace::cli {
 namespace {
 
-constexpr long long kMaxThreads = 1024;
-
-CLI::Validator validator(std::string description, std::function<std::string(std::string&)> fn) {
-  return CLI::Validator(std::move(fn), std::move(description), "");
-}
-
-std::string kernel_list() {
-  std::string names;
-  for (Kernel k : kAllKernels) {
-    if (!names.empty()) names += "|";
-    names += kernel_name(k);
-  }
-  return names;
-}
-
-std::string accel_list() {
-  std::string names;
-  for (AccelKind k : available_accels()) {
-    if (!names.empty()) names += "|";
-    names += accel_name(k);
-  }
-  return names;
-}
-
 // The output path when -o is not given: the scene file's own, else the input's name as .png.
 std::string default_output(const std::string& file, const LoadedScene& loaded) {
   if (!loaded.output.empty()) return loaded.output;
@@ -76,7 +52,7 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
                   "output, else FILE's name with .png, else cornell.png")
       ->type_name("PATH")
       ->each([&args](const std::string&) { args.output_given = true; });
-  auto side = validator("", [](std::string& s) { return check_integer_in(s, 1, kMaxImageSide); });
+  auto side = checked([](std::string& s) { return check_integer_in(s, 1, kMaxImageSide); });
   sub->add_option("--width", args.width,
                   "Image width in pixels, 1 to 16384 (default: the scene's, 500)")
       ->type_name("W")
@@ -90,45 +66,33 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
                   std::string("Built-in scene when no FILE is given: ") +
                       std::string(kBuiltinSceneHelp) + " (default cornell)")
       ->type_name("NAME")
-      ->check(validator("", [](std::string& s) {
-        return s == "cornell" || parse_terrain_triangles(s)
-                   ? std::string()
-                   : "unknown scene '" + s + "' (use " + std::string(kBuiltinSceneHelp) + ")";
-      }));
+      ->check(checked(check_builtin_scene));
   sub->add_option("--accel", args.accel,
                   "Acceleration structure: " + accel_list() +
                       " (brute is the lab's loop over all triangles)")
       ->type_name("NAME")
       ->capture_default_str()
-      ->check(validator("", [](std::string& s) {
-        const std::optional<AccelKind> kind = parse_accel(s);
-        if (kind && accel_available(*kind)) return std::string();
-        if (kind) return "'" + s + "' is not built in (this build has " + accel_list() + ")";
-        return "unknown acceleration structure '" + s + "' (use " + accel_list() + ")";
-      }));
+      ->check(checked(check_accel));
   sub->add_option("--kernel", args.kernel,
                   "Ray/triangle intersection: " + kernel_list() +
                       " (default: watertight with --accel brute, where it costs 1.06x; "
                       "moller-trumbore with bvh, whose SIMD leaves and packets have only that "
                       "kernel; watertight lets no ray through shared edges)")
       ->type_name("NAME")
-      ->check(validator("", [](std::string& s) {
-        return parse_kernel(s) ? std::string()
-                               : "unknown kernel '" + s + "' (use " + kernel_list() + ")";
-      }));
+      ->check(checked(check_kernel));
   sub->add_option("--yaw", args.yaw,
                   "Orbit the camera about the vertical axis through what it looks at, radians "
                   "(default 0)")
       ->type_name("RAD")
-      ->check(validator("", [](std::string& s) { return check_finite(s); }));
+      ->check(checked(check_finite));
   sub->add_option("--light", args.light,
                   "Position of the (first) point light (default: the scene's; the built-in's is "
                   "0,-0.5,-0.7)")
       ->type_name("X,Y,Z")
-      ->check(validator("", [](std::string& s) { return check_vec3(s); }));
+      ->check(checked(check_vec3));
   sub->add_option("--threads", args.threads, "Worker threads (default: all cores)")
       ->type_name("N")
-      ->check(validator("", [](std::string& s) { return check_integer_in(s, 1, kMaxThreads); }));
+      ->check(checked([](std::string& s) { return check_integer_in(s, 1, kMaxThreads); }));
   sub->add_flag("-q,--quiet", args.quiet, "Print nothing on success: no summary, no progress bar");
   return sub;
 }

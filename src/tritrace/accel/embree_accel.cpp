@@ -31,6 +31,11 @@ bool count_bytes(void* user, ssize_t bytes, bool) {
   return true;
 }
 
+RTCRay to_rtc(const Ray& r) {
+  return {r.origin.x, r.origin.y, r.origin.z, r.tmin,      r.dir.x, r.dir.y,
+          r.dir.z,    0.0f,       r.tmax,     0xFFFFFFFFu, 0,       0};
+}
+
 Hit to_hit(float tfar, float u, float v, unsigned geom, unsigned prim) {
   if (geom == RTC_INVALID_GEOMETRY_ID) return Hit{};
   return Hit{tfar, u, v, prim};
@@ -162,10 +167,8 @@ void EmbreeAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) cons
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   for (size_t i = 0; i < rays.size(); ++i) {
-    const Ray& r = rays[i];
     RTCRayHit rh;
-    rh.ray = {r.origin.x, r.origin.y, r.origin.z, r.tmin,      r.dir.x, r.dir.y,
-              r.dir.z,    0.0f,       r.tmax,     0xFFFFFFFFu, 0,       0};
+    rh.ray = to_rtc(rays[i]);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &context, &rh);
     hits[i] = to_hit(rh.ray.tfar, rh.hit.u, rh.hit.v, rh.hit.geomID, rh.hit.primID);
@@ -185,9 +188,7 @@ void EmbreeAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occlude
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   for (size_t i = 0; i < rays.size(); ++i) {
-    const Ray& r = rays[i];
-    RTCRay ray{r.origin.x, r.origin.y, r.origin.z, r.tmin,      r.dir.x, r.dir.y,
-               r.dir.z,    0.0f,       r.tmax,     0xFFFFFFFFu, 0,       0};
+    RTCRay ray = to_rtc(rays[i]);
     rtcOccluded1(impl_->scene, &context, &ray);
     occluded[i] = ray.tfar < 0.0f ? 1 : 0;
   }

@@ -120,6 +120,10 @@ Scene make_terrain_scene(uint64_t triangles, const CornellOptions& options) {
   return scene;
 }
 
+bool is_builtin_scene(std::string_view name) {
+  return name == "cornell" || parse_terrain_triangles(name).has_value();
+}
+
 Scene make_builtin_scene(std::string_view name, const CornellOptions& options) {
   if (name == "cornell") return make_cornell_box(options);
   if (const std::optional<uint64_t> triangles = parse_terrain_triangles(name)) {

@@ -21,6 +21,9 @@ std::optional<uint64_t> parse_terrain_triangles(std::string_view name);
 // the lab view.
 Scene make_terrain_scene(uint64_t triangles, const CornellOptions& options = {});
 
+// Whether `name` is one of the scene names below.
+bool is_builtin_scene(std::string_view name);
+
 // The scene names the CLI accepts: "cornell" and "terrain:<count>". Throws
 // Error(name, reason, kUsage) for anything else.
 Scene make_builtin_scene(std::string_view name, const CornellOptions& options = {});

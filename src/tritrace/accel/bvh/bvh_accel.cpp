@@ -22,10 +22,8 @@ using bvh::TriangleBlock;
 using bvh::WideBvh;
 using bvh::WideNode;
 
-constexpr float kGamma3 = 3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f);
-constexpr float kFarScale = 1.0f + 2.0f * kGamma3;
-// Wide-tree depth is bounded by the builder (binary depth <= 64 + log2(n)); 7 entries per level.
-constexpr int kStackSize = 1024;
+using bvh::kFarScale;
+using bvh::kStackSize;
 
 // Per-ray constants of the box test: the inverse direction, and for each axis which of a node's
 // lo/hi arrays is the near plane (offsets in floats from WideNode::lo_x).
@@ -258,6 +256,15 @@ bool any_hit(const WideBvh& tree, const Ray& ray) {
   }
 }
 
+// Calls fn(rays, out) on consecutive packets of at most bvh::kPacketSize rays.
+template <typename Out, typename Fn>
+void for_each_packet(std::span<const Ray> rays, std::span<Out> out, Fn&& fn) {
+  for (size_t first = 0; first < rays.size(); first += bvh::kPacketSize) {
+    const size_t n = std::min<size_t>(bvh::kPacketSize, rays.size() - first);
+    fn(rays.subspan(first, n), out.subspan(first, n));
+  }
+}
+
 }  // namespace
 
 BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConfig& config,
@@ -270,10 +277,8 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConf
 void BvhAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
   if constexpr (bvh::kPacketSize > 0) {
     if (packets_) {
-      for (size_t first = 0; first < rays.size(); first += bvh::kPacketSize) {
-        const size_t n = std::min<size_t>(bvh::kPacketSize, rays.size() - first);
-        bvh::intersect_packet(bvh_, rays.subspan(first, n), hits.subspan(first, n));
-      }
+      for_each_packet(rays, hits,
+                      [&](auto packet, auto out) { bvh::intersect_packet(bvh_, packet, out); });
       return;
     }
   }
@@ -285,10 +290,8 @@ void BvhAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
 void BvhAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
   if constexpr (bvh::kPacketSize > 0) {
     if (packets_) {
-      for (size_t first = 0; first < rays.size(); first += bvh::kPacketSize) {
-        const size_t n = std::min<size_t>(bvh::kPacketSize, rays.size() - first);
-        bvh::occluded_packet(bvh_, rays.subspan(first, n), occluded.subspan(first, n));
-      }
+      for_each_packet(rays, occluded,
+                      [&](auto packet, auto out) { bvh::occluded_packet(bvh_, packet, out); });
       return;
     }
   }

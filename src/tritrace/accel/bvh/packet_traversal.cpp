@@ -22,9 +22,6 @@ namespace {
 using namespace simd;
 constexpr int W = kLanes;
 constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr float kGamma3 = 3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f);
-constexpr float kFarScale = 1.0f + 2.0f * kGamma3;  // Ize 2013, as in the single-ray test
-constexpr int kStackSize = 1024;
 
 struct Packet {
   VF o[3], d[3], inv[3];

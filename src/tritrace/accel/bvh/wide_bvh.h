@@ -16,6 +16,13 @@ inline constexpr int kWidth = 8;
 inline constexpr uint32_t kLeafBit = 0x80000000u;
 inline constexpr uint32_t kEmptyChild = 0xFFFFFFFFu;
 
+// Both traversals (single-ray and packet) scale far slab distances by 1 + 2 gamma(3), after Ize,
+// "Robust BVH Ray Traversal" (JCGT 2013), so rounding can only make a box look bigger.
+inline constexpr float kGamma3 = 3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f);
+inline constexpr float kFarScale = 1.0f + 2.0f * kGamma3;
+// The builder bounds the binary depth by 64 + log2(n); at most 7 stacked children per level.
+inline constexpr int kStackSize = 1024;
+
 struct alignas(32) WideNode {
   // Per child: box bounds. Empty slots hold an inverted box (lo = +inf, hi = -inf) that no ray
   // hits.
