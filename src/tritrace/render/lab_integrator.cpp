@@ -6,6 +6,8 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/constants.hpp>
 
+#include "tritrace/math/simd_lanes.h"
+
 namespace tritrace {
 namespace {
 
@@ -13,6 +15,7 @@ namespace {
 // doing that for 256 of each on every tile cost more than a tenth of a Cornell box frame.
 struct Scratch {
   std::array<Hit, kMaxBatch> hits;
+  std::array<ShadowRay, kMaxBatch> shadows;
   std::array<Ray, kMaxBatch> shadow_rays;
 };
 
@@ -65,6 +68,168 @@ ShadowRay lab_shadow_ray(const TriangleMesh& mesh, const Hit& hit, glm::vec3 lig
   return s;
 }
 
+#if TRITRACE_SIMD_LANES > 0
+namespace {
+
+using simd::VF;
+using simd::VI;
+using simd::VM;
+
+// Three lanes-wide coordinates: kLanes points or vectors.
+struct V3 {
+  VF x, y, z;
+};
+V3 operator+(V3 a, V3 b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+V3 operator-(V3 a, V3 b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+V3 operator-(V3 a) {
+  return {-a.x, -a.y, -a.z};
+}
+V3 operator*(VF s, V3 a) {
+  return {s * a.x, s * a.y, s * a.z};
+}
+V3 operator/(V3 a, VF s) {
+  return {a.x / s, a.y / s, a.z / s};
+}
+// glm::dot's order: (x + y) + z.
+VF dot(V3 a, V3 b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+V3 splat3(glm::vec3 p) {
+  return {simd::splat(p.x), simd::splat(p.y), simd::splat(p.z)};
+}
+V3 select(VM m, V3 a, V3 b) {
+  return {simd::select(m, a.x, b.x), simd::select(m, a.y, b.y), simd::select(m, a.z, b.z)};
+}
+// Lane l reads points[prim[l]], with first[l] = 3 * prim[l] (the float index of its x).
+V3 gather3(const std::vector<glm::vec3>& points, VI first) {
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
+  const float* base = &points[0].x;
+  return {simd::gather(base, first), simd::gather(base + 1, first), simd::gather(base + 2, first)};
+}
+
+// offset_ray_origin, lane by lane (see math/offset_ray.h for the reasoning).
+VF shift(VF pc, VF nc, VF extent, const RayOffsetParams& k) {
+  const VI ulps = simd::truncate_to_int(simd::splat(k.int_scale) * nc);
+  const VI bits = simd::bits_of(pc);
+  const VF by_ulps =
+      simd::float_from_bits(simd::select(pc < simd::splat(0.0f), bits - ulps, bits + ulps));
+  const VF by_extent = pc + simd::splat(k.float_scale) * extent * nc;
+  // vmax(a, b) is a > b ? a : b, so vmax(by_ulps, by_extent) is std::max(by_extent, by_ulps),
+  // NaN and signed zeros included; the same for vmin and std::min.
+  return simd::select(nc > simd::splat(0.0f), simd::vmax(by_ulps, by_extent),
+                      simd::vmin(by_ulps, by_extent));
+}
+V3 offset_origin(V3 p, V3 n, VF extent, const RayOffsetParams& k) {
+  return {shift(p.x, n.x, extent, k), shift(p.y, n.y, extent, k), shift(p.z, n.z, extent, k)};
+}
+
+// Up to kLanes hits (count of them) into out[0, count).
+void shadow_lanes(const TriangleMesh& mesh, const Hit* hits, int count, glm::vec3 light_position,
+                  const RayOffsetParams& offset, ShadowRay* out) {
+  constexpr int W = simd::kLanes;
+  alignas(64) int32_t prim_in[W];
+  alignas(64) float u_in[W], v_in[W];
+  for (int l = 0; l < W; ++l) {
+    const bool in = l < count && hits[l].found();
+    prim_in[l] = in ? static_cast<int32_t>(hits[l].prim) : 0;
+    u_in[l] = in ? hits[l].u : 0.0f;
+    v_in[l] = in ? hits[l].v : 0.0f;
+  }
+  const VF u = simd::load(u_in), v = simd::load(v_in);
+  // Neighbouring pixels mostly hit the same triangle: then its data is loaded once and broadcast,
+  // which costs far less than four gathers of three coordinates each.
+  bool same = true;
+  for (int l = 1; l < count; ++l) same &= prim_in[l] == prim_in[0] || !hits[l].found();
+  V3 v0, e1, e2, normal;
+  if (same) {
+    const size_t p = static_cast<size_t>(prim_in[0]);
+    v0 = splat3(mesh.v0()[p]);
+    e1 = splat3(mesh.e1()[p]);
+    e2 = splat3(mesh.e2()[p]);
+    normal = splat3(mesh.normal()[p]);
+  } else {
+    const VI prim = simd::load_i(prim_in);
+    const VI first = prim + prim + prim;
+    v0 = gather3(mesh.v0(), first);
+    e1 = gather3(mesh.e1(), first);
+    e2 = gather3(mesh.e2(), first);
+    normal = gather3(mesh.normal(), first);
+  }
+  const V3 light = splat3(light_position);
+  const VF zero = simd::splat(0.0f);
+
+  const V3 x = v0 + u * e1 + v * e2;
+  const V3 r = light - x;
+  const VF dist2 = dot(r, r);
+  const VF dist = simd::sqrt(dist2);
+  const V3 dir = r / dist;
+  const VF cos_theta = dot(dir, normal);
+  const VM behind = simd::not_greater(cos_theta, zero) | simd::not_greater(dist, zero);
+
+  const V3 a = {simd::vmax(simd::abs(e1.x), simd::abs(e2.x)),
+                simd::vmax(simd::abs(e1.y), simd::abs(e2.y)),
+                simd::vmax(simd::abs(e1.z), simd::abs(e2.z))};
+  const VF extent = simd::vmax(simd::vmax(a.x, a.y), a.z);
+  const V3 inward = v0 + (e1 + e2) / simd::splat(3.0f) - x;
+  const VF inward_length = simd::sqrt(dot(inward, inward));
+  const V3 inside =
+      select(inward_length > zero, offset_origin(x, inward / inward_length, extent, offset), x);
+  const V3 start = offset_origin(inside, normal, extent, offset);
+  const V3 end = offset_origin(light, -dir, extent, offset);
+  const V3 segment = end - start;
+  const VF length = simd::sqrt(dot(segment, segment));
+  const VM lit = simd::not_greater(length, zero) | simd::not_greater(dot(segment, r), zero);
+  const V3 ray_dir = segment / length;
+
+  alignas(64) float lanes[9][W];
+  const VF fields[9] = {dist2,     cos_theta, start.x,   start.y, start.z,
+                        ray_dir.x, ray_dir.y, ray_dir.z, length};
+  for (int f = 0; f < 9; ++f) simd::store(lanes[f], fields[f]);
+  const uint32_t behind_bits = simd::bits(behind), lit_bits = simd::bits(lit);
+  for (int l = 0; l < count; ++l) {
+    ShadowRay& s = out[l];
+    s = ShadowRay{};
+    if (!hits[l].found()) continue;
+    s.dist2 = lanes[0][l];
+    s.cos_theta = lanes[1][l];
+    if (behind_bits >> l & 1) continue;
+    if (lit_bits >> l & 1) {
+      s.kind = ShadowRay::Kind::kLit;
+      continue;
+    }
+    s.kind = ShadowRay::Kind::kTrace;
+    s.ray.origin = {lanes[2][l], lanes[3][l], lanes[4][l]};
+    s.ray.dir = {lanes[5][l], lanes[6][l], lanes[7][l]};
+    s.ray.tmin = 0.0f;
+    s.ray.tmax = lanes[8][l];
+  }
+}
+
+}  // namespace
+#endif
+
+void lab_shadow_rays(const TriangleMesh& mesh, std::span<const Hit> hits, glm::vec3 light,
+                     const RayOffsetParams& offset, std::span<ShadowRay> out) {
+  assert(out.size() == hits.size());
+  size_t i = 0;
+#if TRITRACE_SIMD_LANES > 0
+  // The gathers index floats with 32-bit integers: 3 * prim must fit.
+  if (mesh.size() <= static_cast<size_t>(INT32_MAX / 3)) {
+    for (; i < hits.size(); i += simd::kLanes) {
+      const int count = static_cast<int>(std::min<size_t>(simd::kLanes, hits.size() - i));
+      shadow_lanes(mesh, hits.data() + i, count, light, offset, out.data() + i);
+    }
+  }
+#endif
+  for (; i < hits.size(); ++i) {
+    out[i] = hits[i].found() ? lab_shadow_ray(mesh, hits[i], light, offset) : ShadowRay{};
+  }
+}
+
 uint64_t LabIntegrator::radiance(std::span<const Ray> rays, std::span<glm::vec3> radiance,
                                  const Scene& scene, const Accel& accel) const {
   assert(rays.size() <= kMaxBatch && radiance.size() == rays.size());
@@ -81,11 +246,13 @@ uint64_t LabIntegrator::radiance(std::span<const Ray> rays, std::span<glm::vec3>
   std::array<uint8_t, kMaxBatch> blocked;
   uint64_t traced = n;
 
+  std::span<ShadowRay> shadows = std::span(scratch.shadows).first(n);
   for (const PointLight& light : scene.lights) {
+    lab_shadow_rays(scene.mesh, std::span<const Hit>(hits.data(), n), light.position, offset_,
+                    shadows);
     size_t m = 0;
     for (size_t i = 0; i < n; ++i) {
-      if (!hits[i].found()) continue;
-      const ShadowRay shadow = lab_shadow_ray(scene.mesh, hits[i], light.position, offset_);
+      const ShadowRay& shadow = shadows[i];
       if (shadow.kind == ShadowRay::Kind::kBehind) continue;
       const float weight = shadow.cos_theta / (4.0f * glm::pi<float>() * shadow.dist2);
       if (shadow.kind == ShadowRay::Kind::kLit) {

@@ -30,6 +30,12 @@ struct ShadowRay {
 ShadowRay lab_shadow_ray(const TriangleMesh& mesh, const Hit& hit, glm::vec3 light,
                          const RayOffsetParams& offset = {});
 
+// lab_shadow_ray for each hit of a batch, out[i] for hits[i] (a missed ray gets a default
+// ShadowRay: kBehind). Where the build has SIMD it shades simd::kLanes hits at once with the same
+// IEEE operations in the same order, so every field is the same bit for bit (tested).
+void lab_shadow_rays(const TriangleMesh& mesh, std::span<const Hit> hits, glm::vec3 light,
+                     const RayOffsetParams& offset, std::span<ShadowRay> out);
+
 class LabIntegrator final : public Integrator {
  public:
   explicit LabIntegrator(const RayOffsetParams& offset = {}) : offset_(offset) {}

@@ -83,17 +83,15 @@ struct TsanVisibleBody {
 
 namespace {
 
-// Visits a tile's pixels in 4 x 4 blocks, row by row within a block, so that consecutive rays of a
-// batch are neighbours in both directions: packets of 8 or 16 of them stay coherent.
+// Visits a tile in 4 x 4 pixel blocks (smaller at the tile's edges), fn(bx, by, ex, ey) for the
+// block [bx, ex) x [by, ey), whose pixels are taken row by row: consecutive rays of a batch are
+// neighbours in both directions, so packets of 8 or 16 of them stay coherent.
 template <typename Fn>
-void for_each_pixel_in_blocks(int x0, int y0, int x1, int y1, Fn&& fn) {
+void for_each_block(int x0, int y0, int x1, int y1, Fn&& fn) {
   constexpr int kBlock = 4;
   for (int by = y0; by < y1; by += kBlock) {
     for (int bx = x0; bx < x1; bx += kBlock) {
-      const int ey = std::min(by + kBlock, y1), ex = std::min(bx + kBlock, x1);
-      for (int y = by; y < ey; ++y) {
-        for (int x = bx; x < ex; ++x) fn(x, y);
-      }
+      fn(bx, by, std::min(bx + kBlock, x1), std::min(by + kBlock, y1));
     }
   }
 }
@@ -134,13 +132,18 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
       const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
       const int x1 = std::min(x0 + tile, width), y1 = std::min(y0 + tile, height);
       size_t n = 0;
-      for_each_pixel_in_blocks(x0, y0, x1, y1,
-                               [&](int x, int y) { batch[n++] = camera.primary_ray(x, y); });
+      for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
+        camera.primary_rays(bx, by, ex, ey, batch.data() + n);
+        n += static_cast<size_t>((ex - bx) * (ey - by));
+      });
       traced += integrator.radiance(std::span<const Ray>(batch.data(), n),
                                     std::span(radiance).first(n), scene, accel);
       n = 0;
-      for_each_pixel_in_blocks(x0, y0, x1, y1,
-                               [&](int x, int y) { image.at(x, y) = radiance[n++]; });
+      for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
+        for (int y = by; y < ey; ++y) {
+          for (int x = bx; x < ex; ++x) image.at(x, y) = radiance[n++];
+        }
+      });
       if (options.progress) {
         options.progress->tiles_done(tiles_done.fetch_add(1, std::memory_order_relaxed) + 1,
                                      tiles_total);

@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "tritrace/math/rotation.h"
+#include "tritrace/math/simd_lanes.h"
 
 namespace tritrace {
 
@@ -48,6 +49,55 @@ Camera Camera::look_at(int width, int height, glm::vec3 position, glm::vec3 targ
 float Camera::focal_for_vertical_fov(int height, double degrees) {
   const double half = degrees * std::numbers::pi / 360.0;
   return static_cast<float>(0.5 * height / std::tan(half));
+}
+
+void Camera::primary_rays(int x0, int y0, int x1, int y1, Ray* out) const {
+  const int row = x1 - x0, count = row * (y1 - y0);
+  int i = 0;
+#if TRITRACE_SIMD_LANES > 0
+  // Lane by lane the operations of primary_ray: d from the basis, then glm::normalize's
+  // d * (1 / sqrt(dot(d, d))). Each ray's fields are written one by one, straight into `out`:
+  // building a Ray in a temporary and copying it (what the compiler does with primary_ray) stalls
+  // on the copy's wide load of freshly stored floats.
+  using simd::VF;
+  constexpr int W = simd::kLanes;
+  const int half_width = width_ / 2, half_height = height_ / 2;
+  const VF rx = simd::splat(right_.x), ry = simd::splat(right_.y), rz = simd::splat(right_.z);
+  const VF dnx = simd::splat(down_.x), dny = simd::splat(down_.y), dnz = simd::splat(down_.z);
+  const VF fx = simd::splat(forward_.x * focal_), fy = simd::splat(forward_.y * focal_),
+           fz = simd::splat(forward_.z * focal_);
+  int px = x0, py = y0;  // the next pixel, row by row
+  for (; i + W <= count; i += W) {
+    alignas(64) float dx_in[W], dy_in[W];
+    for (int l = 0; l < W; ++l) {
+      dx_in[l] = static_cast<float>(px - half_width);
+      dy_in[l] = static_cast<float>(py - half_height);
+      if (++px == x1) {
+        px = x0;
+        ++py;
+      }
+    }
+    const VF dx = simd::load(dx_in), dy = simd::load(dy_in);
+    const VF d_x = rx * dx + dnx * dy + fx;
+    const VF d_y = ry * dx + dny * dy + fy;
+    const VF d_z = rz * dx + dnz * dy + fz;
+    const VF scale = simd::splat(1.0f) / simd::sqrt(d_x * d_x + d_y * d_y + d_z * d_z);
+    alignas(64) float dir[3][W];
+    simd::store(dir[0], d_x * scale);
+    simd::store(dir[1], d_y * scale);
+    simd::store(dir[2], d_z * scale);
+    for (int l = 0; l < W; ++l) {
+      Ray& ray = out[i + l];
+      ray.origin = position_;
+      ray.dir.x = dir[0][l];
+      ray.dir.y = dir[1][l];
+      ray.dir.z = dir[2][l];
+      ray.tmin = 0.0f;
+      ray.tmax = kRayTMax;
+    }
+  }
+#endif
+  for (; i < count; ++i) out[i] = primary_ray(x0 + i % row, y0 + i / row);
 }
 
 }  // namespace tritrace

@@ -39,19 +39,21 @@ inline VM finite(VF x) {
   return (x - x) == splat(0.0f);
 }  // NaN and +-inf give NaN
 
-// Transposes up to W rays into lanes with gathers. Lanes past the batch, or with a non-finite ray
-// or an empty interval, get an empty interval and never hit anything.
+// Transposes up to W rays into lanes (a Ray is one row of 8 floats). Lanes past the batch, or with
+// a non-finite ray or an empty interval, get an empty interval and never hit anything.
 Packet load_packet(std::span<const Ray> rays) {
-  const float* base = reinterpret_cast<const float*>(rays.data());
   const int count = static_cast<int>(rays.size());
-  Packet p;
-  VF o[3], d[3];
-  for (int a = 0; a < 3; ++a) {
-    o[a] = load_every_8th(base + a, count, 0.0f);
-    d[a] = load_every_8th(base + 3 + a, count, a == 2 ? 1.0f : 0.0f);
+  // A lane past the batch reads this ray: an empty interval.
+  static constexpr float kUnused[8] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.0f, kInf, -kInf};
+  const float* rows[W];
+  for (int l = 0; l < W; ++l) {
+    rows[l] = l < count ? reinterpret_cast<const float*>(&rays[static_cast<size_t>(l)]) : kUnused;
   }
-  VF tmin = load_every_8th(base + 6, count, kInf);
-  VF tmax = load_every_8th(base + 7, count, -kInf);
+  VF column[8];
+  transpose_rows_of_8(rows, column);
+  Packet p;
+  const VF o[3] = {column[0], column[1], column[2]}, d[3] = {column[3], column[4], column[5]};
+  const VF tmin = column[6], tmax = column[7];
   VM ok = first_lanes(count) & (tmin <= tmax);
   for (int a = 0; a < 3; ++a) ok = ok & finite(o[a]) & finite(d[a]);
   p.active = bits(ok);

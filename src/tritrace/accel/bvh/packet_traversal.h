@@ -8,9 +8,9 @@
 #include <cstdint>
 #include <span>
 
-#include "tritrace/accel/bvh/simd_lanes.h"
 #include "tritrace/accel/bvh/wide_bvh.h"
 #include "tritrace/geometry/hit.h"
+#include "tritrace/math/simd_lanes.h"
 
 namespace tritrace::bvh {
 
