@@ -91,6 +91,26 @@ inline VF select(VM m, VF if_true, VF if_false) {
 inline VI splat_i(int32_t x) {
   return {_mm512_set1_epi32(x)};
 }
+inline VF to_float(VI a) {
+  return {_mm512_maskz_cvtepi32_ps(0xFFFF, a.v)};
+}
+// Lane l holds l % 4 (quad_column) or l / 4 (quad_row): the pixels of rows 4 wide.
+inline VI quad_column() {
+  return {_mm512_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3)};
+}
+inline VI quad_row() {
+  return {_mm512_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3)};
+}
+// Lane l reads base[index[l]] (index in floats) where `lanes` has bit l set, else 0.
+inline VF gather(const float* base, VI index, VM lanes) {
+  return {_mm512_mask_i32gather_ps(_mm512_setzero_ps(), lanes.m, index.v, base, 4)};
+}
+inline VI iota_i() {
+  return {_mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)};
+}
+inline VM operator==(VI a, VI b) {
+  return {_mm512_cmpeq_epi32_mask(a.v, b.v)};
+}
 inline VM operator>(VI a, VI b) {
   return {_mm512_cmpgt_epi32_mask(a.v, b.v)};
 }
@@ -267,6 +287,26 @@ inline VF select(VM m, VF if_true, VF if_false) {
 }
 inline VI splat_i(int32_t x) {
   return {_mm256_set1_epi32(x)};
+}
+inline VF to_float(VI a) {
+  return {_mm256_cvtepi32_ps(a.v)};
+}
+// Lane l holds l % 4 (quad_column) or l / 4 (quad_row): the pixels of rows 4 wide.
+inline VI quad_column() {
+  return {_mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3)};
+}
+inline VI quad_row() {
+  return {_mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1)};
+}
+// Lane l reads base[index[l]] (index in floats) where `lanes` has bit l set, else 0.
+inline VF gather(const float* base, VI index, VM lanes) {
+  return {_mm256_mask_i32gather_ps(_mm256_setzero_ps(), base, index.v, lanes.m, 4)};
+}
+inline VI iota_i() {
+  return {_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)};
+}
+inline VM operator==(VI a, VI b) {
+  return {_mm256_castsi256_ps(_mm256_cmpeq_epi32(a.v, b.v))};
 }
 inline VM operator>(VI a, VI b) {
   return {_mm256_castsi256_ps(_mm256_cmpgt_epi32(a.v, b.v))};

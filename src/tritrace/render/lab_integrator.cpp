@@ -1,8 +1,10 @@
 // The lab shading, batched: all primary hits of a tile first, then one shadow batch per light.
 #include "tritrace/render/lab_integrator.h"
 
+#include <algorithm>
 #include <array>
 #include <cassert>
+#include <cstddef>
 #include <glm/glm.hpp>
 #include <glm/gtc/constants.hpp>
 
@@ -131,34 +133,46 @@ V3 offset_origin(V3 p, V3 n, VF extent, const RayOffsetParams& k) {
 void shadow_lanes(const TriangleMesh& mesh, const Hit* hits, int count, glm::vec3 light_position,
                   const RayOffsetParams& offset, ShadowRay* out) {
   constexpr int W = simd::kLanes;
-  alignas(64) int32_t prim_in[W];
-  alignas(64) float u_in[W], v_in[W];
-  for (int l = 0; l < W; ++l) {
-    const bool in = l < count && hits[l].found();
-    prim_in[l] = in ? static_cast<int32_t>(hits[l].prim) : 0;
-    u_in[l] = in ? hits[l].u : 0.0f;
-    v_in[l] = in ? hits[l].v : 0.0f;
-  }
-  const VF u = simd::load(u_in), v = simd::load(v_in);
   // Neighbouring pixels mostly hit the same triangle: then its data is loaded once and broadcast,
   // which costs far less than four gathers of three coordinates each.
+  int first_found = -1;
   bool same = true;
-  for (int l = 1; l < count; ++l) same &= prim_in[l] == prim_in[0] || !hits[l].found();
+  for (int l = 0; l < count; ++l) {
+    if (!hits[l].found()) continue;
+    if (first_found < 0) first_found = l;
+    same &= hits[l].prim == hits[first_found].prim;
+  }
+  if (first_found < 0) {  // every ray missed
+    std::fill_n(out, count, ShadowRay{});
+    return;
+  }
+  // The hits' fields gathered (a Hit is 4 floats: t, u, v, prim) straight from where the traversal
+  // wrote them; lanes past the batch read nothing and hold zeros.
+  static_assert(sizeof(Hit) == 4 * sizeof(float) && offsetof(Hit, u) == sizeof(float) &&
+                offsetof(Hit, v) == 2 * sizeof(float) && offsetof(Hit, prim) == 3 * sizeof(float));
+  const float* hit_floats = reinterpret_cast<const float*>(hits);
+  const VI field = simd::iota_i() + simd::iota_i() + simd::iota_i() + simd::iota_i();
+  const VM in_batch = simd::first_lanes(count);
+  const VF u = simd::gather(hit_floats + 1, field, in_batch),
+           v = simd::gather(hit_floats + 2, field, in_batch);
   V3 v0, e1, e2, normal;
   if (same) {
-    const size_t p = static_cast<size_t>(prim_in[0]);
+    const size_t p = hits[first_found].prim;
     v0 = splat3(mesh.v0()[p]);
     e1 = splat3(mesh.e1()[p]);
     e2 = splat3(mesh.e2()[p]);
     normal = splat3(mesh.normal()[p]);
   } else {
-    const VI prim = simd::load_i(prim_in);
-    const VI first = prim + prim + prim;
+    // A missed ray's lane reads triangle 0; its results are never used.
+    const VI prim = simd::bits_of(simd::gather(hit_floats + 3, field, in_batch));
+    const VI valid = simd::select(prim == simd::splat_i(-1), simd::splat_i(0), prim);
+    const VI first = valid + valid + valid;
     v0 = gather3(mesh.v0(), first);
     e1 = gather3(mesh.e1(), first);
     e2 = gather3(mesh.e2(), first);
     normal = gather3(mesh.normal(), first);
   }
+  static_assert(kNoHit == static_cast<uint32_t>(-1));
   const V3 light = splat3(light_position);
   const VF zero = simd::splat(0.0f);
 

@@ -60,24 +60,20 @@ void Camera::primary_rays(int x0, int y0, int x1, int y1, Ray* out) const {
   // building a Ray in a temporary and copying it (what the compiler does with primary_ray) stalls
   // on the copy's wide load of freshly stored floats.
   using simd::VF;
+  using simd::VI;
   constexpr int W = simd::kLanes;
   const int half_width = width_ / 2, half_height = height_ / 2;
   const VF rx = simd::splat(right_.x), ry = simd::splat(right_.y), rz = simd::splat(right_.z);
   const VF dnx = simd::splat(down_.x), dny = simd::splat(down_.y), dnz = simd::splat(down_.z);
   const VF fx = simd::splat(forward_.x * focal_), fy = simd::splat(forward_.y * focal_),
            fz = simd::splat(forward_.z * focal_);
-  int px = x0, py = y0;  // the next pixel, row by row
-  for (; i + W <= count; i += W) {
-    alignas(64) float dx_in[W], dy_in[W];
-    for (int l = 0; l < W; ++l) {
-      dx_in[l] = static_cast<float>(px - half_width);
-      dy_in[l] = static_cast<float>(py - half_height);
-      if (++px == x1) {
-        px = x0;
-        ++py;
-      }
-    }
-    const VF dx = simd::load(dx_in), dy = simd::load(dy_in);
+  // Rows 4 wide (the renderer's blocks) fill whole vectors of W / 4 rows; other shapes go pixel by
+  // pixel below. The offsets are integers, converted once, as primary_ray does.
+  static_assert(W % 4 == 0);
+  for (; row == 4 && i + W <= count; i += W) {
+    const VI column = simd::splat_i(x0 - half_width) + simd::quad_column();
+    const VI line = simd::splat_i(y0 + i / 4 - half_height) + simd::quad_row();
+    const VF dx = simd::to_float(column), dy = simd::to_float(line);
     const VF d_x = rx * dx + dnx * dy + fx;
     const VF d_y = ry * dx + dny * dy + fy;
     const VF d_z = rz * dx + dnz * dy + fz;
