@@ -23,10 +23,11 @@ using bvh::kLeafBit;
 using bvh::WideBvh;
 
 void expect_same_as_brute(const TriangleMesh& mesh, Kernel kernel, int rays_count, uint32_t seed,
-                          BvhTraversal traversal = BvhTraversal::kAuto) {
+                          BvhTraversal traversal = BvhTraversal::kAuto, bool coherent = false) {
   const BruteForceAccel brute(mesh, kernel);
   const BvhAccel accel(mesh, kernel, {}, traversal);
-  const std::vector<Ray> rays = awkward_rays(mesh, rays_count, seed);
+  const std::vector<Ray> rays =
+      coherent ? coherent_rays(mesh, rays_count / 16, seed) : awkward_rays(mesh, rays_count, seed);
   std::vector<Hit> want(rays.size()), got(rays.size());
   std::vector<uint8_t> want_occ(rays.size()), got_occ(rays.size());
   brute.intersect(rays, want);
@@ -60,6 +61,23 @@ TEST_P(BvhVsBrute, TerrainSameHitsBitForBit) {
 
 TEST_P(BvhVsBrute, RandomSoupSameHitsBitForBit) {
   expect_same_as_brute(random_soup(3000, 3), GetParam(), 4000, 4);
+}
+
+TEST_P(BvhVsBrute, CoherentPacketsSameHitsBitForBit) {
+  expect_same_as_brute(make_cornell_box().mesh, GetParam(), 16000, 5, BvhTraversal::kAuto, true);
+  expect_same_as_brute(make_terrain_scene(20000).mesh, GetParam(), 8000, 6, BvhTraversal::kAuto,
+                       true);
+  expect_same_as_brute(random_soup(3000, 7), GetParam(), 8000, 8, BvhTraversal::kAuto, true);
+}
+
+TEST_P(BvhVsBrute, TerrainImageIsIdentical) {
+  const Scene scene = make_terrain_scene(20000, {.width = 64, .height = 48, .yaw = -0.3});
+  const BruteForceAccel brute(scene.mesh, GetParam());
+  const BvhAccel accel(scene.mesh, GetParam());
+  const Image a = render(scene, brute, LabIntegrator{}, {});
+  const Image b = render(scene, accel, LabIntegrator{}, {});
+  EXPECT_EQ(
+      std::memcmp(a.pixels().data(), b.pixels().data(), a.pixels().size() * sizeof(glm::vec3)), 0);
 }
 
 TEST_P(BvhVsBrute, CornellImageIsIdentical) {

@@ -64,4 +64,39 @@ inline std::vector<Ray> awkward_rays(const TriangleMesh& mesh, int n, uint32_t s
   return rays;
 }
 
+// Coherent packets, as the renderer makes them, aimed at vertices and edges so that boxes and
+// triangles are grazed: groups of 16 consecutive rays from one origin (a pinhole camera) through a
+// 4 x 4 grid of points around a target, or from 16 nearby origins (hit points) to one point (a
+// light) as bounded segments. The packet traversal's whole-packet (frustum) tests run on these.
+inline std::vector<Ray> coherent_rays(const TriangleMesh& mesh, int packets, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-1.5f, 1.5f), unit(0.0f, 1.0f);
+  std::uniform_int_distribution<size_t> tri(0, mesh.size() - 1);
+  std::vector<Ray> rays;
+  for (int k = 0; k < packets; ++k) {
+    const size_t t = tri(rng);
+    const glm::vec3 target =
+        k % 2 == 0 ? mesh.vertex(t, k % 3) : mesh.v0()[t] + unit(rng) * mesh.e1()[t];
+    const glm::vec3 origin = glm::vec3(pos(rng), pos(rng), pos(rng)) * (k % 3 == 0 ? 3.0f : 1.0f);
+    const float spread = (k % 4 == 0 ? 1e-6f : 1e-2f) * (1.0f + glm::length(target - origin));
+    const bool towards_light = k % 3 == 2;
+    for (int l = 0; l < 16; ++l) {
+      const glm::vec3 offset(spread * static_cast<float>(l % 4 - 2),
+                             spread * static_cast<float>(l / 4 - 2), spread * unit(rng));
+      Ray r;
+      if (towards_light) {  // many origins around the target, one end point
+        r.origin = target + offset;
+        const glm::vec3 segment = origin - r.origin;
+        r.tmax = glm::length(segment);
+        r.dir = segment / r.tmax;
+      } else {
+        r.origin = origin;
+        r.dir = glm::normalize(target + offset - origin);
+      }
+      rays.push_back(r);
+    }
+  }
+  return rays;
+}
+
 }  // namespace tritrace

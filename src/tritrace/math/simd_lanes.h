@@ -155,16 +155,18 @@ inline VM first_lanes(int count) {
 }
 // Written out rather than _mm512_reduce_min_ps, which trips GCC 12's -Wmaybe-uninitialized.
 inline float hmin(VF a) {
-  __m512 m = _mm512_min_ps(a.v, _mm512_shuffle_f32x4(a.v, a.v, 0x4E));  // swap 256-bit halves
-  m = _mm512_min_ps(m, _mm512_shuffle_f32x4(m, m, 0xB1));               // swap 128-bit quarters
+  __m512 m = _mm512_maskz_min_ps(
+      0xFFFF, a.v, _mm512_maskz_shuffle_f32x4(0xFFFF, a.v, a.v, 0x4E));  // swap 256-bit halves
+  m = _mm512_maskz_min_ps(0xFFFF, m,
+                          _mm512_maskz_shuffle_f32x4(0xFFFF, m, m, 0xB1));  // swap 128-bit quarters
   __m128 q = _mm512_castps512_ps128(m);
   q = _mm_min_ps(q, _mm_movehl_ps(q, q));
   q = _mm_min_ss(q, _mm_shuffle_ps(q, q, 1));
   return _mm_cvtss_f32(q);
 }
 inline float hmax(VF a) {
-  __m512 m = _mm512_max_ps(a.v, _mm512_shuffle_f32x4(a.v, a.v, 0x4E));
-  m = _mm512_max_ps(m, _mm512_shuffle_f32x4(m, m, 0xB1));
+  __m512 m = _mm512_maskz_max_ps(0xFFFF, a.v, _mm512_maskz_shuffle_f32x4(0xFFFF, a.v, a.v, 0x4E));
+  m = _mm512_maskz_max_ps(0xFFFF, m, _mm512_maskz_shuffle_f32x4(0xFFFF, m, m, 0xB1));
   __m128 q = _mm512_castps512_ps128(m);
   q = _mm_max_ps(q, _mm_movehl_ps(q, q));
   q = _mm_max_ss(q, _mm_shuffle_ps(q, q, 1));

@@ -9,9 +9,11 @@
 // inlined (GCC bug 105593); the warning is about the compiler's own header, not this code.
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
 #endif
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -23,6 +25,16 @@ using namespace simd;
 constexpr int W = kLanes;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
+// Interval bounds of a packet's origins and inverse directions, splatted for a test of all eight
+// children of a node at once. Usable when every active ray has the same direction sign on each axis
+// and finite bounds (interval arithmetic over a packet, as in Wald, Boulos and Shirley, "Ray
+// Tracing Deformable Scenes Using Dynamic Bounding Volume Hierarchies", ACM TOG 26(1), 2007).
+struct Frustum {
+  bool usable = false;
+  __m256 o_lo[3], o_hi[3], inv_lo[3], inv_hi[3];
+  float tmin_lo = 0.0f;
+};
+
 struct Packet {
   VF o[3], d[3], inv[3];
   VF tmin, tmax;
@@ -30,6 +42,7 @@ struct Packet {
   // Per axis: 0 all directions positive, 1 all negative, -1 mixed (then blend per lane).
   int sign[3];
   uint32_t active;
+  Frustum frustum;
 };
 
 static_assert(sizeof(Ray) == 8 * sizeof(float) && offsetof(Ray, dir) == 3 * sizeof(float) &&
@@ -68,7 +81,54 @@ Packet load_packet(std::span<const Ray> rays) {
   }
   p.tmin = select(ok, tmin, splat(kInf));
   p.tmax = select(ok, tmax, splat(-kInf));
+
+  Frustum& f = p.frustum;
+  f.usable = p.active != 0;
+  for (int a = 0; a < 3 && f.usable; ++a) {
+    const float o_lo = hmin(select(ok, p.o[a], splat(kInf)));
+    const float o_hi = hmax(select(ok, p.o[a], splat(-kInf)));
+    const float inv_lo = hmin(select(ok, p.inv[a], splat(kInf)));
+    const float inv_hi = hmax(select(ok, p.inv[a], splat(-kInf)));
+    // Finite bounds (a zero direction component has an infinite inverse) of one sign.
+    f.usable = p.sign[a] >= 0 && std::isfinite(o_lo) && std::isfinite(o_hi) &&
+               std::isfinite(inv_lo) && std::isfinite(inv_hi);
+    f.o_lo[a] = _mm256_set1_ps(o_lo);
+    f.o_hi[a] = _mm256_set1_ps(o_hi);
+    f.inv_lo[a] = _mm256_set1_ps(inv_lo);
+    f.inv_hi[a] = _mm256_set1_ps(inv_hi);
+  }
+  f.tmin_lo = hmin(p.tmin);
   return p;
+}
+
+// The packet's frustum against all eight children of `node`: bit c is set when child c's box may be
+// hit by some ray of the packet within (tmin, tfar_hi], and tnear[c] is at most any ray's entry
+// distance. Every bound is taken at the ends of the intervals; rounding to nearest is monotonic, so
+// each bound holds for the rounded per-ray values hit_box computes: a child that hit_box would
+// enter for some ray is always entered here (the traversal stays exact, it may only visit more).
+inline uint32_t frustum_hits(const WideNode& node, const Packet& p, float tfar_hi,
+                             float tnear[kWidth]) {
+  const Frustum& f = p.frustum;
+  const float* lo[3] = {node.lo_x, node.lo_y, node.lo_z};
+  const float* hi[3] = {node.hi_x, node.hi_y, node.hi_z};
+  __m256 tn = _mm256_set1_ps(f.tmin_lo), tf = _mm256_set1_ps(tfar_hi);
+  for (int a = 0; a < 3; ++a) {
+    const __m256 near = _mm256_load_ps(p.sign[a] ? hi[a] : lo[a]);
+    const __m256 far = _mm256_load_ps(p.sign[a] ? lo[a] : hi[a]);
+    const __m256 n0 = _mm256_sub_ps(near, f.o_hi[a]), n1 = _mm256_sub_ps(near, f.o_lo[a]);
+    const __m256 f0 = _mm256_sub_ps(far, f.o_hi[a]), f1 = _mm256_sub_ps(far, f.o_lo[a]);
+    const __m256 near_lo = _mm256_min_ps(
+        _mm256_min_ps(_mm256_mul_ps(n0, f.inv_lo[a]), _mm256_mul_ps(n0, f.inv_hi[a])),
+        _mm256_min_ps(_mm256_mul_ps(n1, f.inv_lo[a]), _mm256_mul_ps(n1, f.inv_hi[a])));
+    const __m256 far_hi = _mm256_max_ps(
+        _mm256_max_ps(_mm256_mul_ps(f0, f.inv_lo[a]), _mm256_mul_ps(f0, f.inv_hi[a])),
+        _mm256_max_ps(_mm256_mul_ps(f1, f.inv_lo[a]), _mm256_mul_ps(f1, f.inv_hi[a])));
+    tn = _mm256_max_ps(near_lo, tn);
+    tf = _mm256_min_ps(far_hi, tf);
+  }
+  _mm256_storeu_ps(tnear, tn);
+  const __m256 hit = _mm256_cmp_ps(tn, _mm256_mul_ps(tf, _mm256_set1_ps(kFarScale)), _CMP_LE_OQ);
+  return static_cast<uint32_t>(_mm256_movemask_ps(hit));
 }
 
 // The packet against one child box; `tfar` is each ray's current far limit.
@@ -169,16 +229,27 @@ void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<
         const WideNode& node = tree.nodes[ref];
         Entry near[kWidth];
         int n = 0;
-        for (int c = 0; c < kWidth; ++c) {
-          if (node.child[c] == kEmptyChild) continue;
-          VF tn;
-          const VM hit = hit_box(node, c, p, best_t, tn);
-          if (!bits(hit)) continue;
-          prefetch_child(tree, node.child[c]);
-          Entry e{node.child[c], hmin(select(hit, tn, splat(kInf)))};
+        auto insert = [&](Entry e) {  // sorted farthest first
           int j = n++;
           for (; j > 0 && near[j - 1].t < e.t; --j) near[j] = near[j - 1];
           near[j] = e;
+        };
+        if (p.frustum.usable) {
+          alignas(32) float tnear[kWidth];
+          for (uint32_t m = frustum_hits(node, p, farthest_best, tnear); m; m &= m - 1) {
+            const int c = std::countr_zero(m);
+            prefetch_child(tree, node.child[c]);
+            insert({node.child[c], tnear[c]});
+          }
+        } else {
+          for (int c = 0; c < kWidth; ++c) {
+            if (node.child[c] == kEmptyChild) continue;
+            VF tn;
+            const VM hit = hit_box(node, c, p, best_t, tn);
+            if (!bits(hit)) continue;
+            prefetch_child(tree, node.child[c]);
+            insert({node.child[c], hmin(select(hit, tn, splat(kInf)))});
+          }
         }
         if (n > 0) {
           for (int i = 0; i < n - 1; ++i) stack[sp++] = near[i];
@@ -209,6 +280,7 @@ done:
 void occluded_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<uint8_t> occluded) {
   Packet p = load_packet(rays);
   uint32_t blocked = 0;
+  float farthest_tmax = hmax(p.tmax);  // over the rays not yet blocked
   if (!tree.nodes.empty() && p.active) {
     uint32_t stack[kStackSize];
     int sp = 0;
@@ -226,14 +298,24 @@ void occluded_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<u
           p.tmax = select(h.ok, splat(-kInf), p.tmax);
         }
         if ((blocked & p.active) == p.active) break;
+        farthest_tmax = hmax(p.tmax);
       } else {
         const WideNode& node = tree.nodes[ref];
-        for (int c = 0; c < kWidth; ++c) {
-          if (node.child[c] == kEmptyChild) continue;
-          VF tn;
-          if (bits(hit_box(node, c, p, p.tmax, tn))) {
+        if (p.frustum.usable) {
+          alignas(32) float tnear[kWidth];
+          for (uint32_t m = frustum_hits(node, p, farthest_tmax, tnear); m; m &= m - 1) {
+            const int c = std::countr_zero(m);
             prefetch_child(tree, node.child[c]);
             stack[sp++] = node.child[c];
+          }
+        } else {
+          for (int c = 0; c < kWidth; ++c) {
+            if (node.child[c] == kEmptyChild) continue;
+            VF tn;
+            if (bits(hit_box(node, c, p, p.tmax, tn))) {
+              prefetch_child(tree, node.child[c]);
+              stack[sp++] = node.child[c];
+            }
           }
         }
       }
