@@ -72,7 +72,9 @@ SceneOverrides scene_overrides(const SceneFlags& flags) {
   return o;
 }
 
-AccelKind accel_kind(const SceneFlags& flags) { return *parse_accel(flags.accel); }
+AccelKind accel_kind(const SceneFlags& flags) {
+  return *parse_accel(flags.accel);
+}
 
 Kernel kernel_choice(const SceneFlags& flags) {
   return flags.kernel.empty() ? default_kernel_for(accel_kind(flags)) : *parse_kernel(flags.kernel);

@@ -69,7 +69,8 @@ int main(int argc, char** argv) {
     return tritrace::view::run_viewer(options);
   } catch (const tritrace::Error& e) {
     // An error with no subject (no display) is a sentence of its own.
-    std::fprintf(stderr, "tritrace-view: %s\n", e.subject().empty() ? e.reason().c_str() : e.what());
+    std::fprintf(stderr, "tritrace-view: %s\n",
+                 e.subject().empty() ? e.reason().c_str() : e.what());
     return static_cast<int>(e.exit_code());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "tritrace-view: %s\n", e.what());

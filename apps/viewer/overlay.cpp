@@ -48,8 +48,8 @@ void Overlay::draw(SDL_Renderer* renderer, const std::vector<std::string>& lines
       if (TTF_SizeUTF8(font_, line.c_str(), &w, &h) == 0) width = std::max(width, w);
     }
     const int height = std::max(1, line_height * static_cast<int>(lines.size()));
-    SDL_Surface* panel = SDL_CreateRGBSurfaceWithFormat(0, width, height, 32,
-                                                        SDL_PIXELFORMAT_ARGB8888);
+    SDL_Surface* panel =
+        SDL_CreateRGBSurfaceWithFormat(0, width, height, 32, SDL_PIXELFORMAT_ARGB8888);
     if (panel == nullptr) return;
     SDL_FillRect(panel, nullptr, SDL_MapRGBA(panel->format, 0, 0, 0, 0));
     const SDL_Color white{255, 255, 255, 255};

@@ -18,8 +18,7 @@ void pack_argb8888(const Image& image, uint8_t* dst, int pitch_bytes) {
                         uint8_t* row = dst + static_cast<ptrdiff_t>(y) * pitch_bytes;
                         const glm::vec3* in = src + static_cast<size_t>(y) * width;
                         for (int x = 0; x < width; ++x) {
-                          const uint32_t word = 0xff000000u |
-                                                uint32_t{to_byte_lab(in[x].r)} << 16 |
+                          const uint32_t word = 0xff000000u | uint32_t{to_byte_lab(in[x].r)} << 16 |
                                                 uint32_t{to_byte_lab(in[x].g)} << 8 |
                                                 uint32_t{to_byte_lab(in[x].b)};
                           std::memcpy(row + 4 * static_cast<size_t>(x), &word, sizeof word);

@@ -42,9 +42,13 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start, Clock::time_point end) {
   return std::chrono::duration<double>(end - start).count();
 }
-double ms_since(Clock::time_point start) { return 1e3 * seconds_since(start, Clock::now()); }
+double ms_since(Clock::time_point start) {
+  return 1e3 * seconds_since(start, Clock::now());
+}
 
-Error no_display() { return Error("", kNoDisplay); }
+Error no_display() {
+  return Error("", kNoDisplay);
+}
 
 bool env_set(const char* name) {
   const char* value = std::getenv(name);
@@ -58,6 +62,10 @@ class SdlVideo {
  public:
   SdlVideo() {
     if (!env_set("DISPLAY") && !env_set("WAYLAND_DISPLAY")) throw no_display();
+    // Only the system the environment names: SDL would otherwise try the others in turn when it
+    // fails (Wayland's library then prints its own complaint on stderr). A user's own
+    // SDL_VIDEODRIVER still wins (a hint at default priority yields to the environment).
+    SDL_SetHint(SDL_HINT_VIDEODRIVER, env_set("DISPLAY") ? "x11" : "wayland");
     if (SDL_Init(SDL_INIT_VIDEO) != 0) throw no_display();
     const char* driver = SDL_GetCurrentVideoDriver();
     const std::string_view name = driver != nullptr ? driver : "";
@@ -295,8 +303,8 @@ class Viewer {
 
   void frame_done(const FrameTimes& times) {
     last_times_ = times;
-    SDL_SetWindowTitle(window_.get(), window_title(times.total(), image_.width(),
-                                                   image_.height()).c_str());
+    SDL_SetWindowTitle(window_.get(),
+                       window_title(times.total(), image_.width(), image_.height()).c_str());
     if (!options_.quiet && !benchmarking()) report_.add_frame(times.total());
     if (benchmarking()) benchmark_.push_back(times);
   }
@@ -359,8 +367,7 @@ class Viewer {
         "benchmark: %zu frames at %dx%d, medians: frame %.2f ms, render %.2f ms, convert %.3f "
         "ms, upload %.3f ms, present %.3f ms, events %.3f ms (SDL renderer: %s)\n",
         benchmark_.size(), image_.width(), image_.height(), median(total), median(render),
-        median(convert), median(upload), median(present), median(events),
-        renderer_name().c_str());
+        median(convert), median(upload), median(present), median(events), renderer_name().c_str());
     std::fflush(stdout);
   }
 

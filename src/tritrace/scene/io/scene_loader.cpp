@@ -44,8 +44,9 @@ void apply_overrides(LoadedScene& loaded, const SceneOverrides& overrides) {
   // Distance first, then the orbit: both keep the camera on a sphere about look_at.
   if (overrides.distance) {
     const glm::dvec3 from_target = glm::dvec3(c.position) - glm::dvec3(c.look_at);
-    const glm::dvec3 moved =
-        glm::dvec3(c.look_at) + from_target * (*overrides.distance / glm::length(from_target));
+    // Multiplied before dividing, so that round numbers stay exact ((0, 0, -3) * 2 / 3).
+    const glm::dvec3 moved = glm::dvec3(c.look_at) +
+                             from_target * double{*overrides.distance} / glm::length(from_target);
     if (!finite(moved)) {
       throw Error("--distance", "puts the camera beyond float range", ExitCode::kUsage);
     }
