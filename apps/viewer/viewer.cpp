@@ -165,6 +165,7 @@ class Viewer {
       for (const SDL_Event& e : events) {
         if (e.type == SDL_QUIT) return 0;
         if (e.type == SDL_WINDOWEVENT) {
+          if (e.window.event == SDL_WINDOWEVENT_CLOSE) return 0;
           if (e.window.event == SDL_WINDOWEVENT_SIZE_CHANGED) {
             width_ = std::clamp(e.window.data1, 1, kMaxImageSide);
             height_ = std::clamp(e.window.data2, 1, kMaxImageSide);

@@ -12,7 +12,9 @@
 namespace tritrace::cli {
 namespace {
 
-bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool same_bits(float a, float b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
 
 TEST(FormatNumbers, ShortestForms) {
   EXPECT_EQ(format_double(0.1234), "0.1234");

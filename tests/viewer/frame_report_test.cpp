@@ -57,7 +57,7 @@ TEST(ScreenshotPath, TakesTheFirstFreeNumber) {
 
 TEST(PackArgb8888, LabBytesAlphaOpaqueRowsAtThePitch) {
   Image image(2, 2);
-  image.at(0, 0) = glm::vec3(0.5f, 1.0f, 0.0f);  // 127, 255, 0
+  image.at(0, 0) = glm::vec3(0.5f, 1.0f, 0.0f);     // 127, 255, 0
   image.at(1, 0) = glm::vec3(-1.0f, 2.0f, 0.075f);  // 0, 255, 19 (19.125 truncated)
   image.at(0, 1) = glm::vec3(std::numeric_limits<float>::quiet_NaN(), 0.999f, 0.2f);  // 0, 254, 51
   image.at(1, 1) = glm::vec3(1.0f);

@@ -54,7 +54,7 @@ TEST(Motion, UpMovesTheCameraCloserAndStopsShortOfTheTarget) {
   ViewState s;
   Motion m;
   m.approach = 1;
-  EXPECT_EQ(advance(s, m, 0.5, MotionRates{}).distance, 2.5f);  // 1 unit/s for the lab
+  EXPECT_EQ(advance(s, m, 0.5, MotionRates{}).distance, 2.5f);    // 1 unit/s for the lab
   EXPECT_EQ(advance(s, m, 10.0, MotionRates{}).distance, 0.03f);  // 1% of 3
   m.approach = -1;
   EXPECT_EQ(advance(s, m, 2.0, MotionRates{}).distance, 5.0f);

@@ -24,6 +24,8 @@
 #include <thread>
 #include <vector>
 
+#include <X11/Xlib.h>
+
 #include "tritrace/image/image_io.h"
 
 #if !defined(TRITRACE_VIEW_PATH) || !defined(TRITRACE_CLI_PATH)
@@ -155,7 +157,7 @@ class TempFolder {
 
 // Runs a command to completion (at most `timeout`) in `cwd`.
 RunResult RunCommand(const std::vector<std::string>& args, const std::vector<std::string>& env,
-              const fs::path& cwd, std::chrono::milliseconds timeout = 60s) {
+                     const fs::path& cwd, std::chrono::milliseconds timeout = 60s) {
   TempFolder capture;
   RunResult r;
   const pid_t pid = Spawn(args, env, cwd, capture.path() / "out", capture.path() / "err");
@@ -243,15 +245,15 @@ class ViewerTest : public ::testing::Test {
   void StartViewer(const std::vector<std::string>& flags) {
     std::vector<std::string> args{TRITRACE_VIEW_PATH};
     args.insert(args.end(), flags.begin(), flags.end());
-    viewer_ = Spawn(args, env_, work_.path(), work_.path() / "viewer.out",
-                    work_.path() / "viewer.err");
+    viewer_ =
+        Spawn(args, env_, work_.path(), work_.path() / "viewer.out", work_.path() / "viewer.err");
     ASSERT_GT(viewer_, 0);
     start_ = Clock::now();
     // The window exists once xdotool finds it by the viewer's pid (SDL sets _NET_WM_PID).
     const Clock::time_point end = Clock::now() + 20s;
     while (window_.empty() && Clock::now() < end) {
       const RunResult r = RunCommand({"xdotool", "search", "--pid", std::to_string(viewer_)}, env_,
-                              work_.path(), 10s);
+                                     work_.path(), 10s);
       if (!Words(r.out).empty()) window_ = Words(r.out).front();
       if (window_.empty()) std::this_thread::sleep_for(50ms);
       ASSERT_FALSE(WaitExit(viewer_, 0ms).has_value()) << "the viewer exited: " << Err();
@@ -453,6 +455,26 @@ TEST_F(ViewerTest, IdleViewerUsesAlmostNoCpu) {
   EXPECT_LT(cpu, 0.05 * wall) << "CPU seconds while idle for " << wall << " s";
 }
 
+TEST_F(ViewerTest, ClosingTheWindowQuitsWithExitZero) {
+  ASSERT_NO_FATAL_FAILURE(StartViewer({"--width", "64", "--height", "64", "-q"}));
+  // What a window manager sends when the user clicks the close button: WM_DELETE_WINDOW.
+  Display* x = XOpenDisplay(xvfb_->display().c_str());
+  ASSERT_NE(x, nullptr);
+  XEvent close{};
+  close.xclient.type = ClientMessage;
+  close.xclient.window = static_cast<Window>(std::stoul(window_));
+  close.xclient.message_type = XInternAtom(x, "WM_PROTOCOLS", False);
+  close.xclient.format = 32;
+  close.xclient.data.l[0] = static_cast<long>(XInternAtom(x, "WM_DELETE_WINDOW", False));
+  close.xclient.data.l[1] = CurrentTime;
+  XSendEvent(x, close.xclient.window, False, NoEventMask, &close);
+  XCloseDisplay(x);  // flushes the event
+  const std::optional<int> code = WaitExit(viewer_, 10s);
+  viewer_ = -1;
+  EXPECT_EQ(code, 0) << Err();
+  EXPECT_EQ(Err(), "");
+}
+
 TEST_F(ViewerTest, TerminationIsAQuitWithExitZero) {
   ASSERT_NO_FATAL_FAILURE(StartViewer({"--width", "64", "--height", "64", "-q"}));
   ::kill(viewer_, SIGTERM);  // SDL turns it into SDL_QUIT, as closing the window does
@@ -491,7 +513,8 @@ TEST(ViewerFlags, BadValuesNameTheFlagAndExitTwo) {
     std::string line;
   };
   for (const Case& c : std::vector<Case>{
-           {{"--width", "0"}, "tritrace-view: --width: must be an integer from 1 to 16384, got '0'"},
+           {{"--width", "0"},
+            "tritrace-view: --width: must be an integer from 1 to 16384, got '0'"},
            {{"--distance", "-1"},
             "tritrace-view: --distance: must be a finite number greater than 0, got '-1'"},
            {{"--light", "1,2"},
@@ -517,7 +540,8 @@ TEST(ViewerFlags, TritraceViewRunsTheViewer) {
   const RunResult none = RunCommand({TRITRACE_CLI_PATH, "view"}, Environment(""), work.path(), 30s);
   EXPECT_EQ(none.exit_code, 1);
   EXPECT_EQ(none.err, kNoDisplayLine);
-  const RunResult help = RunCommand({TRITRACE_CLI_PATH, "view", "--help"}, Environment(""), work.path());
+  const RunResult help =
+      RunCommand({TRITRACE_CLI_PATH, "view", "--help"}, Environment(""), work.path());
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_NE(help.out.find("--print-state"), std::string::npos) << help.out;
 }

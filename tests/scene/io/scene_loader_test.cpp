@@ -54,11 +54,11 @@ TEST(ApplyOverrides, AgainGivesWhatLoadingWithThemGives) {
   second.height = 200;
   for (const bool builtin : {true, false}) {
     SCOPED_TRACE(builtin ? "built-in" : "scenes/cornell.json");
-    LoadedScene changed = builtin ? load_builtin_scene("cornell", first)
-                                  : load_scene(kCornellJson, first);
+    LoadedScene changed =
+        builtin ? load_builtin_scene("cornell", first) : load_scene(kCornellJson, first);
     apply_overrides(changed, second);
-    const LoadedScene direct = builtin ? load_builtin_scene("cornell", second)
-                                       : load_scene(kCornellJson, second);
+    const LoadedScene direct =
+        builtin ? load_builtin_scene("cornell", second) : load_scene(kCornellJson, second);
     ExpectSameCamera(changed.scene.camera, direct.scene.camera);
     ASSERT_EQ(changed.scene.lights.size(), direct.scene.lights.size());
     EXPECT_EQ(changed.scene.lights.front().position, direct.scene.lights.front().position);
