@@ -66,6 +66,10 @@ class SdlVideo {
     // fails (Wayland's library then prints its own complaint on stderr). A user's own
     // SDL_VIDEODRIVER still wins (a hint at default priority yields to the environment).
     SDL_SetHint(SDL_HINT_VIDEODRIVER, env_set("DISPLAY") ? "x11" : "wayland");
+    // When SDL_RENDER_DRIVER=software picks SDL's software renderer, let it draw into the window's
+    // own framebuffer (X shared memory) instead of probing OpenGL to present it, which loads the
+    // GL driver for nothing (and, with Mesa, leaves allocations LeakSanitizer reports).
+    SDL_SetHint(SDL_HINT_FRAMEBUFFER_ACCELERATION, "0");
     if (SDL_Init(SDL_INIT_VIDEO) != 0) throw no_display();
     const char* driver = SDL_GetCurrentVideoDriver();
     const std::string_view name = driver != nullptr ? driver : "";
