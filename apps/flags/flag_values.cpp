@@ -4,8 +4,9 @@
 
 #include <charconv>
 
+#include <bit>
 #include <cmath>
-#include <cstring>
+#include <cstdint>
 #include <limits>
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/geometry/intersect.h"
@@ -87,7 +88,8 @@ std::string format_float(float value) {
   // rounds that, and double rounding could in principle land on the other float. The double's own
   // shortest form converts back to the exact double and then exactly to `value`.
   const std::optional<float> back = parse_float(text);
-  if (back && std::memcmp(&*back, &value, sizeof value) == 0) return text;
+  // Compared as bits, so that -0 must come back as -0 and not as the equal-comparing +0.
+  if (back && std::bit_cast<uint32_t>(*back) == std::bit_cast<uint32_t>(value)) return text;
   return format_double(static_cast<double>(value));
 }
 

@@ -2,6 +2,7 @@
 #include "frame_report.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdio>
 
 namespace tritrace::view {
@@ -31,10 +32,10 @@ std::string RenderTimeReport::take_line(double now) {
 
 double median(std::vector<double> values) {
   if (values.empty()) return 0.0;
-  const size_t mid = values.size() / 2;
+  const auto mid = static_cast<std::ptrdiff_t>(values.size() / 2);
   std::nth_element(values.begin(), values.begin() + mid, values.end());
-  if (values.size() % 2 == 1) return values[mid];
-  const double upper = values[mid];
+  const double upper = values[values.size() / 2];
+  if (values.size() % 2 == 1) return upper;
   const double lower = *std::max_element(values.begin(), values.begin() + mid);
   return 0.5 * (lower + upper);
 }

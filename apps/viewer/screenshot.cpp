@@ -9,7 +9,7 @@ std::filesystem::path next_screenshot_path(const std::filesystem::path& folder) 
   for (int n = 1;; ++n) {
     char name[64];
     std::snprintf(name, sizeof name, "tritrace-view-%03d.png", n);
-    const std::filesystem::path path = folder / name;
+    std::filesystem::path path = folder / name;
     std::error_code ec;
     if (!std::filesystem::exists(std::filesystem::symlink_status(path, ec))) return path;
   }
