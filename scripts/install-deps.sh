@@ -9,7 +9,8 @@ packages=(
   libassimp-dev assimp-testmodels
   libgtest-dev libgmock-dev libbenchmark-dev
   # tritrace-view: SDL2, SDL2_ttf and the overlay's font; its tests run it in Xvfb and press keys
-  # with xdotool and close its window through Xlib (libx11-dev).
+  # with xdotool; libx11-dev for the viewer's X error handler and for the test that closes its
+  # window as a window manager does.
   libsdl2-dev libsdl2-ttf-dev fonts-dejavu-core xvfb xdotool libx11-dev
   clang-format clang-tidy
   # The sanitizer runtimes for make test-asan / test-tsan (g++ pulls them in; named for clarity).

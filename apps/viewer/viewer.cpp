@@ -5,6 +5,8 @@
 #include "viewer.h"
 
 #include <SDL.h>
+#include <X11/Xlib.h>
+#include <X11/Xproto.h>
 
 #include <chrono>
 #include <cmath>
@@ -55,6 +57,19 @@ bool env_set(const char* name) {
   return value != nullptr && value[0] != '\0';
 }
 
+// SDL wakes its own event wait by sending a message to the window over a second X connection, also
+// when the event that ends the wait is the one that quits (Esc, closing the window). The window is
+// then destroyed at once, and if the server handles that message after the destruction it answers
+// BadWindow, which Xlib's default handler turns into exit(1) during SDL_Quit. That one error is
+// harmless and ignored; every other goes to the handler that was installed before (Xlib's).
+// A C callback cannot carry state, hence the one global, set once before any thread starts.
+XErrorHandler g_previous_x_error_handler = nullptr;
+
+int ignore_wakeup_after_close(Display* display, XErrorEvent* error) {
+  if (error->error_code == BadWindow && error->request_code == X_SendEvent) return 0;
+  return g_previous_x_error_handler != nullptr ? g_previous_x_error_handler(display, error) : 0;
+}
+
 // Owns SDL's video subsystem for the viewer's lifetime. SDL may only use a real windowing system:
 // without one it could pick a driver that shows nothing (offscreen, KMS on a console), and the
 // user would wait for a window that never appears.
@@ -70,6 +85,11 @@ class SdlVideo {
     // own framebuffer (X shared memory) instead of probing OpenGL to present it, which loads the
     // GL driver for nothing (and, with Mesa, leaves allocations LeakSanitizer reports).
     SDL_SetHint(SDL_HINT_FRAMEBUFFER_ACCELERATION, "0");
+    // Before SDL_Init: SDL keeps the handler it finds and puts it back before it closes its X
+    // connections, which is when the error arrives.
+    if (env_set("DISPLAY")) {
+      g_previous_x_error_handler = XSetErrorHandler(ignore_wakeup_after_close);
+    }
     if (SDL_Init(SDL_INIT_VIDEO) != 0) throw no_display();
     const char* driver = SDL_GetCurrentVideoDriver();
     const std::string_view name = driver != nullptr ? driver : "";
@@ -78,7 +98,10 @@ class SdlVideo {
       throw no_display();
     }
   }
-  ~SdlVideo() { SDL_Quit(); }
+  ~SdlVideo() {
+    SDL_Quit();
+    if (env_set("DISPLAY")) XSetErrorHandler(g_previous_x_error_handler);
+  }
   SdlVideo(const SdlVideo&) = delete;
   SdlVideo& operator=(const SdlVideo&) = delete;
 };
