@@ -69,14 +69,14 @@ int main(int argc, char** argv) {
 
   CLI::App app("tritrace: a fast ray tracer for triangle scenes", "tritrace");
   app.require_subcommand(1);
+  tritrace::cli::RenderArgs render_args;
+  CLI::App* render = tritrace::cli::add_render_command(app, render_args);
   // Listed for --help only: `view` is handed to tritrace-view above, before any parsing.
   app.add_subcommand("view",
                      "Open the interactive viewer, tritrace-view (the same scene flags as render; "
                      "see tritrace view --help)")
       ->prefix_command()
       ->allow_extras();
-  tritrace::cli::RenderArgs render_args;
-  CLI::App* render = tritrace::cli::add_render_command(app, render_args);
   tritrace::cli::BenchArgs bench_args;
   CLI::App* bench = tritrace::cli::add_bench_command(app, bench_args);
   tritrace::cli::InfoArgs info_args;
