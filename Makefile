@@ -19,6 +19,8 @@ SANITIZE_FLAGS = -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRITRACE_BUILD_BENCH=OFF
 # the test checks holds exactly one line. The parent's behaviour is still right (exit 1, one
 # 'cannot import' line); the test runs in the normal build.
 ASAN_EXCLUDE = CliTest.ModelThatCrashesTheImporterIsAnError
+# The viewer's tests run under ASan too; .ci/lsan.supp names the two libraries (Xlib, libdbus) whose
+# deliberate process-lifetime allocations LeakSanitizer would otherwise report when it exits.
 # The multi-threaded renderer tests: thread-count invariance, statistics, whole images.
 TSAN_TESTS = Renderer.*:Placements/*
 
@@ -46,6 +48,7 @@ test-asan: deps
 	@cmake -S . -B $(ASAN_DIR) $(SANITIZE_FLAGS) -DTRITRACE_SANITIZE=address,undefined >/dev/null
 	@cmake --build $(ASAN_DIR) -j $(JOBS)
 	@cd $(ASAN_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+	  LSAN_OPTIONS=suppressions=$(CURDIR)/.ci/lsan.supp:print_suppressions=0 \
 	  UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS) -E '$(ASAN_EXCLUDE)'
 
 test-tsan: deps

@@ -8,6 +8,10 @@ packages=(
   libglm-dev libtbb-dev libcli11-dev libstb-dev libembree-dev nlohmann-json3-dev
   libassimp-dev assimp-testmodels
   libgtest-dev libgmock-dev libbenchmark-dev
+  # tritrace-view: SDL2, SDL2_ttf and the overlay's font; its tests run it in Xvfb and press keys
+  # with xdotool; libx11-dev for the viewer's X error handler and for the test that closes its
+  # window as a window manager does.
+  libsdl2-dev libsdl2-ttf-dev fonts-dejavu-core xvfb xdotool libx11-dev
   clang-format clang-tidy
   # The sanitizer runtimes for make test-asan / test-tsan (g++ pulls them in; named for clarity).
   libasan8 libubsan1 libtsan2

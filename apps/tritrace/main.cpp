@@ -1,9 +1,15 @@
 // tritrace's command line: parses the subcommand and turns every error into one line on stderr,
 // `tritrace: <file or flag>: <reason>`, with exit code 2 for usage errors and 1 for runtime ones.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <exception>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 #include "bench_command.h"
 #include "info_command.h"
@@ -26,16 +32,31 @@ std::string usage_message(const CLI::ParseError& e, int argc, char** argv) {
   if (dynamic_cast<const CLI::RequiredError*>(&e) && msg.find("subcommand") != std::string::npos) {
     if (argc > 1 && argv[1][0] != '-') {
       return std::string(argv[1]) +
-             ": unknown command (use 'tritrace render', 'tritrace info' or 'tritrace bench'; see "
-             "--help)";
+             ": unknown command (use 'tritrace render', 'tritrace view', 'tritrace info' or "
+             "'tritrace bench'; see --help)";
     }
-    return "missing command: use 'tritrace render', 'tritrace info' or 'tritrace bench' (see "
-           "--help)";
+    return "missing command: use 'tritrace render', 'tritrace view', 'tritrace info' or "
+           "'tritrace bench' (see --help)";
   }
   for (char& c : msg) {
     if (c == '\n') c = ' ';
   }
   return msg;
+}
+
+// `tritrace view ARGS` runs tritrace-view ARGS, the executable built next to this one, so that
+// the CLI itself links no SDL. Returns only when it cannot be started.
+int exec_viewer(int argc, char** argv) {
+  std::error_code ec;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  std::string viewer = (self.parent_path() / "tritrace-view").string();
+  std::vector<char*> args{viewer.data()};
+  for (int i = 2; i < argc; ++i) args.push_back(argv[i]);
+  args.push_back(nullptr);
+  if (!ec) ::execv(viewer.c_str(), args.data());
+  std::fprintf(stderr, "tritrace: %s: cannot run the viewer: %s\n", viewer.c_str(),
+               std::strerror(ec ? ec.value() : errno));
+  return static_cast<int>(tritrace::ExitCode::kRuntime);
 }
 
 }  // namespace
@@ -44,10 +65,18 @@ std::string usage_message(const CLI::ParseError& e, int argc, char** argv) {
 // everything after it runs inside the try blocks below.
 // NOLINTNEXTLINE(bugprone-exception-escape)
 int main(int argc, char** argv) {
+  if (argc > 1 && std::strcmp(argv[1], "view") == 0) return exec_viewer(argc, argv);
+
   CLI::App app("tritrace: a fast ray tracer for triangle scenes", "tritrace");
   app.require_subcommand(1);
   tritrace::cli::RenderArgs render_args;
   CLI::App* render = tritrace::cli::add_render_command(app, render_args);
+  // Listed for --help only: `view` is handed to tritrace-view above, before any parsing.
+  app.add_subcommand("view",
+                     "Open the interactive viewer, tritrace-view (the same scene flags as render; "
+                     "see tritrace view --help)")
+      ->prefix_command()
+      ->allow_extras();
   tritrace::cli::BenchArgs bench_args;
   CLI::App* bench = tritrace::cli::add_bench_command(app, bench_args);
   tritrace::cli::InfoArgs info_args;

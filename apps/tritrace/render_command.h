@@ -5,20 +5,14 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
+#include "flags/scene_flags.h"
+
 namespace tritrace::cli {
 
 struct RenderArgs {
-  std::string file;           // empty: the built-in Cornell box
+  SceneFlags scene;           // FILE, the scene and its view, shared with tritrace-view
   std::string output;         // the scene file's output, else <file stem>.png or cornell.png
   bool output_given = false;  // -o was on the command line (its value may still be empty)
-  std::string width;          // empty: the scene's (500 for the built-in and for meshes)
-  std::string height;
-  std::string scene;  // a built-in scene name (make_builtin_scene); empty: cornell
-  std::string accel = "bvh";
-  std::string kernel;   // empty: the default kernel
-  std::string yaw;      // empty: no orbit
-  std::string light;    // empty: the scene's light position
-  std::string threads;  // empty: all cores
   bool quiet = false;
 };
 

@@ -301,12 +301,34 @@ TEST_F(CliTest, YawChangesTheImage) {
   EXPECT_TRUE(base != turned) << "--yaw 0.5 gave the default image";
 }
 
+TEST_F(CliTest, DistanceMovesTheLabCameraAlongItsView) {
+  const std::string base = RenderQuietly({"--width", "64", "--height", "64"}, "default.png");
+  const std::string three =
+      RenderQuietly({"--width", "64", "--height", "64", "--distance", "3"}, "three.png");
+  const std::string closer =
+      RenderQuietly({"--width", "64", "--height", "64", "--distance", "2"}, "closer.png");
+  EXPECT_FALSE(base.empty());
+  EXPECT_EQ(base, three) << "--distance 3 is the lab's own distance";
+  EXPECT_TRUE(base != closer) << "--distance 2 gave the default image";
+}
+
+TEST_F(CliTest, DistanceMovesAFileCameraTowardItsLookAt) {
+  // scenes/cornell.json looks from (0, 0, -3) at the origin with the lab's 500 x 500 image and
+  // focal length, so --distance 2 must give the built-in scene's --distance 2 image exactly:
+  // (0, 0, -3) * 2 / 3 is (0, 0, -2).
+  const std::string file = std::string(TRITRACE_SOURCE_DIR) + "/scenes/cornell.json";
+  const std::string from_file = RenderQuietly({file, "--distance", "2"}, "file.png");
+  const std::string built_in = RenderQuietly({"--distance", "2"}, "builtin.png");
+  EXPECT_FALSE(from_file.empty());
+  EXPECT_EQ(from_file, built_in);
+}
+
 TEST_F(CliTest, HelpListsEveryFlagAndExitsZero) {
   const RunResult r = Run({"render", "--help"});
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_EQ(r.err, "");
   for (const std::string flag : {"-o", "--output", "--width", "--height", "--kernel", "--yaw",
-                                 "--light", "--threads", "-q", "--quiet", "--help"}) {
+                                 "--distance", "--light", "--threads", "-q", "--quiet", "--help"}) {
     EXPECT_NE(r.out.find(flag), std::string::npos) << flag << " missing from:\n" << r.out;
   }
   for (const std::string kernel : {"inverse", "cramer", "moller-trumbore"}) {
@@ -373,6 +395,7 @@ const char kSideRange[] = "must be an integer from 1 to 16384";
 const char kThreadRange[] = "must be an integer from 1 to 1024";
 const char kVec3[] = "must be three finite numbers X,Y,Z";
 const char kFinite[] = "must be a finite number";
+const char kDistance[] = "must be a finite number greater than 0";
 const char kExtension[] = "unknown extension";
 
 INSTANTIATE_TEST_SUITE_P(
@@ -410,6 +433,12 @@ INSTANTIATE_TEST_SUITE_P(
         ErrorCase{"LightInfinite", {"--light", "inf,0,0"}, 2, "--light", kVec3},
         ErrorCase{"LightBeyondFloat", {"--light", "1e39,0,0"}, 2, "--light", kVec3},
         ErrorCase{"LightEmptyPart", {"--light", "1,,2"}, 2, "--light", kVec3},
+        ErrorCase{"DistanceZero", {"--distance", "0"}, 2, "--distance", kDistance},
+        ErrorCase{"DistanceNegative", {"--distance", "-1"}, 2, "--distance", kDistance},
+        ErrorCase{"DistanceBelowFloat", {"--distance", "1e-50"}, 2, "--distance", kDistance},
+        ErrorCase{"DistanceBeyondFloat", {"--distance", "1e39"}, 2, "--distance", kDistance},
+        ErrorCase{"DistanceNaN", {"--distance", "nan"}, 2, "--distance", kDistance},
+        ErrorCase{"DistanceNotANumber", {"--distance", "far"}, 2, "--distance", kDistance},
         ErrorCase{"YawInfinite", {"--yaw", "inf"}, 2, "--yaw", kFinite},
         ErrorCase{"YawNaN", {"--yaw", "nan"}, 2, "--yaw", kFinite},
         ErrorCase{"YawNotANumber", {"--yaw", "abc"}, 2, "--yaw", kFinite},

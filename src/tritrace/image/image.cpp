@@ -8,13 +8,6 @@ Image::Image(int width, int height)
       height_(height),
       pixels_(static_cast<size_t>(width) * height, glm::vec3(0.0f)) {}
 
-uint8_t to_byte_lab(float c) {
-  const float scaled = 255.0f * c;
-  if (!(scaled > 0.0f)) return 0;  // also catches NaN
-  if (scaled >= 255.0f) return 255;
-  return static_cast<uint8_t>(scaled);
-}
-
 std::vector<uint8_t> to_rgb8_lab(const Image& image) {
   std::vector<uint8_t> bytes;
   bytes.reserve(image.pixels().size() * 3);

@@ -25,8 +25,16 @@ class Image {
   std::vector<glm::vec3> pixels_;
 };
 
-// The lab's byte: truncate(clamp(255 * c, 0, 255)), so 0.5 -> 127. NaN maps to 0.
-uint8_t to_byte_lab(float c);
+// The lab's byte: truncate(clamp(255 * c, 0, 255)), so 0.5 -> 127. NaN maps to 0. Inline so that
+// the viewer's per-frame conversion of a whole image vectorises.
+inline uint8_t to_byte_lab(float c) {
+  // Selects rather than branches, so that loops over pixels vectorise. NaN fails the first compare
+  // and becomes 0.
+  float scaled = 255.0f * c;
+  scaled = scaled > 0.0f ? scaled : 0.0f;
+  scaled = scaled < 255.0f ? scaled : 255.0f;
+  return static_cast<uint8_t>(static_cast<int>(scaled));
+}
 
 // Interleaved RGB bytes, row 0 first, using to_byte_lab.
 std::vector<uint8_t> to_rgb8_lab(const Image& image);

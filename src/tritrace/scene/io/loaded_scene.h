@@ -25,6 +25,10 @@ struct CameraSpec {
   // At most one is set; with neither, the focal length is the image height, as in the lab.
   std::optional<double> vertical_fov_degrees;
   std::optional<float> focal_length_px;
+  // The built-in scenes' camera is the lab's orbit camera, Camera(width, height, yaw, distance),
+  // whose rays the lab's images depend on bit for bit; position (0, 0, -distance), look_at and up
+  // then only describe it. Scene files and meshes are built with Camera::look_at.
+  bool lab_orbit = false;
 };
 
 // Command-line values that replace the scene's own (see docs/SCENE_FORMAT.md).
@@ -32,6 +36,7 @@ struct SceneOverrides {
   std::optional<int> width;
   std::optional<int> height;
   std::optional<double> yaw;       // orbit about the vertical through look_at, radians
+  std::optional<float> distance;   // from the camera to look_at, along its line of sight; > 0
   std::optional<glm::vec3> light;  // position of the first light
 };
 
@@ -43,7 +48,7 @@ struct LoadStats {
 
 struct LoadedScene {
   Scene scene;
-  CameraSpec camera;  // what scene.camera was built from
+  CameraSpec camera;  // the scene's own camera, before overrides: scene.camera is built from both
   LoadStats stats;
   std::string output;  // the scene file's output path; empty when it names none
 };

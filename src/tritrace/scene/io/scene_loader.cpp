@@ -26,21 +26,40 @@ bool finite(glm::dvec3 v) {
 }  // namespace
 
 void apply_overrides(LoadedScene& loaded, const SceneOverrides& overrides) {
-  CameraSpec& c = loaded.camera;
+  CameraSpec c = loaded.camera;  // a copy: the description stays as loaded (see the header)
   if (overrides.width) c.width = *overrides.width;
   if (overrides.height) c.height = *overrides.height;
-  if (overrides.yaw) {
-    const RotationY r = RotationY::from_angle(*overrides.yaw);
-    c.position = c.look_at + r.apply(c.position - c.look_at);
-    if (!Camera::is_valid_look_at(c.position, c.look_at, c.up)) {
-      throw Error("--yaw", "turns the camera to look along its up direction", ExitCode::kUsage);
-    }
-  }
   if (overrides.light) {
     if (loaded.scene.lights.empty()) {
       loaded.scene.lights.push_back({*overrides.light, kLabLightPower});
     } else {
       loaded.scene.lights.front().position = *overrides.light;
+    }
+  }
+  if (c.lab_orbit) {
+    const float distance = overrides.distance.value_or(glm::length(c.position - c.look_at));
+    loaded.scene.camera = Camera(c.width, c.height, overrides.yaw.value_or(0.0), distance);
+    return;
+  }
+  // Distance first, then the orbit: both keep the camera on a sphere about look_at.
+  if (overrides.distance) {
+    const glm::dvec3 from_target = glm::dvec3(c.position) - glm::dvec3(c.look_at);
+    // Multiplied before dividing, so that round numbers stay exact ((0, 0, -3) * 2 / 3).
+    const glm::dvec3 moved = glm::dvec3(c.look_at) +
+                             from_target * double{*overrides.distance} / glm::length(from_target);
+    if (!finite(moved)) {
+      throw Error("--distance", "puts the camera beyond float range", ExitCode::kUsage);
+    }
+    c.position = glm::vec3(moved);
+    if (!Camera::is_valid_look_at(c.position, c.look_at, c.up)) {
+      throw Error("--distance", "puts the camera on the point it looks at", ExitCode::kUsage);
+    }
+  }
+  if (overrides.yaw) {
+    const RotationY r = RotationY::from_angle(*overrides.yaw);
+    c.position = c.look_at + r.apply(c.position - c.look_at);
+    if (!Camera::is_valid_look_at(c.position, c.look_at, c.up)) {
+      throw Error("--yaw", "turns the camera to look along its up direction", ExitCode::kUsage);
     }
   }
   float focal = 0.0f;  // the lab's default: the image height
@@ -58,17 +77,13 @@ bool is_scene_file(const std::string& path) {
 }
 
 LoadedScene load_builtin_scene(const std::string& name, const SceneOverrides& overrides) {
-  CornellOptions options;
-  if (overrides.width) options.width = *overrides.width;
-  if (overrides.height) options.height = *overrides.height;
-  if (overrides.yaw) options.yaw = *overrides.yaw;
-  if (overrides.light) options.light_position = *overrides.light;
   LoadedScene loaded;
-  loaded.scene = make_builtin_scene(name, options);
-  loaded.camera.width = options.width;
-  loaded.camera.height = options.height;
-  loaded.camera.position = loaded.scene.camera.position();
+  // The geometry does not depend on the view; apply_overrides sets camera and light.
+  loaded.scene = make_builtin_scene(name, CornellOptions{});
+  loaded.camera.position = glm::vec3(0.0f, 0.0f, -kLabCameraDistance);
+  loaded.camera.lab_orbit = true;
   loaded.stats.meshes = 1;
+  apply_overrides(loaded, overrides);
   return loaded;
 }
 

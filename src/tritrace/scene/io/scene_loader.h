@@ -15,8 +15,11 @@ inline constexpr double kFramingFovDegrees = 40.0;
 // so that with the lab's ambient 0.5 and a grey albedo the image is neither black nor clipped.
 inline constexpr float kFramingIrradiance = 0.8f;
 
-// Applies `overrides` to the camera description and the first light, then builds scene.camera
-// from the description. Throws Error naming the flag when the result is not a valid camera.
+// Builds scene.camera from the camera description with `overrides` applied, and moves the first
+// light (adding one with the lab's power if there is none). loaded.camera is left as it was, so
+// calling it again with other view overrides gives the scene that loading with them would have
+// given, bit for bit: how the viewer changes the view without loading the geometry again. Throws
+// Error naming the flag when the result is not a valid camera.
 void apply_overrides(LoadedScene& loaded, const SceneOverrides& overrides);
 
 bool is_scene_file(const std::string& path);  // by extension: .json, any case

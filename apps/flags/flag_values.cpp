@@ -1,10 +1,12 @@
 // Flag value parsing with std::from_chars, which accepts no leading spaces, signs like '+', or
 // trailing junk.
-#include "flag_values.h"
+#include "flags/flag_values.h"
 
 #include <charconv>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/geometry/intersect.h"
@@ -28,6 +30,12 @@ std::optional<double> parse_finite(const std::string& text) {
   return value;
 }
 
+std::optional<float> parse_float(const std::string& text) {
+  const std::optional<double> x = parse_finite(text);
+  if (!x || std::abs(*x) > std::numeric_limits<float>::max()) return std::nullopt;
+  return static_cast<float>(*x);
+}
+
 std::optional<glm::vec3> parse_vec3(const std::string& text) {
   glm::vec3 v(0.0f);
   size_t start = 0;
@@ -35,9 +43,9 @@ std::optional<glm::vec3> parse_vec3(const std::string& text) {
     const size_t comma = text.find(',', start);
     const bool last = (i == 2);
     if (last != (comma == std::string::npos)) return std::nullopt;  // too few or too many parts
-    const std::optional<double> x = parse_finite(text.substr(start, comma - start));
-    if (!x || std::abs(*x) > std::numeric_limits<float>::max()) return std::nullopt;
-    v[i] = static_cast<float>(*x);
+    const std::optional<float> x = parse_float(text.substr(start, comma - start));
+    if (!x) return std::nullopt;
+    v[i] = *x;
     start = comma + 1;
   }
   return v;
@@ -58,6 +66,35 @@ std::string check_finite(const std::string& text) {
 std::string check_vec3(const std::string& text) {
   if (parse_vec3(text)) return "";
   return "must be three finite numbers X,Y,Z, got '" + text + "'";
+}
+
+std::string check_distance(const std::string& text) {
+  const std::optional<float> d = parse_float(text);
+  if (d && *d > 0.0f) return "";
+  return "must be a finite number greater than 0, got '" + text + "'";
+}
+
+std::string format_double(double value) {
+  char buffer[64];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, ec == std::errc() ? end : buffer);
+}
+
+std::string format_float(float value) {
+  char buffer[64];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
+  std::string text(buffer, ec == std::errc() ? end : buffer);
+  // The float's shortest form is exact when parsed as a float; parse_float reads a double and
+  // rounds that, and double rounding could in principle land on the other float. The double's own
+  // shortest form converts back to the exact double and then exactly to `value`.
+  const std::optional<float> back = parse_float(text);
+  // Compared as bits, so that -0 must come back as -0 and not as the equal-comparing +0.
+  if (back && std::bit_cast<uint32_t>(*back) == std::bit_cast<uint32_t>(value)) return text;
+  return format_double(static_cast<double>(value));
+}
+
+std::string format_vec3(glm::vec3 value) {
+  return format_float(value.x) + "," + format_float(value.y) + "," + format_float(value.z);
 }
 
 std::string kernel_list() {

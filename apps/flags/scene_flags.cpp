@@ -1,0 +1,97 @@
+// Registration and conversion of the shared scene flags; the help texts are the user's reference,
+// so they name defaults and units.
+#include "flags/scene_flags.h"
+
+#include "flags/flag_values.h"
+#include "tritrace/error.h"
+#include "tritrace/scene/io/scene_loader.h"
+#include "tritrace/scene/procedural.h"
+
+namespace tritrace::cli {
+
+void add_scene_flags(CLI::App& app, SceneFlags& flags) {
+  app.add_option("FILE", flags.file,
+                 "Scene (.json) or mesh file (.obj, .ply, .stl, .gltf, .glb, .fbx, .dae, .3ds, "
+                 "... anything assimp reads); default: the built-in Cornell box")
+      ->type_name("FILE");
+  auto side = checked([](std::string& s) { return check_integer_in(s, 1, kMaxImageSide); });
+  app.add_option("--width", flags.width,
+                 "Image width in pixels, 1 to 16384 (default: the scene's, 500)")
+      ->type_name("W")
+      ->check(side);
+  app.add_option("--height", flags.height,
+                 "Image height in pixels, 1 to 16384 (default: the scene's, 500); the built-in "
+                 "scene's focal length")
+      ->type_name("H")
+      ->check(side);
+  app.add_option("--scene", flags.scene,
+                 std::string("Built-in scene when no FILE is given: ") +
+                     std::string(kBuiltinSceneHelp) + " (default cornell)")
+      ->type_name("NAME")
+      ->check(checked(check_builtin_scene));
+  app.add_option("--accel", flags.accel,
+                 "Acceleration structure: " + accel_list() +
+                     " (brute is the lab's loop over all triangles)")
+      ->type_name("NAME")
+      ->capture_default_str()
+      ->check(checked(check_accel));
+  app.add_option("--kernel", flags.kernel,
+                 "Ray/triangle intersection: " + kernel_list() +
+                     " (default: watertight with --accel brute, where it costs 1.06x; "
+                     "moller-trumbore with bvh, whose SIMD leaves and packets have only that "
+                     "kernel; watertight lets no ray through shared edges)")
+      ->type_name("NAME")
+      ->check(checked(check_kernel));
+  app.add_option("--yaw", flags.yaw,
+                 "Orbit the camera about the vertical axis through what it looks at, radians "
+                 "(default 0)")
+      ->type_name("RAD")
+      ->check(checked(check_finite));
+  app.add_option("--distance", flags.distance,
+                 "Camera distance from the point it looks at, moving it along its line of sight "
+                 "(default: the scene's; the built-in scenes' is 3)")
+      ->type_name("D")
+      ->check(checked(check_distance));
+  app.add_option("--light", flags.light,
+                 "Position of the (first) point light (default: the scene's; the built-in's is "
+                 "0,-0.5,-0.7)")
+      ->type_name("X,Y,Z")
+      ->check(checked(check_vec3));
+  app.add_option("--threads", flags.threads, "Worker threads (default: all cores)")
+      ->type_name("N")
+      ->check(checked([](std::string& s) { return check_integer_in(s, 1, kMaxThreads); }));
+}
+
+SceneOverrides scene_overrides(const SceneFlags& flags) {
+  SceneOverrides o;
+  if (!flags.width.empty()) o.width = static_cast<int>(*parse_integer(flags.width));
+  if (!flags.height.empty()) o.height = static_cast<int>(*parse_integer(flags.height));
+  if (!flags.yaw.empty()) o.yaw = *parse_finite(flags.yaw);
+  if (!flags.distance.empty()) o.distance = *parse_float(flags.distance);
+  if (!flags.light.empty()) o.light = *parse_vec3(flags.light);
+  return o;
+}
+
+AccelKind accel_kind(const SceneFlags& flags) {
+  return *parse_accel(flags.accel);
+}
+
+Kernel kernel_choice(const SceneFlags& flags) {
+  return flags.kernel.empty() ? default_kernel_for(accel_kind(flags)) : *parse_kernel(flags.kernel);
+}
+
+int thread_count(const SceneFlags& flags) {
+  return flags.threads.empty() ? 0 : static_cast<int>(*parse_integer(flags.threads));
+}
+
+LoadedScene load_scene_from(const SceneFlags& flags, const SceneOverrides& overrides) {
+  if (!flags.file.empty() && !flags.scene.empty()) {
+    throw Error("--scene", "give either a FILE or --scene, not both", ExitCode::kUsage);
+  }
+  if (flags.file.empty()) {
+    return load_builtin_scene(flags.scene.empty() ? "cornell" : flags.scene, overrides);
+  }
+  return load_scene(flags.file, overrides);
+}
+
+}  // namespace tritrace::cli

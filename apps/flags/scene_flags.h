@@ -1,0 +1,41 @@
+// The flags that choose a scene and its view (FILE, --scene, --accel, --kernel, --width, --height,
+// --yaw, --distance, --light, --threads), shared by `tritrace render` and `tritrace-view` so that
+// both accept the same values with the same messages and build the same Scene from them.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "tritrace/accel/make_accel.h"
+#include "tritrace/geometry/intersect.h"
+#include "tritrace/scene/io/loaded_scene.h"
+
+namespace tritrace::cli {
+
+// The raw texts, checked by the validators add_scene_flags installs; empty means not given.
+struct SceneFlags {
+  std::string file;  // empty: a built-in scene
+  std::string width;
+  std::string height;
+  std::string scene;  // a built-in scene name; empty: cornell
+  std::string accel = "bvh";
+  std::string kernel;  // empty: the accel's default kernel
+  std::string yaw;
+  std::string distance;
+  std::string light;
+  std::string threads;  // empty: all cores
+};
+
+void add_scene_flags(CLI::App& app, SceneFlags& flags);
+
+// The parsed values; call only after a successful parse (the validators have run).
+SceneOverrides scene_overrides(const SceneFlags& flags);
+AccelKind accel_kind(const SceneFlags& flags);
+Kernel kernel_choice(const SceneFlags& flags);
+int thread_count(const SceneFlags& flags);  // 0: all cores
+
+// The built-in scene or FILE with `overrides`. Throws Error (usage) when both FILE and --scene are
+// given, and whatever load_scene throws.
+LoadedScene load_scene_from(const SceneFlags& flags, const SceneOverrides& overrides);
+
+}  // namespace tritrace::cli

@@ -1,0 +1,43 @@
+// Title text, the throttled frame-time line and medians.
+#include "frame_report.h"
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdio>
+
+namespace tritrace::view {
+
+std::string window_title(double frame_ms, int width, int height) {
+  char text[128];
+  const double fps = frame_ms > 0.0 ? 1000.0 / frame_ms : 0.0;
+  std::snprintf(text, sizeof text, "tritrace \u2014 %.1f ms/frame (%.0f fps), %dx%d", frame_ms, fps,
+                width, height);
+  return text;
+}
+
+double RenderTimeReport::seconds_until_due(double now) const {
+  if (!printed_) return 0.0;
+  return std::max(0.0, last_print_ + 1.0 - now);
+}
+
+std::string RenderTimeReport::take_line(double now) {
+  char text[64];
+  std::snprintf(text, sizeof text, "Render time: %.1f ms", frames_ > 0 ? sum_ms_ / frames_ : 0.0);
+  sum_ms_ = 0.0;
+  frames_ = 0;
+  printed_ = true;
+  last_print_ = now;
+  return text;
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const auto mid = static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  const double upper = values[values.size() / 2];
+  if (values.size() % 2 == 1) return upper;
+  const double lower = *std::max_element(values.begin(), values.begin() + mid);
+  return 0.5 * (lower + upper);
+}
+
+}  // namespace tritrace::view

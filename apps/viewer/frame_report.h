@@ -1,0 +1,37 @@
+// What the viewer tells about its speed: the window title, the lab's "Render time" line at most
+// once a second, and medians for --benchmark-frames. Clock values come in as arguments, so the
+// once-a-second rule is unit-tested without waiting.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace tritrace::view {
+
+// "tritrace — 3.1 ms/frame (320 fps), 500x500"
+std::string window_title(double frame_ms, int width, int height);
+
+// Collects frame times and says when the next "Render time: N ms" line is due: at once for the
+// first frame, then at most once a second, giving the mean of the frames since the last line.
+class RenderTimeReport {
+ public:
+  void add_frame(double frame_ms) {
+    sum_ms_ += frame_ms;
+    ++frames_;
+  }
+  bool pending() const { return frames_ > 0; }
+  // Seconds from `now` until a pending line may be printed (0 when due, negative never).
+  double seconds_until_due(double now) const;
+  // The line for the frames since the last one (call when seconds_until_due(now) is 0).
+  std::string take_line(double now);
+
+ private:
+  double sum_ms_ = 0.0;
+  int frames_ = 0;
+  bool printed_ = false;
+  double last_print_ = 0.0;
+};
+
+double median(std::vector<double> values);  // 0 for none
+
+}  // namespace tritrace::view

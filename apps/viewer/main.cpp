@@ -1,0 +1,79 @@
+// tritrace-view's command line: the scene flags of `tritrace render` plus the viewer's own, and
+// every error as one line `tritrace-view: <flag or file>: <reason>` with exit code 2 (usage) or 1.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+#include <string>
+
+#include "flags/flag_values.h"
+#include "flags/scene_flags.h"
+#include "tritrace/error.h"
+#include "viewer.h"
+
+namespace {
+
+// CLI11's messages reduced to one line naming the flag, as the tritrace CLI does.
+std::string usage_message(const CLI::ParseError& e) {
+  std::string msg = e.what();
+  if (dynamic_cast<const CLI::ExtrasError*>(&e)) {
+    const size_t colon = msg.find(": ");
+    const std::string args = colon == std::string::npos ? msg : msg.substr(colon + 2);
+    return args + ": unknown option or argument (see --help)";
+  }
+  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) && msg.find(" missing") != std::string::npos) {
+    return msg.substr(0, msg.find(": ")) + ": missing value";
+  }
+  for (char& c : msg) {
+    if (c == '\n') c = ' ';
+  }
+  return msg;
+}
+
+}  // namespace
+
+// Setting up the parser can only throw std::bad_alloc, for which terminating is the right answer.
+// NOLINTNEXTLINE(bugprone-exception-escape)
+int main(int argc, char** argv) {
+  CLI::App app(
+      "tritrace-view: the lab's Cornell box (or any scene tritrace renders) in a window.\n"
+      "Keys: Left/Right orbit the camera, Up/Down move it forward/back, W/S A/D Q/E move the "
+      "light along +z/-z, -x/+x, up/down, R resets, P saves a screenshot, H shows help and "
+      "statistics, Esc quits.",
+      "tritrace-view");
+  tritrace::view::ViewerOptions options;
+  tritrace::cli::add_scene_flags(app, options.scene);
+  app.add_flag("-q,--quiet", options.quiet, "Do not print the 'Render time' lines");
+  app.add_flag("--print-state", options.print_state,
+               "Print the view as a 'tritrace render' command each time it comes to rest");
+  std::string frames;
+  app.add_option("--benchmark-frames", frames,
+                 "Render N frames turning the camera as if Left were held, print the median "
+                 "times per frame and exit")
+      ->type_name("N")
+      ->check(tritrace::cli::checked(
+          [](std::string& s) { return tritrace::cli::check_integer_in(s, 1, 100000); }));
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "tritrace-view: %s\n", usage_message(e).c_str());
+    return static_cast<int>(tritrace::ExitCode::kUsage);
+  }
+  if (!frames.empty()) {
+    options.benchmark_frames = static_cast<int>(*tritrace::cli::parse_integer(frames));
+  }
+
+  try {
+    return tritrace::view::run_viewer(options);
+  } catch (const tritrace::Error& e) {
+    // An error with no subject (no display) is a sentence of its own.
+    std::fprintf(stderr, "tritrace-view: %s\n",
+                 e.subject().empty() ? e.reason().c_str() : e.what());
+    return static_cast<int>(e.exit_code());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tritrace-view: %s\n", e.what());
+    return static_cast<int>(tritrace::ExitCode::kRuntime);
+  }
+}

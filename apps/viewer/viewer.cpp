@@ -1,0 +1,443 @@
+// The SDL2 side of the viewer: the display check, the window, the event loop that sleeps in
+// SDL_WaitEvent while nothing changes, the per-frame render -> texture -> present, screenshots and
+// the title and stdout reports. Everything that can be computed without SDL lives in the other
+// files of this folder.
+#include "viewer.h"
+
+#include <SDL.h>
+#include <X11/Xlib.h>
+#include <X11/Xproto.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "flags/flag_values.h"
+#include "frame_report.h"
+#include "overlay.h"
+#include "pixels.h"
+#include "screenshot.h"
+#include "tritrace/accel/make_accel.h"
+#include "tritrace/error.h"
+#include "tritrace/image/image_io.h"
+#include "tritrace/render/lab_integrator.h"
+#include "tritrace/render/renderer.h"
+#include "tritrace/scene/io/scene_loader.h"
+#include "view_state.h"
+
+#ifndef TRITRACE_OVERLAY_FONT
+#define TRITRACE_OVERLAY_FONT "/usr/share/fonts/truetype/dejavu/DejaVuSansMono.ttf"
+#endif
+
+namespace tritrace::view {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start, Clock::time_point end) {
+  return std::chrono::duration<double>(end - start).count();
+}
+double ms_since(Clock::time_point start) {
+  return 1e3 * seconds_since(start, Clock::now());
+}
+
+Error no_display() {
+  return Error("", kNoDisplay);
+}
+
+bool env_set(const char* name) {
+  const char* value = std::getenv(name);
+  return value != nullptr && value[0] != '\0';
+}
+
+// SDL wakes its own event wait by sending a message to the window over a second X connection, also
+// when the event that ends the wait is the one that quits (Esc, closing the window). The window is
+// then destroyed at once, and if the server handles that message after the destruction it answers
+// BadWindow, which Xlib's default handler turns into exit(1) during SDL_Quit. That one error is
+// harmless and ignored; every other goes to the handler that was installed before (Xlib's).
+// A C callback cannot carry state, hence the one global, set once before any thread starts.
+XErrorHandler g_previous_x_error_handler = nullptr;
+
+int ignore_wakeup_after_close(Display* display, XErrorEvent* error) {
+  if (error->error_code == BadWindow && error->request_code == X_SendEvent) return 0;
+  return g_previous_x_error_handler != nullptr ? g_previous_x_error_handler(display, error) : 0;
+}
+
+// Owns SDL's video subsystem for the viewer's lifetime. SDL may only use a real windowing system:
+// without one it could pick a driver that shows nothing (offscreen, KMS on a console), and the
+// user would wait for a window that never appears.
+class SdlVideo {
+ public:
+  SdlVideo() {
+    if (!env_set("DISPLAY") && !env_set("WAYLAND_DISPLAY")) throw no_display();
+    // Only the system the environment names: SDL would otherwise try the others in turn when it
+    // fails (Wayland's library then prints its own complaint on stderr). A user's own
+    // SDL_VIDEODRIVER still wins (a hint at default priority yields to the environment).
+    SDL_SetHint(SDL_HINT_VIDEODRIVER, env_set("DISPLAY") ? "x11" : "wayland");
+    // When SDL_RENDER_DRIVER=software picks SDL's software renderer, let it draw into the window's
+    // own framebuffer (X shared memory) instead of probing OpenGL to present it, which loads the
+    // GL driver for nothing (and, with Mesa, leaves allocations LeakSanitizer reports).
+    SDL_SetHint(SDL_HINT_FRAMEBUFFER_ACCELERATION, "0");
+    // Before SDL_Init: SDL keeps the handler it finds and puts it back before it closes its X
+    // connections, which is when the error arrives.
+    if (env_set("DISPLAY")) {
+      g_previous_x_error_handler = XSetErrorHandler(ignore_wakeup_after_close);
+    }
+    if (SDL_Init(SDL_INIT_VIDEO) != 0) throw no_display();
+    const char* driver = SDL_GetCurrentVideoDriver();
+    const std::string_view name = driver != nullptr ? driver : "";
+    if (name != "x11" && name != "wayland") {
+      SDL_Quit();
+      throw no_display();
+    }
+  }
+  ~SdlVideo() {
+    SDL_Quit();
+    if (env_set("DISPLAY")) XSetErrorHandler(g_previous_x_error_handler);
+  }
+  SdlVideo(const SdlVideo&) = delete;
+  SdlVideo& operator=(const SdlVideo&) = delete;
+};
+
+struct WindowDeleter {
+  void operator()(SDL_Window* w) const { SDL_DestroyWindow(w); }
+};
+struct RendererDeleter {
+  void operator()(SDL_Renderer* r) const { SDL_DestroyRenderer(r); }
+};
+struct TextureDeleter {
+  void operator()(SDL_Texture* t) const { SDL_DestroyTexture(t); }
+};
+
+// Per-frame costs in milliseconds: events (handling input and setting the view), render (the
+// Renderer), convert (float image to texture pixels), upload (locking the texture and handing the
+// pixels to SDL), present (copy to the window and flip).
+struct FrameTimes {
+  double events = 0, render = 0, convert = 0, upload = 0, present = 0;
+  double total() const { return events + render + convert + upload + present; }
+};
+
+HeldKeys held_keys() {
+  const Uint8* k = SDL_GetKeyboardState(nullptr);
+  // Scancodes, i.e. key positions: W/A/S/D and Q/E keep their shape on any keyboard layout.
+  HeldKeys h;
+  h.left = k[SDL_SCANCODE_LEFT] != 0;
+  h.right = k[SDL_SCANCODE_RIGHT] != 0;
+  h.up = k[SDL_SCANCODE_UP] != 0;
+  h.down = k[SDL_SCANCODE_DOWN] != 0;
+  h.w = k[SDL_SCANCODE_W] != 0;
+  h.s = k[SDL_SCANCODE_S] != 0;
+  h.a = k[SDL_SCANCODE_A] != 0;
+  h.d = k[SDL_SCANCODE_D] != 0;
+  h.q = k[SDL_SCANCODE_Q] != 0;
+  h.e = k[SDL_SCANCODE_E] != 0;
+  return h;
+}
+
+void print_line(const std::string& line) {
+  std::printf("%s\n", line.c_str());
+  std::fflush(stdout);  // stdout is often a pipe or a file: each line should arrive at once
+}
+
+class Viewer {
+ public:
+  explicit Viewer(const ViewerOptions& options) : options_(options) {}
+
+  int run() {
+    // The display first: without one, fail at once rather than after loading a large scene.
+    video_.emplace();
+    const SceneOverrides overrides = cli::scene_overrides(options_.scene);
+    loaded_ = cli::load_scene_from(options_.scene, overrides);
+    width_ = loaded_.scene.camera.width();
+    height_ = loaded_.scene.camera.height();
+    start_ = initial_view(options_.scene, loaded_);
+    view_ = start_;
+    rates_ = MotionRates::for_distance(start_.distance);
+    accel_ = make_accel(cli::accel_kind(options_.scene), loaded_.scene.mesh,
+                        cli::kernel_choice(options_.scene));
+    render_options_.threads = cli::thread_count(options_.scene);
+
+    window_.reset(SDL_CreateWindow("tritrace", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED,
+                                   width_, height_, SDL_WINDOW_RESIZABLE));
+    if (!window_) throw no_display();
+    renderer_.reset(SDL_CreateRenderer(window_.get(), -1, 0));
+    if (!renderer_) throw Error("SDL", std::string("cannot create a renderer: ") + SDL_GetError());
+    overlay_.emplace(TRITRACE_OVERLAY_FONT);
+    return loop();
+  }
+
+ private:
+  int loop() {
+    bool need_render = true, need_present = false, screenshot = false;
+    Clock::time_point last_motion = Clock::now();
+    std::vector<SDL_Event> events;
+    for (;;) {
+      // The keys held since the last events: they moved the view until now.
+      const Motion motion = benchmarking() ? Motion{1, 0, {}} : motion_from(held_keys());
+      wait_for_events(need_render || need_present || screenshot || motion.any(), events);
+      const Clock::time_point woke = Clock::now();
+      if (motion.any()) {
+        view_ = advance(view_, motion, seconds_since(last_motion, woke), rates_);
+        need_render = true;
+      }
+      last_motion = woke;
+
+      for (const SDL_Event& e : events) {
+        if (e.type == SDL_QUIT) return 0;
+        if (e.type == SDL_WINDOWEVENT) {
+          if (e.window.event == SDL_WINDOWEVENT_CLOSE) return 0;
+          if (e.window.event == SDL_WINDOWEVENT_SIZE_CHANGED) {
+            width_ = std::clamp(e.window.data1, 1, kMaxImageSide);
+            height_ = std::clamp(e.window.data2, 1, kMaxImageSide);
+            need_render = true;
+          } else if (e.window.event == SDL_WINDOWEVENT_EXPOSED) {
+            need_present = true;
+          }
+        }
+        if (e.type != SDL_KEYDOWN || e.key.repeat != 0) continue;
+        switch (e.key.keysym.sym) {
+          case SDLK_ESCAPE:
+            return 0;
+          case SDLK_r:
+            view_ = start_;
+            need_render = true;
+            break;
+          case SDLK_p:
+            screenshot = true;
+            break;
+          case SDLK_h:
+            show_overlay_ = !show_overlay_;
+            need_present = true;
+            break;
+          default:
+            break;
+        }
+      }
+
+      FrameTimes times;
+      times.events = ms_since(woke);
+      if (need_render) {
+        render_frame(times);
+        need_render = false;
+        need_present = true;
+      }
+      if (need_present) {
+        present(times);
+        need_present = false;
+      }
+      if (times.render > 0.0) frame_done(times);
+      if (screenshot) {
+        save_screenshot();
+        screenshot = false;
+      }
+      if (options_.print_state && !motion_from(held_keys()).any() && printed_view_ != image_view_) {
+        print_line("view: " + command_for_image());
+        printed_view_ = image_view_;
+      }
+      if (!options_.quiet && report_.pending() &&
+          report_.seconds_until_due(seconds_since(epoch_, Clock::now())) == 0.0) {
+        print_line(report_.take_line(seconds_since(epoch_, Clock::now())));
+      }
+      if (benchmarking() && static_cast<int>(benchmark_.size()) >= options_.benchmark_frames) {
+        print_benchmark();
+        return 0;
+      }
+    }
+  }
+
+  bool benchmarking() const { return options_.benchmark_frames > 0; }
+
+  // Returns at once with whatever is queued when `busy`; otherwise sleeps in SDL until an event
+  // arrives, or until a pending "Render time" line is due.
+  void wait_for_events(bool busy, std::vector<SDL_Event>& events) {
+    events.clear();
+    SDL_Event e;
+    if (!busy) {
+      int timeout_ms = -1;
+      if (!options_.quiet && report_.pending()) {
+        const double wait = report_.seconds_until_due(seconds_since(epoch_, Clock::now()));
+        timeout_ms = static_cast<int>(std::ceil(wait * 1e3));
+      }
+      const int got = timeout_ms < 0 ? SDL_WaitEvent(&e) : SDL_WaitEventTimeout(&e, timeout_ms);
+      if (got != 0) events.push_back(e);
+    }
+    while (SDL_PollEvent(&e) != 0) events.push_back(e);
+  }
+
+  void render_frame(FrameTimes& times) {
+    const Clock::time_point start = Clock::now();
+    try {
+      apply_overrides(loaded_, view_overrides(view_, width_, height_));
+    } catch (const Error& e) {
+      // A view the scene cannot take (a degenerate camera): keep the last good one.
+      std::fprintf(stderr, "tritrace-view: %s\n", e.what());
+      view_ = image_view_;
+      apply_overrides(loaded_, view_overrides(view_, width_, height_));
+    }
+    times.events += ms_since(start);
+
+    RenderStats stats;
+    const LabIntegrator integrator;
+    image_ = render(loaded_.scene, *accel_, integrator, render_options_, &stats);
+    image_view_ = view_;
+    times.render = stats.milliseconds;
+    threads_ = stats.threads;
+    mrays_ = stats.mrays_per_second();
+
+    const Clock::time_point upload = Clock::now();
+    if (!texture_ || texture_width_ != image_.width() || texture_height_ != image_.height()) {
+      texture_.reset(SDL_CreateTexture(renderer_.get(), SDL_PIXELFORMAT_ARGB8888,
+                                       SDL_TEXTUREACCESS_STREAMING, image_.width(),
+                                       image_.height()));
+      if (!texture_) {
+        throw Error("SDL", std::string("cannot create a texture: ") + SDL_GetError());
+      }
+      texture_width_ = image_.width();
+      texture_height_ = image_.height();
+    }
+    void* pixels = nullptr;
+    int pitch = 0;
+    if (SDL_LockTexture(texture_.get(), nullptr, &pixels, &pitch) == 0) {
+      const Clock::time_point convert = Clock::now();
+      pack_argb8888(image_, static_cast<uint8_t*>(pixels), pitch);
+      times.convert = ms_since(convert);
+      SDL_UnlockTexture(texture_.get());
+    }
+    times.upload = ms_since(upload) - times.convert;
+  }
+
+  void present(FrameTimes& times) {
+    const Clock::time_point start = Clock::now();
+    SDL_Renderer* r = renderer_.get();
+    SDL_SetRenderDrawColor(r, 0, 0, 0, 255);
+    SDL_RenderClear(r);
+    if (texture_) {
+      // Drawn at its own size from the top-left corner: pixels map 1:1 to the window's, and a
+      // resize shows the old frame unscaled until the new one is rendered.
+      const SDL_Rect at{0, 0, texture_width_, texture_height_};
+      SDL_RenderCopy(r, texture_.get(), nullptr, &at);
+    }
+    if (show_overlay_) overlay_->draw(r, overlay_lines());
+    SDL_RenderPresent(r);
+    times.present = ms_since(start);
+  }
+
+  void frame_done(const FrameTimes& times) {
+    last_times_ = times;
+    SDL_SetWindowTitle(window_.get(),
+                       window_title(times.total(), image_.width(), image_.height()).c_str());
+    if (!options_.quiet && !benchmarking()) report_.add_frame(times.total());
+    if (benchmarking()) benchmark_.push_back(times);
+  }
+
+  std::string command_for_image() const {
+    return render_command_line(options_.scene, image_view_, image_.width(), image_.height());
+  }
+
+  void save_screenshot() {
+    std::error_code ec;
+    const std::filesystem::path folder = std::filesystem::current_path(ec);
+    const std::filesystem::path path = next_screenshot_path(ec ? "." : folder);
+    try {
+      write_image(image_, path.string());
+      print_line("saved " + path.string() + ": " + command_for_image());
+    } catch (const Error& e) {
+      // A full disk or a read-only folder must not end the session: say so and go on.
+      std::fprintf(stderr, "tritrace-view: %s\n", e.what());
+    }
+  }
+
+  std::vector<std::string> overlay_lines() const {
+    char stats[256];
+    std::snprintf(stats, sizeof stats,
+                  "%.1f ms/frame: render %.1f, convert %.2f, upload %.2f, present %.2f, "
+                  "events %.2f",
+                  last_times_.total(), last_times_.render, last_times_.convert, last_times_.upload,
+                  last_times_.present, last_times_.events);
+    char scene[256];
+    std::snprintf(scene, sizeof scene, "%dx%d, %zu triangles, %s, %s, %d threads, %.3g Mrays/s",
+                  image_.width(), image_.height(), loaded_.scene.mesh.size(),
+                  std::string(accel_name(cli::accel_kind(options_.scene))).c_str(),
+                  std::string(kernel_name(cli::kernel_choice(options_.scene))).c_str(), threads_,
+                  mrays_);
+    std::string view = "yaw " + cli::format_double(image_view_.yaw) + " rad, distance " +
+                       cli::format_float(image_view_.distance);
+    if (image_view_.light) view += ", light " + cli::format_vec3(*image_view_.light);
+    return {"tritrace-view (H hides this)",
+            stats,
+            scene,
+            view,
+            "",
+            "Left/Right    orbit the camera",
+            "Up/Down       move the camera forward/back",
+            "W/S A/D Q/E   move the light +z/-z, -x/+x, up/down",
+            "R reset   P screenshot   H help   Esc quit"};
+  }
+
+  void print_benchmark() const {
+    std::vector<double> events, render, convert, upload, present, total;
+    for (const FrameTimes& t : benchmark_) {
+      events.push_back(t.events);
+      render.push_back(t.render);
+      convert.push_back(t.convert);
+      upload.push_back(t.upload);
+      present.push_back(t.present);
+      total.push_back(t.total());
+    }
+    std::printf(
+        "benchmark: %zu frames at %dx%d, medians: frame %.2f ms, render %.2f ms, convert %.3f "
+        "ms, upload %.3f ms, present %.3f ms, events %.3f ms (SDL renderer: %s)\n",
+        benchmark_.size(), image_.width(), image_.height(), median(total), median(render),
+        median(convert), median(upload), median(present), median(events), renderer_name().c_str());
+    std::fflush(stdout);
+  }
+
+  std::string renderer_name() const {
+    SDL_RendererInfo info;
+    if (SDL_GetRendererInfo(renderer_.get(), &info) != 0 || info.name == nullptr) return "?";
+    return info.name;
+  }
+
+  const ViewerOptions& options_;
+  LoadedScene loaded_;
+  std::unique_ptr<Accel> accel_;
+  RenderOptions render_options_;
+  ViewState start_, view_;
+  ViewState image_view_;                   // the view image_ shows
+  std::optional<ViewState> printed_view_;  // the last view --print-state printed
+  MotionRates rates_;
+  int width_ = 0, height_ = 0;  // the window's, which the next frame renders at
+  Image image_;
+  int threads_ = 0;
+  double mrays_ = 0.0;
+  FrameTimes last_times_;
+  RenderTimeReport report_;
+  std::vector<FrameTimes> benchmark_;
+  const Clock::time_point epoch_ = Clock::now();
+  bool show_overlay_ = false;
+
+  // Destroyed in reverse order: textures before their renderer, the renderer before the window,
+  // and SDL itself last.
+  std::optional<SdlVideo> video_;
+  std::unique_ptr<SDL_Window, WindowDeleter> window_;
+  std::unique_ptr<SDL_Renderer, RendererDeleter> renderer_;
+  std::unique_ptr<SDL_Texture, TextureDeleter> texture_;
+  int texture_width_ = 0, texture_height_ = 0;
+  std::optional<Overlay> overlay_;
+};
+
+}  // namespace
+
+int run_viewer(const ViewerOptions& options) {
+  Viewer viewer(options);
+  return viewer.run();
+}
+
+}  // namespace tritrace::view

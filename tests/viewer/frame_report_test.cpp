@@ -1,0 +1,82 @@
+// The viewer's reports: title text, the at-most-once-a-second "Render time" line, medians,
+// screenshot names and texture pixels.
+#include "frame_report.h"
+
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include "pixels.h"
+#include "screenshot.h"
+
+namespace tritrace::view {
+namespace {
+
+TEST(WindowTitle, MillisecondsFpsAndSize) {
+  EXPECT_EQ(window_title(3.125, 500, 500), "tritrace \u2014 3.1 ms/frame (320 fps), 500x500");
+  EXPECT_EQ(window_title(40.0, 1280, 720), "tritrace \u2014 40.0 ms/frame (25 fps), 1280x720");
+}
+
+TEST(RenderTimeReport, FirstFrameAtOnceThenAtMostOncePerSecond) {
+  RenderTimeReport r;
+  EXPECT_FALSE(r.pending());
+  r.add_frame(10.0);
+  ASSERT_TRUE(r.pending());
+  EXPECT_EQ(r.seconds_until_due(5.0), 0.0);
+  EXPECT_EQ(r.take_line(5.0), "Render time: 10.0 ms");
+  EXPECT_FALSE(r.pending());
+  r.add_frame(20.0);
+  r.add_frame(30.0);
+  EXPECT_DOUBLE_EQ(r.seconds_until_due(5.25), 0.75);
+  EXPECT_EQ(r.seconds_until_due(6.0), 0.0);
+  EXPECT_EQ(r.take_line(6.5), "Render time: 25.0 ms");  // the mean since the last line
+  r.add_frame(1.0);
+  EXPECT_DOUBLE_EQ(r.seconds_until_due(7.0), 0.5);
+}
+
+TEST(Median, OddEvenAndEmpty) {
+  EXPECT_EQ(median({}), 0.0);
+  EXPECT_EQ(median({3.0, 1.0, 2.0}), 2.0);
+  EXPECT_EQ(median({4.0, 1.0, 3.0, 2.0}), 2.5);
+}
+
+TEST(ScreenshotPath, TakesTheFirstFreeNumber) {
+  std::string pattern = (std::filesystem::temp_directory_path() / "tritrace_shot.XXXXXX").string();
+  ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
+  const std::filesystem::path folder = pattern;
+  EXPECT_EQ(next_screenshot_path(folder), folder / "tritrace-view-001.png");
+  std::ofstream(folder / "tritrace-view-001.png") << "x";
+  std::ofstream(folder / "tritrace-view-003.png") << "x";
+  EXPECT_EQ(next_screenshot_path(folder), folder / "tritrace-view-002.png");
+  std::filesystem::remove_all(folder);
+}
+
+TEST(PackArgb8888, LabBytesAlphaOpaqueRowsAtThePitch) {
+  Image image(2, 2);
+  image.at(0, 0) = glm::vec3(0.5f, 1.0f, 0.0f);     // 127, 255, 0
+  image.at(1, 0) = glm::vec3(-1.0f, 2.0f, 0.075f);  // 0, 255, 19 (19.125 truncated)
+  image.at(0, 1) = glm::vec3(std::numeric_limits<float>::quiet_NaN(), 0.999f, 0.2f);  // 0, 254, 51
+  image.at(1, 1) = glm::vec3(1.0f);
+  const int pitch = 12;  // 8 bytes of pixels and 4 of padding per row
+  uint8_t bytes[24];
+  std::memset(bytes, 0xab, sizeof bytes);
+  pack_argb8888(image, bytes, pitch);
+  auto word = [&](int x, int y) {
+    uint32_t w = 0;
+    std::memcpy(&w, bytes + y * pitch + 4 * x, 4);
+    return w;
+  };
+  EXPECT_EQ(word(0, 0), 0xff7fff00u);
+  EXPECT_EQ(word(1, 0), 0xff00ff13u);
+  EXPECT_EQ(word(0, 1), 0xff00fe33u);
+  EXPECT_EQ(word(1, 1), 0xffffffffu);
+  EXPECT_EQ(bytes[8], 0xab);  // padding untouched
+  EXPECT_EQ(bytes[20], 0xab);
+}
+
+}  // namespace
+}  // namespace tritrace::view

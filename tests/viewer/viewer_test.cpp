@@ -1,0 +1,549 @@
+// Viewer integration tests, as a person uses it: a real X server (Xvfb), the real tritrace-view,
+// real key presses from xdotool (XTEST, to the focused window), screenshots saved with P and
+// compared pixel for pixel with `tritrace render` of the command line the viewer printed.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <X11/Xlib.h>
+
+#include "tritrace/image/image_io.h"
+
+#if !defined(TRITRACE_VIEW_PATH) || !defined(TRITRACE_CLI_PATH)
+#error "TRITRACE_VIEW_PATH and TRITRACE_CLI_PATH must name the built executables"
+#endif
+
+extern char** environ;
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+std::vector<std::string> Words(const std::string& text) {
+  std::vector<std::string> words;
+  std::istringstream in(text);
+  for (std::string w; in >> w;) words.push_back(w);
+  return words;
+}
+
+// The environment of this process with DISPLAY (and WAYLAND_DISPLAY) replaced: `display` empty
+// means none at all. The tests use SDL's software renderer: the result is the same (screenshots
+// are the rendered image, never read back from the window) and it keeps Mesa's shader compiler,
+// slow to start on a 2-core machine, out of every test.
+std::vector<std::string> Environment(const std::string& display) {
+  std::vector<std::string> env;
+  for (char** e = environ; *e != nullptr; ++e) {
+    const std::string var = *e;
+    if (var.rfind("DISPLAY=", 0) == 0 || var.rfind("WAYLAND_DISPLAY=", 0) == 0 ||
+        var.rfind("SDL_RENDER_DRIVER=", 0) == 0) {
+      continue;
+    }
+    env.push_back(var);
+  }
+  if (!display.empty()) env.push_back("DISPLAY=" + display);
+  env.push_back("SDL_RENDER_DRIVER=software");
+  return env;
+}
+
+// Starts `args` in `cwd` with `env`, stdin from /dev/null and stdout/stderr to files (or
+// /dev/null when empty). Returns the pid, or -1.
+pid_t Spawn(const std::vector<std::string>& args, const std::vector<std::string>& env,
+            const fs::path& cwd, const fs::path& out, const fs::path& err) {
+  std::vector<std::string> arg_storage = args, env_storage = env;
+  std::vector<char*> argv, envp;
+  for (std::string& s : arg_storage) argv.push_back(s.data());
+  argv.push_back(nullptr);
+  for (std::string& s : env_storage) envp.push_back(s.data());
+  envp.push_back(nullptr);
+  const std::string out_path = out.empty() ? "/dev/null" : out.string();
+  const std::string err_path = err.empty() ? "/dev/null" : err.string();
+  const std::string dir = cwd.string();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    // Child: only async-signal-safe calls until exec.
+    const int in = ::open("/dev/null", O_RDONLY);
+    const int o = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    const int e = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    if (in < 0 || o < 0 || e < 0 || ::chdir(dir.c_str()) != 0 || ::dup2(in, 0) < 0 ||
+        ::dup2(o, 1) < 0 || ::dup2(e, 2) < 0) {
+      ::_exit(126);
+    }
+    ::execvpe(argv[0], argv.data(), envp.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// Waits up to `timeout` for `pid` to exit; its exit code, 128 + signal, or nullopt on timeout.
+std::optional<int> WaitExit(pid_t pid, std::chrono::milliseconds timeout) {
+  const Clock::time_point end = Clock::now() + timeout;
+  for (;;) {
+    int status = 0;
+    const pid_t r = ::waitpid(pid, &status, WNOHANG);
+    if (r == pid) {
+      if (WIFEXITED(status)) return WEXITSTATUS(status);
+      if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
+    }
+    if (r < 0 && errno != EINTR) return std::nullopt;
+    if (Clock::now() > end) return std::nullopt;
+    std::this_thread::sleep_for(10ms);
+  }
+}
+
+void KillAndReap(pid_t pid) {
+  if (pid <= 0) return;
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+}
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+// A scratch folder, removed at the end.
+class TempFolder {
+ public:
+  TempFolder() {
+    std::string pattern = (fs::temp_directory_path() / "tritrace_view_test.XXXXXX").string();
+    if (::mkdtemp(pattern.data()) != nullptr) path_ = pattern;
+  }
+  ~TempFolder() {
+    std::error_code ec;
+    if (!path_.empty()) fs::remove_all(path_, ec);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+// Runs a command to completion (at most `timeout`) in `cwd`.
+RunResult RunCommand(const std::vector<std::string>& args, const std::vector<std::string>& env,
+                     const fs::path& cwd, std::chrono::milliseconds timeout = 60s) {
+  TempFolder capture;
+  RunResult r;
+  const pid_t pid = Spawn(args, env, cwd, capture.path() / "out", capture.path() / "err");
+  if (pid < 0) return r;
+  const std::optional<int> code = WaitExit(pid, timeout);
+  if (!code) KillAndReap(pid);
+  r.exit_code = code.value_or(-1);
+  r.out = ReadFile(capture.path() / "out");
+  r.err = ReadFile(capture.path() / "err");
+  return r;
+}
+
+// An X server of its own on a free display number (Xvfb picks it and writes it to -displayfd once
+// it accepts connections), so that tests can run in parallel.
+class Xvfb {
+ public:
+  Xvfb() {
+    int fds[2];
+    if (::pipe2(fds, O_CLOEXEC) != 0) return;
+    const std::string write_fd = std::to_string(fds[1]);
+    pid_ = ::fork();
+    if (pid_ == 0) {
+      ::fcntl(fds[1], F_SETFD, 0);  // the write end must survive exec
+      const int null = ::open("/dev/null", O_RDWR);
+      if (null >= 0) {
+        ::dup2(null, 0);
+        ::dup2(null, 1);
+        ::dup2(null, 2);
+      }
+      ::execlp("Xvfb", "Xvfb", "-displayfd", write_fd.c_str(), "-screen", "0", "1280x1024x24",
+               "-nolisten", "tcp", static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    ::close(fds[1]);
+    if (pid_ < 0) {
+      ::close(fds[0]);
+      return;
+    }
+    std::string number;
+    const Clock::time_point end = Clock::now() + 15s;
+    while (Clock::now() < end) {
+      pollfd p{fds[0], POLLIN, 0};
+      if (::poll(&p, 1, 100) <= 0) continue;
+      char c = 0;
+      if (::read(fds[0], &c, 1) != 1) break;  // Xvfb exited: it could not start
+      if (c == '\n') {
+        display_ = ":" + number;
+        break;
+      }
+      number += c;
+    }
+    ::close(fds[0]);
+  }
+  ~Xvfb() {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGTERM);
+      if (!WaitExit(pid_, 5s)) KillAndReap(pid_);
+    }
+  }
+  const std::string& display() const { return display_; }  // empty: not started
+
+ private:
+  pid_t pid_ = -1;
+  std::string display_;
+};
+
+const std::string kNoDisplayLine =
+    "tritrace-view: no display available (set DISPLAY or use 'tritrace render')\n";
+
+// One running viewer in its own folder on its own X server.
+class ViewerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_FALSE(work_.path().empty());
+    xvfb_ = std::make_unique<Xvfb>();
+    if (xvfb_->display().empty()) GTEST_SKIP() << "skipped: no Xvfb";
+    env_ = Environment(xvfb_->display());
+  }
+
+  void TearDown() override {
+    KillAndReap(viewer_);
+    xvfb_.reset();
+  }
+
+  void StartViewer(const std::vector<std::string>& flags) {
+    std::vector<std::string> args{TRITRACE_VIEW_PATH};
+    args.insert(args.end(), flags.begin(), flags.end());
+    viewer_ =
+        Spawn(args, env_, work_.path(), work_.path() / "viewer.out", work_.path() / "viewer.err");
+    ASSERT_GT(viewer_, 0);
+    start_ = Clock::now();
+    // The window exists once xdotool finds it by the viewer's pid (SDL sets _NET_WM_PID).
+    const Clock::time_point end = Clock::now() + 20s;
+    while (window_.empty() && Clock::now() < end) {
+      const RunResult r = RunCommand({"xdotool", "search", "--pid", std::to_string(viewer_)}, env_,
+                                     work_.path(), 10s);
+      if (!Words(r.out).empty()) window_ = Words(r.out).front();
+      if (window_.empty()) std::this_thread::sleep_for(50ms);
+      ASSERT_FALSE(WaitExit(viewer_, 0ms).has_value()) << "the viewer exited: " << Err();
+    }
+    ASSERT_FALSE(window_.empty()) << "no window for the viewer; stderr: " << Err();
+    // Key presses go to the window with the input focus; with no window manager, give it.
+    ASSERT_EQ(Xdotool({"windowfocus", "--sync", window_}), 0);
+  }
+
+  int Xdotool(std::vector<std::string> args) {
+    args.insert(args.begin(), "xdotool");
+    return RunCommand(args, env_, work_.path(), 10s).exit_code;
+  }
+
+  void Key(const std::string& key) { ASSERT_EQ(Xdotool({"key", key}), 0); }
+  void Hold(const std::string& key, std::chrono::milliseconds how_long) {
+    ASSERT_EQ(Xdotool({"keydown", key}), 0);
+    std::this_thread::sleep_for(how_long);
+    ASSERT_EQ(Xdotool({"keyup", key}), 0);
+  }
+
+  std::string Out() const { return ReadFile(work_.path() / "viewer.out"); }
+  std::string Err() const { return ReadFile(work_.path() / "viewer.err"); }
+
+  // The stdout lines starting with `prefix`, once there are at least `count` (empty on timeout).
+  std::vector<std::string> WaitForLines(const std::string& prefix, size_t count) {
+    const Clock::time_point end = Clock::now() + 20s;
+    for (;;) {
+      std::vector<std::string> found;
+      for (const std::string& line : Lines(Out())) {
+        if (line.rfind(prefix, 0) == 0) found.push_back(line);
+      }
+      if (found.size() >= count) return found;
+      if (Clock::now() > end || WaitExit(viewer_, 0ms).has_value()) {
+        ADD_FAILURE() << "waited for " << count << " '" << prefix << "' lines; stdout:\n"
+                      << Out() << "stderr:\n"
+                      << Err();
+        return {};
+      }
+      std::this_thread::sleep_for(20ms);
+    }
+  }
+
+  struct Shot {
+    fs::path path;
+    std::vector<std::string> command;  // the words after "tritrace"
+    tritrace::Rgb8Image image;
+  };
+
+  // Presses P and returns the screenshot it saved (the `n`th) with its reproducing command.
+  Shot Screenshot(size_t n) {
+    Key("p");
+    Shot shot;
+    const std::vector<std::string> lines = WaitForLines("saved ", n);
+    if (lines.size() < n) return shot;
+    const std::string& line = lines[n - 1];
+    const size_t colon = line.find(": tritrace render ");
+    EXPECT_NE(colon, std::string::npos) << line;
+    if (colon == std::string::npos) return shot;
+    shot.path = line.substr(6, colon - 6);
+    EXPECT_TRUE(shot.path.is_absolute()) << shot.path;
+    EXPECT_EQ(shot.path.parent_path(), fs::canonical(work_.path()));
+    shot.command = Words(line.substr(colon + 11));
+    shot.image = tritrace::read_image_rgb8(shot.path.string());
+    return shot;
+  }
+
+  // `tritrace <command> -o NAME -q` in the viewer's folder, decoded.
+  tritrace::Rgb8Image RenderWithCli(std::vector<std::string> command, const std::string& name) {
+    command.insert(command.begin(), TRITRACE_CLI_PATH);
+    command.insert(command.end(), {"-o", name, "-q"});
+    const RunResult r = RunCommand(command, env_, work_.path());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    if (r.exit_code != 0) return {};
+    return tritrace::read_image_rgb8((work_.path() / name).string());
+  }
+
+  // The value after `flag` in a screenshot's command.
+  static std::string Value(const Shot& shot, const std::string& flag) {
+    for (size_t i = 0; i + 1 < shot.command.size(); ++i) {
+      if (shot.command[i] == flag) return shot.command[i + 1];
+    }
+    ADD_FAILURE() << flag << " missing";
+    return "";
+  }
+
+  // utime + stime of the viewer, in seconds.
+  double CpuSeconds() const {
+    const std::string stat = ReadFile("/proc/" + std::to_string(viewer_) + "/stat");
+    // Fields after the command name (which is in parentheses and may hold spaces): state is
+    // field 3, utime 14 and stime 15.
+    const std::vector<std::string> f = Words(stat.substr(stat.rfind(')') + 1));
+    if (f.size() < 13) return -1.0;
+    const double ticks = std::stod(f[11]) + std::stod(f[12]);
+    return ticks / static_cast<double>(::sysconf(_SC_CLK_TCK));
+  }
+
+  TempFolder work_;
+  std::unique_ptr<Xvfb> xvfb_;
+  std::vector<std::string> env_;
+  pid_t viewer_ = -1;
+  std::string window_;
+  Clock::time_point start_;
+};
+
+bool SameImage(const tritrace::Rgb8Image& a, const tritrace::Rgb8Image& b) {
+  return a.width == b.width && a.height == b.height && a.rgb == b.rgb;
+}
+
+TEST_F(ViewerTest, KeysMoveTheViewAndEveryScreenshotIsTheCliImage) {
+  ASSERT_NO_FATAL_FAILURE(StartViewer({"--width", "200", "--height", "160", "--print-state"}));
+  ASSERT_FALSE(WaitForLines("view: ", 1).empty());
+
+  // H draws the overlay in the window only: the screenshot is still the rendered image.
+  Key("h");
+  const Shot first = Screenshot(1);
+  ASSERT_EQ(first.image.width, 200);
+  ASSERT_EQ(first.image.height, 160);
+  EXPECT_EQ(Value(first, "--yaw"), "0");
+  EXPECT_EQ(Value(first, "--distance"), "3");
+  EXPECT_EQ(Value(first, "--light"), "0,-0.5,-0.7");
+  EXPECT_TRUE(SameImage(first.image, RenderWithCli(first.command, "cli1.png")));
+
+  // Held Left orbits the camera (adding yaw) for as long as it is held.
+  Hold("Left", 500ms);
+  const Shot turned = Screenshot(2);
+  const double yaw = std::stod(Value(turned, "--yaw"));
+  EXPECT_GT(yaw, 0.3) << "1.5 rad/s held for 0.5 s";
+  EXPECT_LT(yaw, 3.0);  // generous: a loaded machine delays the key release
+  EXPECT_TRUE(SameImage(turned.image, RenderWithCli(turned.command, "cli2.png")));
+  EXPECT_FALSE(SameImage(turned.image, first.image));
+
+  // W moves the light toward +z: the shadows move.
+  Hold("w", 300ms);
+  const Shot lit = Screenshot(3);
+  EXPECT_EQ(Value(lit, "--yaw"), Value(turned, "--yaw"));
+  const std::vector<std::string> light = Words([&] {
+    std::string l = Value(lit, "--light");
+    for (char& c : l) c = c == ',' ? ' ' : c;
+    return l;
+  }());
+  ASSERT_EQ(light.size(), 3u);
+  EXPECT_EQ(light[0], "0");
+  EXPECT_EQ(light[1], "-0.5");
+  EXPECT_GT(std::stod(light[2]), -0.65);
+  EXPECT_TRUE(SameImage(lit.image, RenderWithCli(lit.command, "cli3.png")));
+  EXPECT_FALSE(SameImage(lit.image, turned.image));
+
+  // Up moves the camera forward (closer), Down back.
+  Hold("Up", 300ms);
+  const Shot closer = Screenshot(4);
+  EXPECT_LT(std::stod(Value(closer, "--distance")), 2.9);
+  EXPECT_TRUE(SameImage(closer.image, RenderWithCli(closer.command, "cli4.png")));
+  EXPECT_FALSE(SameImage(closer.image, lit.image));
+  Hold("Down", 600ms);
+  const Shot farther = Screenshot(5);
+  EXPECT_GT(std::stod(Value(farther, "--distance")), std::stod(Value(closer, "--distance")));
+  EXPECT_TRUE(SameImage(farther.image, RenderWithCli(farther.command, "cli5.png")));
+
+  // R resets camera and light: the first image again.
+  Key("r");
+  const Shot reset = Screenshot(6);
+  EXPECT_TRUE(SameImage(reset.image, first.image));
+
+  // A resized window renders at its new size.
+  ASSERT_EQ(Xdotool({"windowsize", window_, "120", "90"}), 0);
+  const Clock::time_point resize_end = Clock::now() + 10s;
+  Shot resized;
+  for (size_t n = 7; Clock::now() < resize_end; ++n) {
+    resized = Screenshot(n);
+    if (resized.image.width == 120 || ::testing::Test::HasFailure()) break;
+    std::this_thread::sleep_for(100ms);
+  }
+  EXPECT_EQ(resized.image.width, 120);
+  EXPECT_EQ(resized.image.height, 90);
+  EXPECT_TRUE(SameImage(resized.image, RenderWithCli(resized.command, "cli7.png")));
+
+  Key("Escape");
+  const std::optional<int> code = WaitExit(viewer_, 10s);
+  viewer_ = -1;
+  EXPECT_EQ(code, 0) << Err();
+  EXPECT_EQ(Err(), "");
+
+  // The lab's "Render time" line, at most once a second (and once for the first frame).
+  const double seconds = std::chrono::duration<double>(Clock::now() - start_).count();
+  const size_t reports = WaitForLines("Render time: ", 1).size();
+  EXPECT_LE(static_cast<double>(reports), seconds + 1.0) << Out();
+}
+
+TEST_F(ViewerTest, IdleViewerUsesAlmostNoCpu) {
+  ASSERT_NO_FATAL_FAILURE(StartViewer({"--width", "100", "--height", "100", "--print-state"}));
+  ASSERT_FALSE(WaitForLines("view: ", 1).empty());
+  std::this_thread::sleep_for(1200ms);  // past the first "Render time" line's one-second window
+  const double cpu_before = CpuSeconds();
+  const Clock::time_point wall_before = Clock::now();
+  std::this_thread::sleep_for(2s);
+  const double cpu = CpuSeconds() - cpu_before;
+  const double wall = std::chrono::duration<double>(Clock::now() - wall_before).count();
+  EXPECT_LT(cpu, 0.05 * wall) << "CPU seconds while idle for " << wall << " s";
+}
+
+TEST_F(ViewerTest, ClosingTheWindowQuitsWithExitZero) {
+  ASSERT_NO_FATAL_FAILURE(StartViewer({"--width", "64", "--height", "64", "-q"}));
+  // What a window manager sends when the user clicks the close button: WM_DELETE_WINDOW.
+  Display* x = XOpenDisplay(xvfb_->display().c_str());
+  ASSERT_NE(x, nullptr);
+  XEvent close{};
+  close.xclient.type = ClientMessage;
+  close.xclient.window = static_cast<Window>(std::stoul(window_));
+  close.xclient.message_type = XInternAtom(x, "WM_PROTOCOLS", False);
+  close.xclient.format = 32;
+  close.xclient.data.l[0] = static_cast<long>(XInternAtom(x, "WM_DELETE_WINDOW", False));
+  close.xclient.data.l[1] = CurrentTime;
+  XSendEvent(x, close.xclient.window, False, NoEventMask, &close);
+  XCloseDisplay(x);  // flushes the event
+  const std::optional<int> code = WaitExit(viewer_, 10s);
+  viewer_ = -1;
+  EXPECT_EQ(code, 0) << Err();
+  EXPECT_EQ(Err(), "");
+}
+
+TEST_F(ViewerTest, TerminationIsAQuitWithExitZero) {
+  ASSERT_NO_FATAL_FAILURE(StartViewer({"--width", "64", "--height", "64", "-q"}));
+  ::kill(viewer_, SIGTERM);  // SDL turns it into SDL_QUIT, as closing the window does
+  const std::optional<int> code = WaitExit(viewer_, 10s);
+  viewer_ = -1;
+  EXPECT_EQ(code, 0) << Err();
+  EXPECT_EQ(Out(), "");  // -q: no Render time lines
+}
+
+TEST_F(ViewerTest, MissingSceneFileIsOneLine) {
+  const RunResult r = RunCommand({TRITRACE_VIEW_PATH, "missing.json"}, env_, work_.path(), 30s);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err, "tritrace-view: missing.json: file not found\n");
+}
+
+TEST(ViewerNoDisplay, OneLineAndExitOne) {
+  TempFolder work;
+  const RunResult r = RunCommand({TRITRACE_VIEW_PATH}, Environment(""), work.path(), 30s);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err, kNoDisplayLine);
+  EXPECT_EQ(r.out, "");
+}
+
+TEST(ViewerNoDisplay, UnreachableDisplayIsTheSameLine) {
+  TempFolder work;
+  const RunResult r = RunCommand({TRITRACE_VIEW_PATH}, Environment(":64999"), work.path(), 30s);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err, kNoDisplayLine);
+}
+
+TEST(ViewerFlags, BadValuesNameTheFlagAndExitTwo) {
+  TempFolder work;
+  const std::vector<std::string> env = Environment("");
+  struct Case {
+    std::vector<std::string> args;
+    std::string line;
+  };
+  for (const Case& c : std::vector<Case>{
+           {{"--width", "0"},
+            "tritrace-view: --width: must be an integer from 1 to 16384, got '0'"},
+           {{"--distance", "-1"},
+            "tritrace-view: --distance: must be a finite number greater than 0, got '-1'"},
+           {{"--light", "1,2"},
+            "tritrace-view: --light: must be three finite numbers X,Y,Z, got '1,2'"},
+           {{"--kernel", "fast"}, "tritrace-view: --kernel: unknown kernel 'fast'"},
+           {{"--bogus"}, "tritrace-view: --bogus: unknown option or argument (see --help)"},
+       }) {
+    std::vector<std::string> args{TRITRACE_VIEW_PATH};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    const RunResult r = RunCommand(args, env, work.path(), 30s);
+    EXPECT_EQ(r.exit_code, 2) << c.line;
+    EXPECT_EQ(r.err.rfind(c.line, 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+}
+
+TEST(ViewerFlags, TritraceViewRunsTheViewer) {
+  TempFolder work;
+  const RunResult bad =
+      RunCommand({TRITRACE_CLI_PATH, "view", "--yaw", "x"}, Environment(""), work.path(), 30s);
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_EQ(bad.err, "tritrace-view: --yaw: must be a finite number, got 'x'\n");
+  const RunResult none = RunCommand({TRITRACE_CLI_PATH, "view"}, Environment(""), work.path(), 30s);
+  EXPECT_EQ(none.exit_code, 1);
+  EXPECT_EQ(none.err, kNoDisplayLine);
+  const RunResult help =
+      RunCommand({TRITRACE_CLI_PATH, "view", "--help"}, Environment(""), work.path());
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("--print-state"), std::string::npos) << help.out;
+}
+
+}  // namespace
