@@ -54,7 +54,7 @@ inline VM finite(VF x) {
 
 // Transposes up to W rays into lanes (a Ray is one row of 8 floats). Lanes past the batch, or with
 // a non-finite ray or an empty interval, get an empty interval and never hit anything.
-Packet load_packet(std::span<const Ray> rays) {
+Packet load_packet(std::span<const Ray> rays, bool with_frustum) {
   const int count = static_cast<int>(rays.size());
   // A lane past the batch reads this ray: an empty interval.
   static constexpr float kUnused[8] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.0f, kInf, -kInf};
@@ -83,7 +83,7 @@ Packet load_packet(std::span<const Ray> rays) {
   p.tmax = select(ok, tmax, splat(-kInf));
 
   Frustum& f = p.frustum;
-  f.usable = p.active != 0;
+  f.usable = with_frustum && p.active != 0;
   for (int a = 0; a < 3 && f.usable; ++a) {
     const float o_lo = hmin(select(ok, p.o[a], splat(kInf)));
     const float o_hi = hmax(select(ok, p.o[a], splat(-kInf)));
@@ -102,12 +102,11 @@ Packet load_packet(std::span<const Ray> rays) {
 }
 
 // The packet's frustum against all eight children of `node`: bit c is set when child c's box may be
-// hit by some ray of the packet within (tmin, tfar_hi], and tnear[c] is at most any ray's entry
-// distance. Every bound is taken at the ends of the intervals; rounding to nearest is monotonic, so
-// each bound holds for the rounded per-ray values hit_box computes: a child that hit_box would
-// enter for some ray is always entered here (the traversal stays exact, it may only visit more).
-inline uint32_t frustum_hits(const WideNode& node, const Packet& p, float tfar_hi,
-                             float tnear[kWidth]) {
+// hit by some ray of the packet within (tmin, tfar_hi]. Every bound is taken at the ends of the
+// intervals; rounding to nearest is monotonic, so each bound holds for the rounded per-ray values
+// hit_box computes: a child that hit_box would enter for some ray is never rejected here, so the
+// traversal stays exact.
+inline uint32_t frustum_hits(const WideNode& node, const Packet& p, float tfar_hi) {
   const Frustum& f = p.frustum;
   const float* lo[3] = {node.lo_x, node.lo_y, node.lo_z};
   const float* hi[3] = {node.hi_x, node.hi_y, node.hi_z};
@@ -126,7 +125,6 @@ inline uint32_t frustum_hits(const WideNode& node, const Packet& p, float tfar_h
     tn = _mm256_max_ps(near_lo, tn);
     tf = _mm256_min_ps(far_hi, tf);
   }
-  _mm256_storeu_ps(tnear, tn);
   const __m256 hit = _mm256_cmp_ps(tn, _mm256_mul_ps(tf, _mm256_set1_ps(kFarScale)), _CMP_LE_OQ);
   return static_cast<uint32_t>(_mm256_movemask_ps(hit));
 }
@@ -181,6 +179,25 @@ inline TriangleHits moller_trumbore(const TriangleBlock& b, int l, const Packet&
   return {ok, t, u, v};
 }
 
+// The children worth a per-ray box test: those the packet's frustum may hit where the frustum is
+// usable, else every child present. The frustum only rejects; hit_box then decides per ray, so a
+// small box between the rays of a wide packet is not entered for nothing.
+inline uint32_t candidates(const WideNode& node, const Packet& p, float tfar_hi) {
+  if (p.frustum.usable) return frustum_hits(node, p, tfar_hi);
+  uint32_t present = 0;
+  for (int c = 0; c < kWidth; ++c)
+    present |= static_cast<uint32_t>(node.child[c] != kEmptyChild) << c;
+  return present;
+}
+
+// Building the frustum costs a dozen horizontal reductions per packet; it pays where the tree is
+// deep enough that rejecting children saves more (measured: 3-7% slower on the 30-triangle box,
+// 6% and 12% faster on terrain:1m and terrain:10m; docs/PERFORMANCE.md).
+constexpr size_t kFrustumMinNodes = 16;
+inline bool wants_frustum(const WideBvh& tree) {
+  return tree.nodes.size() >= kFrustumMinNodes;
+}
+
 struct Entry {
   uint32_t ref;
   float t;
@@ -197,7 +214,7 @@ inline void prefetch_child(const WideBvh& tree, uint32_t ref) {
 }  // namespace
 
 void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<Hit> hits) {
-  const Packet p = load_packet(rays);
+  const Packet p = load_packet(rays, wants_frustum(tree));
   // Each lane's best hit so far; (t, prim) ordered lexicographically as in brute force. Starting
   // at tmax makes the box test's far limit simply best_t.
   VF best_t = p.tmax, best_u = splat(0.0f), best_v = splat(0.0f);
@@ -234,22 +251,13 @@ void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<
           for (; j > 0 && near[j - 1].t < e.t; --j) near[j] = near[j - 1];
           near[j] = e;
         };
-        if (p.frustum.usable) {
-          alignas(32) float tnear[kWidth];
-          for (uint32_t m = frustum_hits(node, p, farthest_best, tnear); m; m &= m - 1) {
-            const int c = std::countr_zero(m);
-            prefetch_child(tree, node.child[c]);
-            insert({node.child[c], tnear[c]});
-          }
-        } else {
-          for (int c = 0; c < kWidth; ++c) {
-            if (node.child[c] == kEmptyChild) continue;
-            VF tn;
-            const VM hit = hit_box(node, c, p, best_t, tn);
-            if (!bits(hit)) continue;
-            prefetch_child(tree, node.child[c]);
-            insert({node.child[c], hmin(select(hit, tn, splat(kInf)))});
-          }
+        for (uint32_t m = candidates(node, p, farthest_best); m; m &= m - 1) {
+          const int c = std::countr_zero(m);
+          VF tn;
+          const VM hit = hit_box(node, c, p, best_t, tn);
+          if (!bits(hit)) continue;
+          prefetch_child(tree, node.child[c]);
+          insert({node.child[c], hmin(select(hit, tn, splat(kInf)))});
         }
         if (n > 0) {
           for (int i = 0; i < n - 1; ++i) stack[sp++] = near[i];
@@ -278,7 +286,7 @@ done:
 }
 
 void occluded_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<uint8_t> occluded) {
-  Packet p = load_packet(rays);
+  Packet p = load_packet(rays, wants_frustum(tree));
   uint32_t blocked = 0;
   float farthest_tmax = hmax(p.tmax);  // over the rays not yet blocked
   if (!tree.nodes.empty() && p.active) {
@@ -301,21 +309,12 @@ void occluded_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<u
         farthest_tmax = hmax(p.tmax);
       } else {
         const WideNode& node = tree.nodes[ref];
-        if (p.frustum.usable) {
-          alignas(32) float tnear[kWidth];
-          for (uint32_t m = frustum_hits(node, p, farthest_tmax, tnear); m; m &= m - 1) {
-            const int c = std::countr_zero(m);
+        for (uint32_t m = candidates(node, p, farthest_tmax); m; m &= m - 1) {
+          const int c = std::countr_zero(m);
+          VF tn;
+          if (bits(hit_box(node, c, p, p.tmax, tn))) {
             prefetch_child(tree, node.child[c]);
             stack[sp++] = node.child[c];
-          }
-        } else {
-          for (int c = 0; c < kWidth; ++c) {
-            if (node.child[c] == kEmptyChild) continue;
-            VF tn;
-            if (bits(hit_box(node, c, p, p.tmax, tn))) {
-              prefetch_child(tree, node.child[c]);
-              stack[sp++] = node.child[c];
-            }
           }
         }
       }
