@@ -61,9 +61,8 @@ std::vector<std::string> Words(const std::string& text) {
 }
 
 // The environment of this process with DISPLAY (and WAYLAND_DISPLAY) replaced: `display` empty
-// means none at all. The tests use SDL's software renderer: the result is the same (screenshots
-// are the rendered image, never read back from the window) and it keeps Mesa's shader compiler,
-// slow to start on a 2-core machine, out of every test.
+// means none at all. SDL_RENDER_DRIVER is dropped so that the viewer runs as a user starts it, with
+// its default renderer (SDL's software one).
 std::vector<std::string> Environment(const std::string& display) {
   std::vector<std::string> env;
   for (char** e = environ; *e != nullptr; ++e) {
@@ -75,7 +74,6 @@ std::vector<std::string> Environment(const std::string& display) {
     env.push_back(var);
   }
   if (!display.empty()) env.push_back("DISPLAY=" + display);
-  env.push_back("SDL_RENDER_DRIVER=software");
   return env;
 }
 
