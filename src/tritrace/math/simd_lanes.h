@@ -105,6 +105,10 @@ inline VI quad_row() {
 inline VF gather(const float* base, VI index, VM lanes) {
   return {_mm512_mask_i32gather_ps(_mm512_setzero_ps(), lanes.m, index.v, base, 4)};
 }
+// Only lane l.
+inline VM single_lane(int l) {
+  return {static_cast<__mmask16>(1u << l)};
+}
 inline VI iota_i() {
   return {_mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)};
 }
@@ -306,6 +310,10 @@ inline VF gather(const float* base, VI index, VM lanes) {
 }
 inline VI iota_i() {
   return {_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)};
+}
+// Only lane l.
+inline VM single_lane(int l) {
+  return {_mm256_castsi256_ps(_mm256_cmpeq_epi32(iota_i().v, _mm256_set1_epi32(l)))};
 }
 inline VM operator==(VI a, VI b) {
   return {_mm256_castsi256_ps(_mm256_cmpeq_epi32(a.v, b.v))};
