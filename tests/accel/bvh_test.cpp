@@ -63,6 +63,18 @@ TEST_P(BvhVsBrute, RandomSoupSameHitsBitForBit) {
   expect_same_as_brute(random_soup(3000, 3), GetParam(), 4000, 4);
 }
 
+TEST_P(BvhVsBrute, MixedMagnitudeSoupSameHitsBitForBit) {
+  const TriangleMesh mesh = mixed_magnitude_soup(3000, 9);
+  int rebuilt_differs = 0;  // the case this test is for must really occur
+  for (size_t i = 0; i < mesh.size(); ++i) {
+    rebuilt_differs +=
+        mesh.v0()[i] + mesh.e1()[i] != mesh.v1()[i] || mesh.v0()[i] + mesh.e2()[i] != mesh.v2()[i];
+  }
+  ASSERT_GT(rebuilt_differs, 300);
+  expect_same_as_brute(mesh, GetParam(), 8000, 10);
+  expect_same_as_brute(mesh, GetParam(), 8000, 11, BvhTraversal::kAuto, true);
+}
+
 TEST_P(BvhVsBrute, CoherentPacketsSameHitsBitForBit) {
   expect_same_as_brute(make_cornell_box().mesh, GetParam(), 16000, 5, BvhTraversal::kAuto, true);
   expect_same_as_brute(make_terrain_scene(20000).mesh, GetParam(), 8000, 6, BvhTraversal::kAuto,

@@ -1,6 +1,7 @@
 // Test inputs shared by the accel tests: random triangle soups and rays of every awkward kind.
 #pragma once
 
+#include <cmath>
 #include <glm/geometric.hpp>
 #include <random>
 #include <vector>
@@ -19,6 +20,24 @@ inline TriangleMesh random_soup(int n, uint32_t seed) {
     const float s = size(rng);
     m.add(c, c + s * glm::vec3(pos(rng), pos(rng), pos(rng)),
           c + s * glm::vec3(pos(rng), pos(rng), pos(rng)), 0);
+  }
+  return m;
+}
+
+// Triangles whose vertices differ wildly in magnitude (coordinates from 1e-7 to 1e2, crossing
+// zero, each vertex drawn on its own: a vertex made as v0 + offset in float always gives back
+// v0 + (v1 - v0) == v1), so that for many of them v0 + (v1 - v0) is not v1: a structure that
+// rebuilt the vertices from the edges would answer differently from the oracle's exact vertices.
+inline TriangleMesh mixed_magnitude_soup(int n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), exponent(-7.0f, 2.0f);
+  auto coordinate = [&] { return unit(rng) * std::pow(10.0f, exponent(rng)); };
+  TriangleMesh m;
+  for (int i = 0; i < n; ++i) {
+    const glm::vec3 a(coordinate(), coordinate(), coordinate());
+    const glm::vec3 b(coordinate(), coordinate(), coordinate());
+    const glm::vec3 c(coordinate(), coordinate(), coordinate());
+    m.add(a, b, c, 0);
   }
   return m;
 }

@@ -1,5 +1,5 @@
-// One ray against a whole triangle block (the BVH's leaf): shared by the single-ray traversal and by
-// the packet traversal, which hands it the few rays of a packet that reach a leaf.
+// One ray against a whole triangle block (the BVH's leaf): shared by the single-ray traversal and
+// by the packet traversal, which hands it the few rays of a packet that reach a leaf.
 #pragma once
 
 #include <bit>

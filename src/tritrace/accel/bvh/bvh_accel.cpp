@@ -87,16 +87,17 @@ inline uint32_t intersect_boxes(const WideNode& node, const RayBoxSetup& s, floa
 #endif
 }
 
+// The other kernels read the triangles from the mesh, through the same PreparedRay and arrays as
+// the brute-force loop: the watertight kernel needs the exact vertices (v0 + e1 is not always v1
+// in float), which the blocks do not keep.
 template <Kernel K>
-inline bool block_scalar(const TriangleBlock& b, const Ray& ray, Hit* best) {
+inline bool block_scalar(const TriangleBlock& b, const TriangleArrays& tris,
+                         const PreparedRay<K>& ray, Hit* best) {
   bool any = false;
   for (int l = 0; l < kWidth; ++l) {
     if (b.prim[l] == kNoHit) continue;
-    const glm::vec3 v0(b.v0x[l], b.v0y[l], b.v0z[l]);
-    const glm::vec3 e1(b.e1x[l], b.e1y[l], b.e1z[l]);
-    const glm::vec3 e2(b.e2x[l], b.e2y[l], b.e2z[l]);
     TriangleHit h;
-    if (intersect_triangle<K>(ray, v0, e1, e2, h)) {
+    if (ray.intersect(tris, b.prim[l], h)) {
       if (!best) return true;
       offer(*best, h.t, h.u, h.v, b.prim[l]);
       any = true;
@@ -105,13 +106,15 @@ inline bool block_scalar(const TriangleBlock& b, const Ray& ray, Hit* best) {
   return any;
 }
 
-// With best == nullptr: any hit ends the search (occlusion). Otherwise: the closest hit.
+// With best == nullptr: any hit ends the search (occlusion). Otherwise: the closest hit. `prepared`
+// is `ray` with the kernel's per-ray work done once for the whole traversal.
 template <Kernel K>
-inline bool intersect_block(const TriangleBlock& b, const Ray& ray, Hit* best) {
+inline bool intersect_block(const TriangleBlock& b, const TriangleArrays& tris, const Ray& ray,
+                            const PreparedRay<K>& prepared, Hit* best) {
 #if defined(__AVX2__)
   if constexpr (K == Kernel::kMollerTrumbore) return block_moller_trumbore(b, ray, best);
 #endif
-  return block_scalar<K>(b, ray, best);
+  return block_scalar<K>(b, tris, prepared, best);
 }
 
 // Rays with a NaN or infinite component, or an empty interval, hit nothing; rejecting them here
@@ -129,17 +132,18 @@ struct StackEntry {
 };
 
 template <Kernel K>
-Hit closest_hit(const WideBvh& tree, const Ray& ray) {
+Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray) {
   Hit best;
   if (tree.nodes.empty() || !traceable(ray)) return best;
   const RayBoxSetup setup = box_setup(ray);
+  const PreparedRay<K> prepared(ray);
   StackEntry stack[kStackSize];
   int sp = 0;
   uint32_t ref = 0;
   alignas(32) float tnear[kWidth];
   for (;;) {
     if (ref & kLeafBit) {
-      intersect_block<K>(tree.blocks[ref & ~kLeafBit], ray, &best);
+      intersect_block<K>(tree.blocks[ref & ~kLeafBit], tris, ray, prepared, &best);
     } else {
       const WideNode& node = tree.nodes[ref];
       const float tmax = std::min(best.t, ray.tmax);
@@ -175,16 +179,19 @@ Hit closest_hit(const WideBvh& tree, const Ray& ray) {
 }
 
 template <Kernel K>
-bool any_hit(const WideBvh& tree, const Ray& ray) {
+bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray) {
   if (tree.nodes.empty() || !traceable(ray)) return false;
   const RayBoxSetup setup = box_setup(ray);
+  const PreparedRay<K> prepared(ray);
   uint32_t stack[kStackSize];
   int sp = 0;
   uint32_t ref = 0;
   alignas(32) float tnear[kWidth];
   for (;;) {
     if (ref & kLeafBit) {
-      if (intersect_block<K>(tree.blocks[ref & ~kLeafBit], ray, nullptr)) return true;
+      if (intersect_block<K>(tree.blocks[ref & ~kLeafBit], tris, ray, prepared, nullptr)) {
+        return true;
+      }
     } else {
       const WideNode& node = tree.nodes[ref];
       uint32_t mask = intersect_boxes(node, setup, ray.tmin, ray.tmax, tnear);
@@ -211,7 +218,8 @@ void for_each_packet(std::span<const Ray> rays, std::span<Out> out, Fn&& fn) {
 
 BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConfig& config,
                    BvhTraversal traversal)
-    : bvh_(bvh::build_wide_bvh(mesh, config)),
+    : mesh_(mesh),
+      bvh_(bvh::build_wide_bvh(mesh, config)),
       kernel_(kernel),
       packets_(traversal == BvhTraversal::kAuto && bvh::kPacketSize > 0 &&
                kernel == Kernel::kMollerTrumbore) {}
@@ -225,7 +233,8 @@ void BvhAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
     }
   }
   with_kernel(kernel_, [&]<Kernel K>() {
-    for (size_t i = 0; i < rays.size(); ++i) hits[i] = closest_hit<K>(bvh_, rays[i]);
+    const TriangleArrays tris = mesh_.arrays();
+    for (size_t i = 0; i < rays.size(); ++i) hits[i] = closest_hit<K>(bvh_, tris, rays[i]);
   });
 }
 
@@ -238,7 +247,8 @@ void BvhAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) 
     }
   }
   with_kernel(kernel_, [&]<Kernel K>() {
-    for (size_t i = 0; i < rays.size(); ++i) occluded[i] = any_hit<K>(bvh_, rays[i]) ? 1 : 0;
+    const TriangleArrays tris = mesh_.arrays();
+    for (size_t i = 0; i < rays.size(); ++i) occluded[i] = any_hit<K>(bvh_, tris, rays[i]) ? 1 : 0;
   });
 }
 

@@ -17,6 +17,8 @@ enum class BvhTraversal {
 
 class BvhAccel final : public Accel {
  public:
+  // Keeps a reference to `mesh`, which must outlive the accel (the scalar kernels read its
+  // vertices).
   BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConfig& config = {},
            BvhTraversal traversal = BvhTraversal::kAuto);
 
@@ -29,6 +31,7 @@ class BvhAccel final : public Accel {
   Kernel kernel() const { return kernel_; }
 
  private:
+  const TriangleMesh& mesh_;
   bvh::WideBvh bvh_;
   Kernel kernel_;
   bool packets_;
