@@ -36,6 +36,10 @@ std::string format_vec3(glm::vec3 value);  // "X,Y,Z", each as format_float
 inline constexpr long long kMaxThreads = 1024;
 
 // The names the render and bench commands accept, and the checks on them.
+// A CLI11 parse error as one line that names the flag first where CLI11 gives one: unknown
+// arguments and missing values reworded, newlines flattened. Both apps print it after their name.
+std::string one_line_usage_message(const CLI::ParseError& e);
+
 std::string kernel_list();  // "inverse|cramer|..."
 std::string accel_list();   // the accels this build has
 std::string check_builtin_scene(const std::string& name);

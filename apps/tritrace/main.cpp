@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bench_command.h"
+#include "flags/flag_values.h"
 #include "info_command.h"
 #include "render_command.h"
 #include "tritrace/error.h"
@@ -20,15 +21,7 @@ namespace {
 
 // CLI11's messages, reduced to one line that names the flag first where CLI11 gives one.
 std::string usage_message(const CLI::ParseError& e, int argc, char** argv) {
-  std::string msg = e.what();
-  if (dynamic_cast<const CLI::ExtrasError*>(&e)) {
-    const size_t colon = msg.find(": ");
-    const std::string args = colon == std::string::npos ? msg : msg.substr(colon + 2);
-    return args + ": unknown option or argument (see --help)";
-  }
-  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) && msg.find(" missing") != std::string::npos) {
-    return msg.substr(0, msg.find(": ")) + ": missing value";
-  }
+  const std::string msg = e.what();
   if (dynamic_cast<const CLI::RequiredError*>(&e) && msg.find("subcommand") != std::string::npos) {
     if (argc > 1 && argv[1][0] != '-') {
       return std::string(argv[1]) +
@@ -38,10 +31,7 @@ std::string usage_message(const CLI::ParseError& e, int argc, char** argv) {
     return "missing command: use 'tritrace render', 'tritrace view', 'tritrace info' or "
            "'tritrace bench' (see --help)";
   }
-  for (char& c : msg) {
-    if (c == '\n') c = ' ';
-  }
-  return msg;
+  return tritrace::cli::one_line_usage_message(e);
 }
 
 // `tritrace view ARGS` runs tritrace-view ARGS, the executable built next to this one, so that
