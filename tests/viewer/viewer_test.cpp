@@ -233,6 +233,15 @@ class ViewerTest : public ::testing::Test {
     xvfb_ = std::make_unique<Xvfb>();
     if (xvfb_->display().empty()) GTEST_SKIP() << "skipped: no Xvfb";
     env_ = Environment(xvfb_->display());
+    // Xvfb names its display once it listens; a client's first request is the proof that it
+    // serves, so the viewer's own start is not also a test of the server's.
+    bool serving = false;
+    for (const Clock::time_point end = Clock::now() + 10s; !serving && Clock::now() < end;) {
+      serving =
+          RunCommand({"xdotool", "getdisplaygeometry"}, env_, work_.path(), 5s).exit_code == 0;
+      if (!serving) std::this_thread::sleep_for(50ms);
+    }
+    ASSERT_TRUE(serving) << "Xvfb on " << xvfb_->display() << " does not answer";
   }
 
   void TearDown() override {
