@@ -70,6 +70,8 @@ int ignore_wakeup_after_close(Display* display, XErrorEvent* error) {
   return g_previous_x_error_handler != nullptr ? g_previous_x_error_handler(display, error) : 0;
 }
 
+constexpr int kDisplayAttempts = 10;
+
 // Owns SDL's video subsystem for the viewer's lifetime. SDL may only use a real windowing system:
 // without one it could pick a driver that shows nothing (offscreen, KMS on a console), and the
 // user would wait for a window that never appears.
@@ -96,7 +98,14 @@ class SdlVideo {
     if (env_set("DISPLAY")) {
       g_previous_x_error_handler = XSetErrorHandler(ignore_wakeup_after_close);
     }
-    if (SDL_Init(SDL_INIT_VIDEO) != 0) throw no_display();
+    // A display that is there can still refuse one connection: with Xvfb on a loaded machine,
+    // SDL's first XOpenDisplay failed in about 1 of 10 test-suite runs while the server went on
+    // serving other clients, and a second try 100 ms later always connected. So a few tries,
+    // about a second in all, before calling the display missing.
+    for (int attempt = 1; SDL_Init(SDL_INIT_VIDEO) != 0; ++attempt) {
+      if (attempt == kDisplayAttempts) throw no_display();
+      SDL_Delay(100);
+    }
     const char* driver = SDL_GetCurrentVideoDriver();
     const std::string_view name = driver != nullptr ? driver : "";
     if (name != "x11" && name != "wayland") {

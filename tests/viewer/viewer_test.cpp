@@ -168,14 +168,31 @@ RunResult RunCommand(const std::vector<std::string>& args, const std::vector<std
   return r;
 }
 
-// An X server of its own on a free display number (Xvfb picks it and writes it to -displayfd once
-// it accepts connections), so that tests can run in parallel.
+// An X server of its own, so that tests can run in parallel. Xvfb's own choice of a free display
+// (-displayfd alone) scans up from :0, so tests starting together would race for the same low
+// numbers; each try here names a number spread over a wide range by the process id, and
+// -displayfd still reports when the server accepts connections. A taken number makes Xvfb exit at
+// once, and the next try takes another.
 class Xvfb {
  public:
   Xvfb() {
+    for (int attempt = 0; attempt < 8 && display_.empty(); ++attempt) {
+      const int number = 1000 + static_cast<int>((static_cast<unsigned>(::getpid()) * 7919u +
+                                                  static_cast<unsigned>(attempt) * 104729u) %
+                                                 30000u);
+      Start(number);
+    }
+  }
+  ~Xvfb() { Stop(); }
+  const std::string& display() const { return display_; }  // empty: not started
+
+ private:
+  void Start(int number) {
     int fds[2];
     if (::pipe2(fds, O_CLOEXEC) != 0) return;
     const std::string write_fd = std::to_string(fds[1]);
+    std::string name = ":";
+    name += std::to_string(number);
     pid_ = ::fork();
     if (pid_ == 0) {
       ::fcntl(fds[1], F_SETFD, 0);  // the write end must survive exec
@@ -185,8 +202,8 @@ class Xvfb {
         ::dup2(null, 1);
         ::dup2(null, 2);
       }
-      ::execlp("Xvfb", "Xvfb", "-displayfd", write_fd.c_str(), "-screen", "0", "1280x1024x24",
-               "-nolisten", "tcp", static_cast<char*>(nullptr));
+      ::execlp("Xvfb", "Xvfb", name.c_str(), "-displayfd", write_fd.c_str(), "-screen", "0",
+               "1280x1024x24", "-nolisten", "tcp", static_cast<char*>(nullptr));
       ::_exit(127);
     }
     ::close(fds[1]);
@@ -194,7 +211,7 @@ class Xvfb {
       ::close(fds[0]);
       return;
     }
-    std::string number;
+    std::string reported;
     const Clock::time_point end = Clock::now() + 15s;
     while (Clock::now() < end) {
       pollfd p{fds[0], POLLIN, 0};
@@ -202,22 +219,22 @@ class Xvfb {
       char c = 0;
       if (::read(fds[0], &c, 1) != 1) break;  // Xvfb exited: it could not start
       if (c == '\n') {
-        display_ = ":" + number;
+        display_ = ":" + reported;
         break;
       }
-      number += c;
+      reported += c;
     }
     ::close(fds[0]);
+    if (display_.empty()) Stop();
   }
-  ~Xvfb() {
+  void Stop() {
     if (pid_ > 0) {
       ::kill(pid_, SIGTERM);
       if (!WaitExit(pid_, 5s)) KillAndReap(pid_);
     }
+    pid_ = -1;
   }
-  const std::string& display() const { return display_; }  // empty: not started
 
- private:
   pid_t pid_ = -1;
   std::string display_;
 };
