@@ -32,9 +32,9 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // and finite bounds (interval arithmetic over a packet, as in Wald, Boulos and Shirley, "Ray
 // Tracing Deformable Scenes Using Dynamic Bounding Volume Hierarchies", ACM TOG 26(1), 2007).
 struct Frustum {
-  bool usable = false;
   __m256 o_lo[3], o_hi[3], inv_lo[3], inv_hi[3];
   float tmin_lo = 0.0f;
+  bool usable = false;
 };
 
 struct Packet {
