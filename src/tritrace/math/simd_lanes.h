@@ -200,9 +200,6 @@ inline VI operator+(VI a, VI b) {
 inline VI operator-(VI a, VI b) {
   return {_mm512_sub_epi32(a.v, b.v)};
 }
-inline VI load_i(const int32_t* p) {
-  return {_mm512_loadu_si512(p)};
-}
 // The float's bit pattern as an integer and back (std::bit_cast per lane).
 inline VI bits_of(VF a) {
   return {_mm512_castps_si512(a.v)};
@@ -386,9 +383,6 @@ inline VI operator+(VI a, VI b) {
 }
 inline VI operator-(VI a, VI b) {
   return {_mm256_sub_epi32(a.v, b.v)};
-}
-inline VI load_i(const int32_t* p) {
-  return {_mm256_loadu_si256(reinterpret_cast<const __m256i*>(p))};
 }
 // The float's bit pattern as an integer and back (std::bit_cast per lane).
 inline VI bits_of(VF a) {

@@ -223,13 +223,31 @@ inline void prefetch_child(const WideBvh& tree, uint32_t ref) {
 
 }  // namespace
 
+// A lane's best-hit prim before any hit: above every triangle index, so ties go to real ones.
+constexpr int32_t kNoPrim = std::numeric_limits<int32_t>::max();
+
+// The packet's best hits so far, lane by lane as Hits: t is the lane's current limit (its tmax
+// until a hit), prim kNoHit where none was found.
+struct LaneHits {
+  alignas(64) float t[W], u[W], v[W];
+  alignas(64) int32_t prim[W];
+  LaneHits(VF best_t, VF best_u, VF best_v, VI best_prim) {
+    store(t, best_t);
+    store(u, best_u);
+    store(v, best_v);
+    store(prim, best_prim);
+  }
+  Hit operator[](size_t l) const {
+    return {t[l], u[l], v[l], prim[l] == kNoPrim ? kNoHit : static_cast<uint32_t>(prim[l])};
+  }
+};
+
 void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<Hit> hits) {
   const Packet p = load_packet(rays, wants_frustum(tree));
   // Each lane's best hit so far; (t, prim) ordered lexicographically as in brute force. Starting
   // at tmax makes the box test's far limit simply best_t.
   VF best_t = p.tmax, best_u = splat(0.0f), best_v = splat(0.0f);
-  constexpr int32_t kNone = std::numeric_limits<int32_t>::max();
-  VI best_prim = splat_i(kNone);
+  VI best_prim = splat_i(kNoPrim);
 
   if (!tree.nodes.empty() && p.active) {
     Entry stack[kStackSize];
@@ -242,17 +260,11 @@ void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<
         if (std::popcount(lanes) <= kSingleRayLeafLanes) {
           // Lanes that did not enter the leaf's box cannot hit its triangles (their closest hit
           // has only come nearer since), so only the entering rays are tested.
-          alignas(64) float t[W], u[W], v[W];
-          alignas(64) int32_t prim[W];
-          store(t, best_t);
-          store(u, best_u);
-          store(v, best_v);
-          store(prim, best_prim);
+          const LaneHits current(best_t, best_u, best_v, best_prim);
           for (uint32_t m = lanes; m; m &= m - 1) {
             const int l = std::countr_zero(m);
-            const bool none = prim[l] == kNone;
-            Hit h{t[l], u[l], v[l], none ? kNoHit : static_cast<uint32_t>(prim[l])};
-            const Hit before = h;
+            const Hit before = current[static_cast<size_t>(l)];
+            Hit h = before;
             block_moller_trumbore(b, rays[static_cast<size_t>(l)], &h);
             if (h.prim == before.prim && h.t == before.t) continue;
             const VM lane = single_lane(l);
@@ -312,15 +324,8 @@ void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<
     }
   }
 done:
-  alignas(64) float t[W], u[W], v[W];
-  alignas(64) int32_t prim[W];
-  store(t, best_t);
-  store(u, best_u);
-  store(v, best_v);
-  store(prim, best_prim);
-  for (size_t l = 0; l < rays.size(); ++l) {
-    hits[l] = prim[l] == kNone ? Hit{} : Hit{t[l], u[l], v[l], static_cast<uint32_t>(prim[l])};
-  }
+  const LaneHits best(best_t, best_u, best_v, best_prim);
+  for (size_t l = 0; l < rays.size(); ++l) hits[l] = best[l].found() ? best[l] : Hit{};
 }
 
 void occluded_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<uint8_t> occluded) {
