@@ -1,4 +1,5 @@
-// Aiming rays at a closed mesh's edges and vertices, and counting those that slip through.
+// Aiming rays at a closed mesh's edges and vertices, and counting those that slip through the
+// kernel alone or an accel built over the mesh.
 #include "leaks/leak_count.h"
 
 #include <tbb/blocked_range.h>
@@ -6,6 +7,7 @@
 
 #include <algorithm>
 #include <glm/glm.hpp>
+#include <memory>
 #include <random>
 #include <stdexcept>
 
@@ -14,9 +16,9 @@
 namespace tritrace::leaks {
 namespace {
 
-// Each chunk of rays draws from its own generator, seeded by (seed, chunk), so the rays do not
-// depend on how chunks are spread over threads.
+// Rays are made, and handed to an accel, a chunk at a time; a multiple of kBundleSize.
 constexpr uint64_t kChunk = 4096;
+static_assert(kChunk % kBundleSize == 0);
 
 struct Prepared {
   TriangleMesh mesh;                        // the triangles, in the kernels' layout
@@ -68,6 +70,41 @@ struct Aim {
   uint32_t a = 0, b = 0;  // the target's vertices (a == b for a vertex)
 };
 
+// The outward normals of the faces at the target: those around a vertex, or the two sharing the
+// edge a-b.
+std::vector<glm::vec3> faces_at(const IndexedMesh& m, const Prepared& p, uint32_t a, uint32_t b) {
+  std::vector<glm::vec3> normals;
+  for (uint32_t t : p.ring[a]) {
+    const auto& tri = m.triangles[t];
+    if (std::find(tri.begin(), tri.end(), b) != tri.end()) normals.push_back(p.outward[t]);
+  }
+  return normals;
+}
+
+bool crosses(glm::vec3 w, const std::vector<glm::vec3>& normals) {
+  for (glm::vec3 n : normals) {
+    if (glm::dot(w, n) < 0.1f) return false;
+  }
+  return true;
+}
+
+// A direction from the target out to the origin: `mean` (of the normals) turned at random by up
+// to about `spread` radians' worth, at least 5.7 degrees off every face; `mean` if 64 tries fail.
+glm::vec3 outward_direction(glm::vec3 mean, float spread, const std::vector<glm::vec3>& normals,
+                            std::mt19937_64& rng) {
+  for (int attempt = 0; attempt < 64; ++attempt) {
+    const glm::vec3 c = glm::normalize(mean + spread * random_unit(rng));
+    if (crosses(c, normals)) return c;
+  }
+  return mean;
+}
+
+void aim_at(Aim& aim, glm::vec3 origin, glm::vec3 target) {
+  aim.ray.origin = origin;
+  aim.ray.dir = glm::normalize(target - origin);
+  aim.t_target = glm::length(target - origin);
+}
+
 Aim make_ray(const IndexedMesh& m, const Prepared& p, std::mt19937_64& rng) {
   Aim aim;
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
@@ -89,38 +126,101 @@ Aim make_ray(const IndexedMesh& m, const Prepared& p, std::mt19937_64& rng) {
     const glm::vec3 q = m.positions[rng() % m.positions.size()];
     origin = p.centre + (0.9f * unit(rng)) * (q - p.centre);
   } else {
-    // Faces at the target: those around a vertex, or the two sharing the edge.
+    const std::vector<glm::vec3> normals = faces_at(m, p, aim.a, aim.b);
     glm::vec3 mean(0.0f);
-    std::vector<glm::vec3> normals;
-    for (uint32_t t : p.ring[aim.a]) {
-      const auto& tri = m.triangles[t];
-      if (std::find(tri.begin(), tri.end(), aim.b) != tri.end()) normals.push_back(p.outward[t]);
-    }
     for (glm::vec3 n : normals) mean += n;
     mean = glm::normalize(mean);
-    glm::vec3 w = mean;
-    for (int attempt = 0; attempt < 64; ++attempt) {
-      const glm::vec3 c = glm::normalize(mean + 0.8f * random_unit(rng));
-      bool ok = true;
-      for (glm::vec3 n : normals) ok = ok && glm::dot(c, n) >= 0.1f;
-      if (ok) {
-        w = c;
-        break;
-      }
-    }
-    origin = target + (2.0f * p.radius) * w;
+    origin = target + (2.0f * p.radius) * outward_direction(mean, 0.8f, normals, rng);
   }
-  aim.ray.origin = origin;
-  aim.ray.dir = glm::normalize(target - origin);
-  aim.t_target = glm::length(target - origin);
+  aim_at(aim, origin, target);
   return aim;
 }
 
+float distance_to_segment(glm::vec3 q, glm::vec3 a, glm::vec3 b) {
+  const glm::vec3 ab = b - a;
+  const float len2 = glm::dot(ab, ab);
+  const float s = len2 > 0.0f ? std::clamp(glm::dot(q - a, ab) / len2, 0.0f, 1.0f) : 0.0f;
+  return glm::length(q - (a + s * ab));
+}
+
+// kBundleSize coherent rays appended to `out`: one side, one target vertex or points spread evenly
+// along a stretch of one edge, and origins close together. The stretch is at most a quarter of
+// the edge and 0.2 of its distance d from the origin, and inside origins move by at most 0.1 d, so
+// a bundle spans a few degrees to about 20 wherever it starts (inside, d may be small).
+void make_bundle(const IndexedMesh& m, const Prepared& p, std::mt19937_64& rng,
+                 std::vector<Aim>& out) {
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  Aim base;
+  base.vertex = rng() & 1;
+  if (base.vertex) {
+    base.a = base.b = static_cast<uint32_t>(rng() % m.positions.size());
+  } else {
+    const EdgeUse& e = p.edges[rng() % p.edges.size()];
+    base.a = e.a;
+    base.b = e.b;
+  }
+  const glm::vec3 pa = m.positions[base.a], pb = m.positions[base.b];
+  base.inside = rng() & 1;
+  float f = 0.0f, d = 2.0f * p.radius;
+  glm::vec3 base_origin(0.0f), base_dir(0.0f);
+  std::vector<glm::vec3> normals;
+  if (base.inside) {
+    f = 0.9f * unit(rng);
+    base_origin = p.centre + f * (m.positions[rng() % m.positions.size()] - p.centre);
+    d = distance_to_segment(base_origin, pa, pb);
+  } else {
+    normals = faces_at(m, p, base.a, base.b);
+    glm::vec3 mean(0.0f);
+    for (glm::vec3 n : normals) mean += n;
+    base_dir = outward_direction(glm::normalize(mean), 0.8f, normals, rng);
+  }
+  const float length = glm::length(pb - pa);
+  const float span = base.vertex ? 0.0f : std::min(0.25f, 0.2f * d / length);
+  const float s0 = base.vertex ? 0.0f : (1.0f - span) * unit(rng);
+  for (int k = 0; k < kBundleSize; ++k) {
+    Aim aim = base;
+    const float s = s0 + span * ((static_cast<float>(k) + unit(rng)) / kBundleSize);
+    const glm::vec3 target = base.vertex ? pa : pa + s * (pb - pa);
+    glm::vec3 origin;
+    if (base.inside) {
+      // A convex combination of two inside points (each one of the centre and a vertex), so
+      // inside.
+      const glm::vec3 other = p.centre + f * (m.positions[rng() % m.positions.size()] - p.centre);
+      const float apart = glm::length(other - base_origin);
+      const float mix = apart > 0.0f ? std::min(0.05f, 0.1f * d / apart) : 0.0f;
+      origin = base_origin + mix * (other - base_origin);
+    } else {
+      origin = target + (2.0f * p.radius) * outward_direction(base_dir, 0.05f, normals, rng);
+    }
+    aim_at(aim, origin, target);
+    out.push_back(aim);
+  }
+}
+
+// Each chunk of rays draws from its own generators (one for scattered rays, one for bundles),
+// seeded by (seed, chunk), so that the rays do not depend on how chunks are spread over threads.
+std::vector<Aim> make_aims(const IndexedMesh& m, const Prepared& p, bool bundles, uint64_t seed,
+                           uint64_t chunk, uint64_t count) {
+  std::vector<Aim> aims;
+  aims.reserve(count + kBundleSize);
+  if (bundles) {
+    std::seed_seq seq{seed, chunk, uint64_t{1}};
+    std::mt19937_64 rng(seq);
+    while (aims.size() < count) make_bundle(m, p, rng, aims);
+    aims.resize(count);
+  } else {
+    std::seed_seq seq{seed, chunk};
+    std::mt19937_64 rng(seq);
+    while (aims.size() < count) aims.push_back(make_ray(m, p, rng));
+  }
+  return aims;
+}
+
 template <Kernel K>
-bool leaks(const Prepared& p, const Aim& aim, const LeakOptions& options,
+bool leaks(const Prepared& p, const Aim& aim, bool all_triangles,
            std::vector<uint32_t>& candidates) {
   candidates.clear();
-  if (options.all_triangles) {
+  if (all_triangles) {
     for (uint32_t t = 0; t < p.mesh.size(); ++t) candidates.push_back(t);
   } else {
     // Both ends' rings: a target rounded off an edge near its end may lie in any of them.
@@ -143,6 +243,54 @@ bool leaks(const Prepared& p, const Aim& aim, const LeakOptions& options,
   return !any || closest > aim.t_target * (1.0f + 1e-5f);
 }
 
+// The same rule for an accel's closest hit over the whole mesh.
+bool leaks(const Aim& aim, const Hit& hit) {
+  if (!hit.found()) return true;
+  return !aim.inside && hit.t > aim.t_target * (1.0f + 1e-5f);
+}
+
+void tally(LeakCounts& counts, const Aim& aim, bool leaked) {
+  counts.rays++;
+  counts.leaks += leaked;
+  (aim.inside ? counts.inside_rays : counts.outside_rays)++;
+  (aim.inside ? counts.inside_leaks : counts.outside_leaks) += leaked;
+  counts.vertex_rays += aim.vertex;
+  counts.vertex_leaks += aim.vertex && leaked;
+}
+
+// Scratch space of one worker, reused from chunk to chunk.
+struct Scratch {
+  std::vector<uint32_t> candidates;
+  std::vector<Ray> rays;
+  std::vector<Hit> hits;
+};
+
+void run_chunk(const Prepared& p, const LeakRun& run, const Accel* accel, bool all_triangles,
+               std::span<const Aim> aims, Scratch& scratch, LeakCounts& counts) {
+  if (!accel) {
+    with_kernel(run.kernel, [&]<Kernel K>() {
+      for (const Aim& aim : aims) {
+        tally(counts, aim, leaks<K>(p, aim, all_triangles, scratch.candidates));
+      }
+    });
+    return;
+  }
+  scratch.rays.clear();
+  for (const Aim& aim : aims) scratch.rays.push_back(aim.ray);
+  scratch.hits.assign(aims.size(), Hit{});
+  const std::span<const Ray> rays(scratch.rays);
+  const std::span<Hit> hits(scratch.hits);
+  if (run.path.bundles) {
+    for (size_t first = 0; first < rays.size(); first += kBundleSize) {
+      const size_t n = std::min<size_t>(kBundleSize, rays.size() - first);
+      accel->intersect(rays.subspan(first, n), hits.subspan(first, n));
+    }
+  } else {
+    accel->intersect(rays, hits);
+  }
+  for (size_t i = 0; i < aims.size(); ++i) tally(counts, aims[i], leaks(aims[i], hits[i]));
+}
+
 }  // namespace
 
 LeakCounts& LeakCounts::operator+=(const LeakCounts& o) {
@@ -157,32 +305,79 @@ LeakCounts& LeakCounts::operator+=(const LeakCounts& o) {
   return *this;
 }
 
-LeakCounts count_leaks(const IndexedMesh& mesh, Kernel kernel, const LeakOptions& options) {
+std::string leak_path_name(const LeakPath& path) {
+  std::string name = path.accel ? std::string(accel_name(*path.accel)) : "kernel";
+  return path.bundles ? name + " bundles" : name;
+}
+
+std::vector<LeakPath> report_paths() {
+  return {{},
+          {AccelKind::kBrute},
+          {AccelKind::kBvhSingle},
+          {AccelKind::kBvh},
+          {AccelKind::kBvh, /*bundles=*/true}};
+}
+
+std::vector<LeakCounts> count_leaks(const IndexedMesh& mesh, std::span<const LeakRun> runs,
+                                    const LeakOptions& options) {
   const Prepared p = prepare(mesh);
-  const uint64_t chunks = (options.rays + kChunk - 1) / kChunk;
+  std::vector<uint64_t> rays(runs.size());
+  std::vector<std::unique_ptr<Accel>> accels(runs.size());
+  uint64_t scattered = 0, bundled = 0;
+  for (size_t r = 0; r < runs.size(); ++r) {
+    rays[r] = runs[r].rays ? runs[r].rays : options.rays;
+    (runs[r].path.bundles ? bundled : scattered) =
+        std::max(runs[r].path.bundles ? bundled : scattered, rays[r]);
+    if (runs[r].path.accel) accels[r] = make_accel(*runs[r].path.accel, p.mesh, runs[r].kernel);
+  }
+  // Rays [begin, end) of the chunk that a total of `total` rays reaches: none past the total.
+  auto in_chunk = [](uint64_t chunk, uint64_t total) {
+    const uint64_t begin = chunk * kChunk;
+    return begin >= total ? uint64_t{0} : std::min(kChunk, total - begin);
+  };
+  const uint64_t chunks = (std::max(scattered, bundled) + kChunk - 1) / kChunk;
   return tbb::parallel_reduce(
-      tbb::blocked_range<uint64_t>(0, chunks), LeakCounts{},
-      [&](const tbb::blocked_range<uint64_t>& range, LeakCounts counts) {
-        std::vector<uint32_t> candidates;
+      tbb::blocked_range<uint64_t>(0, chunks), std::vector<LeakCounts>(runs.size()),
+      [&](const tbb::blocked_range<uint64_t>& range, std::vector<LeakCounts> counts) {
+        Scratch scratch;
         for (uint64_t chunk = range.begin(); chunk != range.end(); ++chunk) {
-          std::seed_seq seq{options.seed, chunk};
-          std::mt19937_64 rng(seq);
-          const uint64_t end = std::min(options.rays, (chunk + 1) * kChunk);
-          for (uint64_t i = chunk * kChunk; i < end; ++i) {
-            const Aim aim = make_ray(mesh, p, rng);
-            const bool leaked = with_kernel(
-                kernel, [&]<Kernel K>() { return leaks<K>(p, aim, options, candidates); });
-            counts.rays++;
-            counts.leaks += leaked;
-            (aim.inside ? counts.inside_rays : counts.outside_rays)++;
-            (aim.inside ? counts.inside_leaks : counts.outside_leaks) += leaked;
-            counts.vertex_rays += aim.vertex;
-            counts.vertex_leaks += aim.vertex && leaked;
+          const std::vector<Aim> scattered_aims =
+              make_aims(mesh, p, false, options.seed, chunk, in_chunk(chunk, scattered));
+          const std::vector<Aim> bundled_aims =
+              make_aims(mesh, p, true, options.seed, chunk, in_chunk(chunk, bundled));
+          for (size_t r = 0; r < runs.size(); ++r) {
+            const std::span<const Aim> aims =
+                std::span(runs[r].path.bundles ? bundled_aims : scattered_aims)
+                    .first(in_chunk(chunk, rays[r]));
+            run_chunk(p, runs[r], accels[r].get(), options.all_triangles, aims, scratch, counts[r]);
           }
         }
         return counts;
       },
-      [](LeakCounts a, const LeakCounts& b) { return a += b; });
+      [](std::vector<LeakCounts> a, const std::vector<LeakCounts>& b) {
+        for (size_t r = 0; r < a.size(); ++r) a[r] += b[r];
+        return a;
+      });
+}
+
+LeakCounts count_leaks(const IndexedMesh& mesh, const LeakPath& path, Kernel kernel,
+                       const LeakOptions& options) {
+  const LeakRun run{path, kernel, options.rays};
+  return count_leaks(mesh, std::span(&run, 1), options).front();
+}
+
+LeakCounts count_leaks(const IndexedMesh& mesh, Kernel kernel, const LeakOptions& options) {
+  return count_leaks(mesh, LeakPath{}, kernel, options);
+}
+
+std::vector<Ray> aimed_rays(const IndexedMesh& mesh, bool bundles, uint64_t count, uint64_t seed) {
+  const Prepared p = prepare(mesh);
+  std::vector<Ray> rays;
+  for (uint64_t chunk = 0; chunk * kChunk < count; ++chunk) {
+    const uint64_t n = std::min(kChunk, count - chunk * kChunk);
+    for (const Aim& aim : make_aims(mesh, p, bundles, seed, chunk, n)) rays.push_back(aim.ray);
+  }
+  return rays;
 }
 
 }  // namespace tritrace::leaks
