@@ -1,5 +1,6 @@
-// The bench subcommand: for each scene, build every accel (timed), render one warm-up frame, then
-// `reps` timed frames; report medians and the ratio to the fastest Embree mode of the same scene.
+// The bench subcommand: for each scene, build every accel with each kernel asked for (timed),
+// render one warm-up frame, then `reps` timed frames; report medians and the ratios to the fastest
+// non-robust Embree mode and to Embree's robust mode of the same scene.
 #include "bench_command.h"
 
 #include <sys/resource.h>
@@ -29,12 +30,15 @@ struct Record {
   std::string scene;
   size_t triangles = 0;
   std::string accel;
+  std::string kernel;   // "embree" for Embree's own
+  bool robust = false;  // Embree with RTC_SCENE_FLAG_ROBUST
   double build_ms = 0.0;
   double bytes_per_tri = 0.0;
   double copy_bytes_per_tri = 0.0;
   double frame_ms_median = 0.0, frame_ms_min = 0.0, frame_ms_max = 0.0;
   double mrays_per_s = 0.0;
-  std::optional<double> ratio_to_embree;
+  std::optional<double> ratio_to_embree;         // the fastest non-robust Embree mode
+  std::optional<double> ratio_to_embree_robust;  // embree-robust
   int threads = 0;
   int width = 0, height = 0;
 };
@@ -55,6 +59,8 @@ nlohmann::json to_json(const Record& r) {
   nlohmann::json j = {{"scene", r.scene},
                       {"triangles", r.triangles},
                       {"accel", r.accel},
+                      {"kernel", r.kernel},
+                      {"robust", r.robust},
                       {"build_ms", r.build_ms},
                       {"bytes_per_tri", r.bytes_per_tri},
                       {"triangle_copy_bytes_per_tri", r.copy_bytes_per_tri},
@@ -65,8 +71,20 @@ nlohmann::json to_json(const Record& r) {
                       {"threads", r.threads},
                       {"width", r.width},
                       {"height", r.height}};
-  j["ratio_to_embree"] = r.ratio_to_embree ? nlohmann::json(*r.ratio_to_embree) : nlohmann::json();
+  auto optional = [](std::optional<double> v) { return v ? nlohmann::json(*v) : nlohmann::json(); };
+  j["ratio_to_embree"] = optional(r.ratio_to_embree);
+  j["ratio_to_embree_robust"] = optional(r.ratio_to_embree_robust);
   return j;
+}
+
+bool is_embree(AccelKind kind) {
+  return accel_name(kind).starts_with("embree");
+}
+
+std::string ratio_text(std::optional<double> ratio) {
+  char text[16] = "-";
+  if (ratio) std::snprintf(text, sizeof(text), "%.2fx", *ratio);
+  return text;
 }
 
 }  // namespace
@@ -98,8 +116,9 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
   sub->add_option("--threads", args.threads, "Worker threads (default: all cores)")
       ->type_name("N")
       ->check(checked([](std::string& s) { return check_integer_in(s, 1, kMaxThreads); }));
-  sub->add_option("--kernel", args.kernel,
-                  "Ray/triangle kernel for bvh and brute (default: each one's own, as in render)")
+  sub->add_option("--kernel", args.kernels,
+                  "Ray/triangle kernel for bvh and brute, repeatable: one row per kernel "
+                  "(default: each one's own, as in render)")
       ->type_name("NAME")
       ->check(checked(check_kernel));
   sub->add_option("--json", args.json, "Also write the records as a JSON array to PATH")
@@ -122,11 +141,17 @@ int run_bench(const BenchArgs& args) {
   const int threads = args.threads.empty() ? default_thread_count()
                                            : static_cast<int>(*parse_integer(args.threads));
   // Empty: each accel's default kernel (default_kernel_for).
-  const std::optional<Kernel> chosen_kernel =
-      args.kernel.empty() ? std::nullopt : parse_kernel(args.kernel);
+  std::vector<Kernel> chosen_kernels;
+  for (const std::string& name : args.kernels) {
+    const Kernel k = *parse_kernel(name);
+    if (std::find(chosen_kernels.begin(), chosen_kernels.end(), k) == chosen_kernels.end()) {
+      chosen_kernels.push_back(k);
+    }
+  }
 
-  std::printf("%-13s %10s %-13s %10s %8s %8s %26s %9s %8s\n", "scene", "triangles", "accel",
-              "build ms", "B/tri", "+tri B", "frame ms median (min-max)", "Mrays/s", "/embree");
+  std::printf("%-13s %10s %-13s %-15s %10s %8s %8s %26s %9s %8s %8s\n", "scene", "triangles",
+              "accel", "kernel", "build ms", "B/tri", "+tri B", "frame ms median (min-max)",
+              "Mrays/s", "/embree", "/robust");
   std::fflush(stdout);
 
   std::vector<Record> records;
@@ -135,72 +160,94 @@ int run_bench(const BenchArgs& args) {
     const size_t first = records.size();
     std::vector<std::string> skipped;
     for (AccelKind kind : accels) {
-      Record r;
-      r.scene = scene_name;
-      r.triangles = scene.mesh.size();
-      r.accel = std::string(accel_name(kind));
-      r.threads = threads;
-      r.width = width;
-      r.height = height;
-      if (kind == AccelKind::kBrute) {
-        const double estimate = 2.0 * width * height * static_cast<double>(scene.mesh.size()) *
-                                kBruteNsPerTest * 1e-9 / threads;
-        if (estimate > kBruteBudgetSeconds) {
-          char line[160];
-          std::snprintf(line, sizeof(line), "%-13s %10zu %-13s skipped: about %.0f s per frame",
-                        scene_name.c_str(), r.triangles, r.accel.c_str(), estimate);
-          skipped.emplace_back(line);
-          continue;
+      // Embree has its own kernel: one row whatever --kernel asks.
+      std::vector<std::optional<Kernel>> kernels;
+      if (is_embree(kind)) {
+        kernels = {std::nullopt};
+      } else if (chosen_kernels.empty()) {
+        kernels = {default_kernel_for(kind)};
+      } else {
+        kernels.assign(chosen_kernels.begin(), chosen_kernels.end());
+      }
+      for (const std::optional<Kernel> kernel : kernels) {
+        Record r;
+        r.scene = scene_name;
+        r.triangles = scene.mesh.size();
+        r.accel = std::string(accel_name(kind));
+        r.kernel = kernel ? std::string(kernel_name(*kernel)) : "embree";
+        r.robust = kind == AccelKind::kEmbreeRobust;
+        r.threads = threads;
+        r.width = width;
+        r.height = height;
+        if (kind == AccelKind::kBrute) {
+          const double estimate = 2.0 * width * height * static_cast<double>(scene.mesh.size()) *
+                                  kBruteNsPerTest * 1e-9 / threads;
+          if (estimate > kBruteBudgetSeconds) {
+            char line[160];
+            std::snprintf(
+                line, sizeof(line), "%-13s %10zu %-13s %-15s skipped: about %.0f s per frame",
+                scene_name.c_str(), r.triangles, r.accel.c_str(), r.kernel.c_str(), estimate);
+            skipped.emplace_back(line);
+            continue;
+          }
         }
+        AccelInfo info;
+        // Embree ignores the kernel.
+        const std::unique_ptr<Accel> accel =
+            make_accel(kind, scene.mesh, kernel.value_or(kDefaultKernel), &info);
+        r.build_ms = info.build_ms;
+        r.bytes_per_tri =
+            static_cast<double>(info.structure_bytes) / std::max<size_t>(1, r.triangles);
+        r.copy_bytes_per_tri =
+            static_cast<double>(info.triangle_copy_bytes) / std::max<size_t>(1, r.triangles);
+        const LabIntegrator integrator;
+        std::vector<double> ms;
+        uint64_t rays = 0;
+        for (int i = 0; i <= reps; ++i) {  // frame 0 warms caches and threads up, untimed
+          RenderStats stats;
+          render(scene, *accel, integrator, {.threads = threads}, &stats);
+          if (i == 0) continue;
+          ms.push_back(stats.milliseconds);
+          rays += stats.rays;
+        }
+        r.frame_ms_median = median(ms);
+        r.frame_ms_min = *std::min_element(ms.begin(), ms.end());
+        r.frame_ms_max = *std::max_element(ms.begin(), ms.end());
+        // Rays per frame are the same every frame; the rate uses the median frame.
+        r.mrays_per_s = static_cast<double>(rays) / reps / (r.frame_ms_median * 1e3);
+        records.push_back(r);
       }
-      AccelInfo info;
-      const std::unique_ptr<Accel> accel =
-          make_accel(kind, scene.mesh, chosen_kernel.value_or(default_kernel_for(kind)), &info);
-      r.build_ms = info.build_ms;
-      r.bytes_per_tri =
-          static_cast<double>(info.structure_bytes) / std::max<size_t>(1, r.triangles);
-      r.copy_bytes_per_tri =
-          static_cast<double>(info.triangle_copy_bytes) / std::max<size_t>(1, r.triangles);
-      const LabIntegrator integrator;
-      std::vector<double> ms;
-      uint64_t rays = 0;
-      for (int i = 0; i <= reps; ++i) {  // frame 0 warms caches and threads up, untimed
-        RenderStats stats;
-        render(scene, *accel, integrator, {.threads = threads}, &stats);
-        if (i == 0) continue;
-        ms.push_back(stats.milliseconds);
-        rays += stats.rays;
-      }
-      r.frame_ms_median = median(ms);
-      r.frame_ms_min = *std::min_element(ms.begin(), ms.end());
-      r.frame_ms_max = *std::max_element(ms.begin(), ms.end());
-      // Rays per frame are the same every frame; the rate uses the median frame.
-      r.mrays_per_s = static_cast<double>(rays) / reps / (r.frame_ms_median * 1e3);
-      records.push_back(r);
     }
-    // Ratios against the fastest Embree mode of this scene.
-    double embree_best = 0.0;
+    // Ratios against the fastest non-robust Embree mode of this scene (Embree at its fastest), and
+    // against its robust mode (like for like with a watertight kernel).
+    double embree_best = 0.0, embree_robust = 0.0;
     for (size_t i = first; i < records.size(); ++i) {
-      if (records[i].accel.starts_with("embree")) {
+      if (records[i].robust) {
+        embree_robust = records[i].mrays_per_s;
+      } else if (records[i].kernel == "embree") {
         embree_best = std::max(embree_best, records[i].mrays_per_s);
       }
     }
     for (size_t i = first; i < records.size(); ++i) {
       Record& r = records[i];
       if (embree_best > 0.0) r.ratio_to_embree = r.mrays_per_s / embree_best;
-      char ratio[16] = "-";
-      if (r.ratio_to_embree) std::snprintf(ratio, sizeof(ratio), "%.2fx", *r.ratio_to_embree);
+      if (embree_robust > 0.0) r.ratio_to_embree_robust = r.mrays_per_s / embree_robust;
       char frame[64];
       std::snprintf(frame, sizeof(frame), "%.1f (%.1f-%.1f)", r.frame_ms_median, r.frame_ms_min,
                     r.frame_ms_max);
-      std::printf("%-13s %10zu %-13s %10.1f %8.1f %8.1f %26s %9.1f %8s\n", r.scene.c_str(),
-                  r.triangles, r.accel.c_str(), r.build_ms, r.bytes_per_tri, r.copy_bytes_per_tri,
-                  frame, r.mrays_per_s, ratio);
+      std::printf("%-13s %10zu %-13s %-15s %10.1f %8.1f %8.1f %26s %9.1f %8s %8s\n",
+                  r.scene.c_str(), r.triangles, r.accel.c_str(), r.kernel.c_str(), r.build_ms,
+                  r.bytes_per_tri, r.copy_bytes_per_tri, frame, r.mrays_per_s,
+                  ratio_text(r.ratio_to_embree).c_str(),
+                  ratio_text(r.ratio_to_embree_robust).c_str());
     }
     for (const std::string& line : skipped) std::printf("%s\n", line.c_str());
     std::fflush(stdout);
   }
   if (!args.quiet) {
+    std::printf(
+        "/embree: Mrays/s over the fastest non-robust Embree mode's (embree, embree8, "
+        "embree-single); /robust: over embree-robust's (RTC_SCENE_FLAG_ROBUST)\n");
     std::printf("%dx%d, %d thread%s, %d timed frames after one warm-up; peak RSS %ld MiB\n", width,
                 height, threads, threads == 1 ? "" : "s", reps, peak_rss_mib());
   }

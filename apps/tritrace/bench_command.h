@@ -1,6 +1,7 @@
 // `tritrace bench`: the lab workload (one primary and one shadow ray per pixel, all threads) on
-// several scenes and every acceleration structure, side by side in one run, with the ratio of each
-// to Embree's best mode. Prints a table; --json writes the same records for scripts.
+// several scenes, every acceleration structure and the kernels asked for, side by side in one run,
+// with the ratio of each to Embree's best non-robust mode and to Embree's robust mode. Prints a
+// table; --json writes the same records for scripts.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -15,9 +16,9 @@ struct BenchArgs {
   std::string width = "1920";
   std::string height = "1080";
   std::string reps = "5";
-  std::string threads;  // empty: all cores
-  std::string kernel;   // empty: the default kernel
-  std::string json;     // empty: no JSON file
+  std::string threads;               // empty: all cores
+  std::vector<std::string> kernels;  // empty: each accel's default kernel
+  std::string json;                  // empty: no JSON file
   bool quiet = false;
 };
 

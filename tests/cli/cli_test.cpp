@@ -8,6 +8,7 @@
 #include <unistd.h>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 
 #include <algorithm>
 #include <cerrno>
@@ -21,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "tritrace/accel/make_accel.h"
 #include "tritrace/image/image_io.h"
 
 #ifndef TRITRACE_CLI_PATH
@@ -512,12 +514,14 @@ TEST_F(CliTest, BenchWritesATableAndJsonRecords) {
   ASSERT_TRUE(records.is_array());
   std::set<std::string> accels;
   for (const nlohmann::json& rec : records) {
-    for (const char* key : {"scene", "triangles", "accel", "build_ms", "bytes_per_tri",
-                            "frame_ms_median", "frame_ms_min", "frame_ms_max", "mrays_per_s",
-                            "ratio_to_embree", "threads", "width", "height"}) {
+    for (const char* key :
+         {"scene", "triangles", "accel", "kernel", "robust", "build_ms", "bytes_per_tri",
+          "frame_ms_median", "frame_ms_min", "frame_ms_max", "mrays_per_s", "ratio_to_embree",
+          "ratio_to_embree_robust", "threads", "width", "height"}) {
       EXPECT_TRUE(rec.contains(key)) << key;
     }
-    accels.insert(rec["accel"].get<std::string>());
+    const std::string accel = rec["accel"].get<std::string>();
+    accels.insert(accel);
     EXPECT_EQ(rec["width"], 64);
     EXPECT_EQ(rec["height"], 36);
     EXPECT_GT(rec["mrays_per_s"].get<double>(), 0.0);
@@ -525,22 +529,116 @@ TEST_F(CliTest, BenchWritesATableAndJsonRecords) {
     EXPECT_LE(rec["frame_ms_median"].get<double>(), rec["frame_ms_max"].get<double>());
     // cornell is the lab's 30 triangles; terrain:2k is a 32 x 32 grid of quads plus the room.
     EXPECT_EQ(rec["triangles"], rec["scene"] == "cornell" ? 30 : 2 * 32 * 32 + 10);
+    // Without --kernel each accel runs with the kernel `tritrace render` gives it; Embree with
+    // its own.
+    const std::string kernel = accel.starts_with("embree")
+                                   ? "embree"
+                                   : std::string(tritrace::kernel_name(tritrace::default_kernel_for(
+                                         *tritrace::parse_accel(accel))));
+    EXPECT_EQ(rec["kernel"], kernel) << accel;
+    EXPECT_EQ(rec["robust"], accel == "embree-robust") << accel;
   }
   EXPECT_TRUE(accels.count("bvh"));
   EXPECT_TRUE(accels.count("brute"));
 #if TRITRACE_HAVE_EMBREE
   EXPECT_TRUE(accels.count("embree"));
   EXPECT_TRUE(accels.count("embree-single"));
-  // The faster Embree mode of each scene is the reference, so one of them has ratio 1.
+  EXPECT_TRUE(accels.count("embree-robust"));
+  // The fastest non-robust Embree mode of each scene is the reference of ratio_to_embree, so one
+  // of them has ratio 1; embree-robust is the reference of ratio_to_embree_robust.
   for (const std::string scene : {"cornell", "terrain:2k"}) {
     double best = 0.0;
     for (const nlohmann::json& rec : records) {
-      if (rec["scene"] == scene && rec["accel"].get<std::string>().starts_with("embree")) {
+      if (rec["scene"] != scene) continue;
+      const std::string accel = rec["accel"].get<std::string>();
+      if (accel.starts_with("embree") && accel != "embree-robust") {
         best = std::max(best, rec["ratio_to_embree"].get<double>());
+      }
+      if (accel == "embree-robust") {
+        EXPECT_DOUBLE_EQ(rec["ratio_to_embree_robust"].get<double>(), 1.0) << scene;
       }
     }
     EXPECT_DOUBLE_EQ(best, 1.0) << scene;
   }
+#else
+  for (const nlohmann::json& rec : records) {
+    EXPECT_TRUE(rec["ratio_to_embree"].is_null());
+    EXPECT_TRUE(rec["ratio_to_embree_robust"].is_null());
+  }
+#endif
+}
+
+// --kernel repeated: the accels that take a kernel get one row per kernel, in the order asked,
+// so one session times the BVH with both side by side; Embree keeps one row (its own kernel).
+TEST_F(CliTest, BenchRepeatedKernelGivesARowPerKernel) {
+  std::vector<std::string> args = {"bench", "--scene", "cornell", "--width", "32",    "--height",
+                                   "18",    "--reps",  "1",       "--json",  "k.json"};
+  args.insert(args.end(), {"--accel", "bvh", "--accel", "brute"});
+  args.insert(args.end(), {"--kernel", "watertight", "--kernel", "moller-trumbore"});
+#if TRITRACE_HAVE_EMBREE
+  args.insert(args.end(), {"--accel", "embree-robust"});
+#endif
+  const RunResult r = Run(args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  const nlohmann::json records = nlohmann::json::parse(ReadFile(work_ / "k.json"));
+  std::vector<std::pair<std::string, std::string>> rows;
+  for (const nlohmann::json& rec : records) {
+    rows.emplace_back(rec["accel"].get<std::string>(), rec["kernel"].get<std::string>());
+  }
+  std::vector<std::pair<std::string, std::string>> want = {{"bvh", "watertight"},
+                                                           {"bvh", "moller-trumbore"},
+                                                           {"brute", "watertight"},
+                                                           {"brute", "moller-trumbore"}};
+#if TRITRACE_HAVE_EMBREE
+  want.emplace_back("embree-robust", "embree");
+#endif
+  EXPECT_EQ(rows, want);
+  // The table names the kernel of each row.
+  std::istringstream table(r.out);
+  std::string line;
+  int bvh_rows = 0;
+  while (std::getline(table, line)) {
+    if (line.starts_with("cornell") && line.find(" bvh ") != std::string::npos) {
+      ++bvh_rows;
+      EXPECT_TRUE(line.find("watertight") != std::string::npos ||
+                  line.find("moller-trumbore") != std::string::npos)
+          << line;
+    }
+  }
+  EXPECT_EQ(bvh_rows, 2) << r.out;
+}
+
+TEST_F(CliTest, BenchRejectsAnUnknownKernel) {
+  const RunResult r = Run({"bench", "--kernel", "watertight", "--kernel", "fast"});
+  ExpectErrorLine(r, 2, "--kernel", "unknown kernel 'fast'");
+  ExpectOnlyFiles(work_, {});
+}
+
+// embree-robust is an accel like the others: where Embree is built in it renders the scene as brute
+// force does but for pixels on geometric and shadow edges, where Embree's rounding of t, u and v
+// differs from our kernel's (92 of 4096 pixels here); where it is not built in, the flag is
+// refused.
+TEST_F(CliTest, EmbreeRobustAccelRendersTheScene) {
+#if TRITRACE_HAVE_EMBREE
+  const std::vector<std::string> size = {"--width", "64", "--height", "64"};
+  std::vector<std::string> robust = size, brute = size;
+  robust.insert(robust.end(), {"--accel", "embree-robust"});
+  brute.insert(brute.end(), {"--accel", "brute"});
+  RenderQuietly(robust, "robust.png");
+  RenderQuietly(brute, "brute.png");
+  const tritrace::Rgb8Image a = tritrace::read_image_rgb8((work_ / "robust.png").string());
+  const tritrace::Rgb8Image b = tritrace::read_image_rgb8((work_ / "brute.png").string());
+  ASSERT_EQ(a.rgb.size(), b.rgb.size());
+  ASSERT_EQ(a.rgb.size(), 64u * 64u * 3u);
+  size_t differing = 0;
+  for (size_t i = 0; i < a.rgb.size(); i += 3) {
+    differing += !std::equal(a.rgb.begin() + i, a.rgb.begin() + i + 3, b.rgb.begin() + i);
+  }
+  EXPECT_LT(differing, 64u * 64u / 20) << "pixels differing from brute force";
+#else
+  const RunResult r = Run({"render", "--accel", "embree-robust"});
+  ExpectErrorLine(r, 2, "--accel", "not built in");
 #endif
 }
 

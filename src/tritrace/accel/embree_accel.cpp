@@ -112,14 +112,15 @@ bool EmbreeAccel::native_packet16() {
   return native;
 }
 
-EmbreeAccel::EmbreeAccel(const TriangleMesh& mesh, EmbreeMode mode)
-    : impl_(std::make_unique<Impl>()), mode_(mode) {
+EmbreeAccel::EmbreeAccel(const TriangleMesh& mesh, EmbreeMode mode, bool robust)
+    : impl_(std::make_unique<Impl>()), mode_(mode), robust_(robust) {
   const FlushDenormals ftz;
   impl_->device = rtcNewDevice(nullptr);
   if (!impl_->device) throw Error("embree", "cannot create a device");
   rtcSetDeviceMemoryMonitorFunction(impl_->device, count_bytes, &impl_->bytes);
   impl_->scene = rtcNewScene(impl_->device);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+  if (robust) rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
 
   const size_t n = mesh.size();
   if (n > 0) {

@@ -17,8 +17,11 @@ enum class EmbreeMode { kSingle, kPacket8, kPacket16 };
 
 class EmbreeAccel final : public Accel {
  public:
-  // Builds with RTC_BUILD_QUALITY_HIGH on all cores. Throws Error when Embree fails.
-  EmbreeAccel(const TriangleMesh& mesh, EmbreeMode mode);
+  // Builds with RTC_BUILD_QUALITY_HIGH on all cores. `robust` sets RTC_SCENE_FLAG_ROBUST: in
+  // Embree's words, structures that allow robust traversal and no optimisations that reduce
+  // arithmetic accuracy, against rays shooting through the edges of neighbouring primitives.
+  // Throws Error when Embree fails.
+  EmbreeAccel(const TriangleMesh& mesh, EmbreeMode mode, bool robust = false);
   ~EmbreeAccel() override;
   EmbreeAccel(const EmbreeAccel&) = delete;
   EmbreeAccel& operator=(const EmbreeAccel&) = delete;
@@ -29,6 +32,7 @@ class EmbreeAccel final : public Accel {
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
 
   EmbreeMode mode() const { return mode_; }
+  bool robust() const { return robust_; }
   // Bytes Embree allocated for its acceleration structure, not counting the vertex and index
   // buffers it was given.
   size_t structure_bytes() const { return structure_bytes_; }
@@ -39,6 +43,7 @@ class EmbreeAccel final : public Accel {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   EmbreeMode mode_;
+  bool robust_;
   size_t structure_bytes_ = 0;
 };
 

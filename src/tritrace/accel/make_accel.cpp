@@ -14,8 +14,14 @@
 namespace tritrace {
 namespace {
 constexpr AccelKind kAll[] = {AccelKind::kBvh,          AccelKind::kBrute,     AccelKind::kEmbree,
-                              AccelKind::kEmbreeSingle, AccelKind::kBvhSingle, AccelKind::kEmbree8};
+                              AccelKind::kEmbreeSingle, AccelKind::kBvhSingle, AccelKind::kEmbree8,
+                              AccelKind::kEmbreeRobust};
+
+bool is_embree(AccelKind kind) {
+  return kind == AccelKind::kEmbree || kind == AccelKind::kEmbreeSingle ||
+         kind == AccelKind::kEmbree8 || kind == AccelKind::kEmbreeRobust;
 }
+}  // namespace
 
 std::string_view accel_name(AccelKind kind) {
   switch (kind) {
@@ -31,6 +37,8 @@ std::string_view accel_name(AccelKind kind) {
       return "bvh-single";
     case AccelKind::kEmbree8:
       return "embree8";
+    case AccelKind::kEmbreeRobust:
+      return "embree-robust";
   }
   return "unknown";
 }
@@ -43,9 +51,7 @@ std::optional<AccelKind> parse_accel(std::string_view name) {
 }
 
 bool accel_available(AccelKind kind) {
-  const bool embree =
-      kind == AccelKind::kEmbree || kind == AccelKind::kEmbreeSingle || kind == AccelKind::kEmbree8;
-  return !embree || TRITRACE_HAVE_EMBREE;
+  return !is_embree(kind) || TRITRACE_HAVE_EMBREE;
 }
 
 std::vector<AccelKind> available_accels() {
@@ -81,13 +87,14 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kern
     }
     case AccelKind::kEmbree:
     case AccelKind::kEmbreeSingle:
-    case AccelKind::kEmbree8: {
+    case AccelKind::kEmbree8:
+    case AccelKind::kEmbreeRobust: {
 #if TRITRACE_HAVE_EMBREE
       const EmbreeMode mode = kind == AccelKind::kEmbreeSingle ? EmbreeMode::kSingle
                               : kind == AccelKind::kEmbree8    ? EmbreeMode::kPacket8
                               : EmbreeAccel::native_packet16() ? EmbreeMode::kPacket16
                                                                : EmbreeMode::kPacket8;
-      auto embree = std::make_unique<EmbreeAccel>(mesh, mode);
+      auto embree = std::make_unique<EmbreeAccel>(mesh, mode, kind == AccelKind::kEmbreeRobust);
       local.structure_bytes = embree->structure_bytes();
       accel = std::move(embree);
       break;

@@ -16,9 +16,12 @@ namespace tritrace {
 // kBvh and kEmbree trace coherent batches as packets (Embree: 16 rays where it has native 16-wide
 // kernels, else 8); kEmbree8 always 8-wide packets; kBvhSingle and kEmbreeSingle one ray at a
 // time. All for comparison: which Embree mode is fastest depends on the scene and the CPU.
-enum class AccelKind { kBvh, kBrute, kEmbree, kEmbreeSingle, kBvhSingle, kEmbree8 };
+// kEmbreeRobust is kEmbree with RTC_SCENE_FLAG_ROBUST (robust traversal, no optimisations that
+// cost accuracy, so that rays do not slip between neighbouring triangles): the like-for-like
+// comparison for tritrace's watertight kernel.
+enum class AccelKind { kBvh, kBrute, kEmbree, kEmbreeSingle, kBvhSingle, kEmbree8, kEmbreeRobust };
 
-// "bvh", "brute", "embree", "embree-single", "bvh-single", "embree8"
+// "bvh", "brute", "embree", "embree-single", "bvh-single", "embree8", "embree-robust"
 std::string_view accel_name(AccelKind kind);
 std::optional<AccelKind> parse_accel(std::string_view name);
 bool accel_available(AccelKind kind);  // Embree only when built with it
