@@ -326,11 +326,11 @@ std::vector<LeakCounts> count_leaks(const IndexedMesh& mesh, std::span<const Lea
   uint64_t scattered = 0, bundled = 0;
   for (size_t r = 0; r < runs.size(); ++r) {
     rays[r] = runs[r].rays ? runs[r].rays : options.rays;
-    (runs[r].path.bundles ? bundled : scattered) =
-        std::max(runs[r].path.bundles ? bundled : scattered, rays[r]);
+    uint64_t& total = runs[r].path.bundles ? bundled : scattered;
+    total = std::max(total, rays[r]);
     if (runs[r].path.accel) accels[r] = make_accel(*runs[r].path.accel, p.mesh, runs[r].kernel);
   }
-  // Rays [begin, end) of the chunk that a total of `total` rays reaches: none past the total.
+  // How many of the chunk's rays are among the first `total`.
   auto in_chunk = [](uint64_t chunk, uint64_t total) {
     const uint64_t begin = chunk * kChunk;
     return begin >= total ? uint64_t{0} : std::min(kChunk, total - begin);

@@ -16,12 +16,21 @@ using namespace tritrace;
 
 struct Cell {
   leaks::LeakPath path;
-  Kernel kernel;
+  Kernel kernel;  // ignored by Embree
   leaks::LeakCounts counts;
 };
 
+bool embree(const leaks::LeakPath& path) {
+  return path.accel == AccelKind::kEmbree || path.accel == AccelKind::kEmbreeRobust;
+}
+
 bool is_default(const leaks::LeakPath& path, Kernel kernel) {
-  return path.accel && default_kernel_for(*path.accel) == kernel;
+  return path.accel && !embree(path) && default_kernel_for(*path.accel) == kernel;
+}
+
+std::string kernel_text(const Cell& c) {
+  if (embree(c.path)) return "embree's own";
+  return std::string(kernel_name(c.kernel)) + (is_default(c.path, c.kernel) ? " (default)" : "");
 }
 
 unsigned long long ull(uint64_t n) {
@@ -29,12 +38,10 @@ unsigned long long ull(uint64_t n) {
 }
 
 void print_row(const std::string& mesh, const std::string& triangles, const Cell& c) {
-  std::printf("| %s | %s | %s | %s%s | %llu | %llu | %.3f | %llu | %llu | %llu |\n", mesh.c_str(),
-              triangles.c_str(), leaks::leak_path_name(c.path).c_str(),
-              std::string(kernel_name(c.kernel)).c_str(),
-              is_default(c.path, c.kernel) ? " (default)" : "", ull(c.counts.rays),
-              ull(c.counts.leaks), c.counts.percent(), ull(c.counts.inside_leaks),
-              ull(c.counts.outside_leaks), ull(c.counts.vertex_leaks));
+  std::printf("| %s | %s | %s | %s | %llu | %llu | %.3f | %llu | %llu | %llu |\n", mesh.c_str(),
+              triangles.c_str(), leaks::leak_path_name(c.path).c_str(), kernel_text(c).c_str(),
+              ull(c.counts.rays), ull(c.counts.leaks), c.counts.percent(),
+              ull(c.counts.inside_leaks), ull(c.counts.outside_leaks), ull(c.counts.vertex_leaks));
 }
 
 }  // namespace
@@ -57,8 +64,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--kernel", kernel_flags, "Only this kernel, repeatable (default: all)");
   app.add_option("--path", path_flags,
-                 "Only this path, repeatable: kernel, brute, bvh-single, bvh, 'bvh bundles' "
-                 "(default: all)");
+                 "Only this path, repeatable: kernel, brute, bvh-single, bvh, 'bvh bundles', "
+                 "embree, 'embree bundles', embree-robust, 'embree-robust bundles' (default: all "
+                 "this build has)");
   app.add_flag("--all-triangles", options.all_triangles,
                "Kernel alone: test every triangle of the mesh, not only those around the target");
   CLI11_PARSE(app, argc, argv);
@@ -74,29 +82,43 @@ int main(int argc, char** argv) {
     kernels.push_back(*k);
   }
   std::vector<leaks::LeakPath> paths = leaks::report_paths();
+  // Embree, for comparison, with its own kernel: plain and robust (RTC_SCENE_FLAG_ROBUST).
+  std::vector<leaks::LeakPath> embree_paths;
+  for (AccelKind kind : {AccelKind::kEmbree, AccelKind::kEmbreeRobust}) {
+    if (!accel_available(kind)) continue;
+    embree_paths.push_back({kind});
+    embree_paths.push_back({kind, /*bundles=*/true});
+  }
   if (!path_flags.empty()) {
-    std::vector<leaks::LeakPath> chosen;
-    for (const std::string& name : path_flags) {
-      const auto it = std::find_if(paths.begin(), paths.end(), [&](const leaks::LeakPath& p) {
-        return leaks::leak_path_name(p) == name;
+    auto keep = [&](std::vector<leaks::LeakPath>& list) {
+      std::erase_if(list, [&](const leaks::LeakPath& p) {
+        return std::find(path_flags.begin(), path_flags.end(), leaks::leak_path_name(p)) ==
+               path_flags.end();
       });
-      if (it == paths.end()) {
+    };
+    for (const std::string& name : path_flags) {
+      auto named = [&](const leaks::LeakPath& p) { return leaks::leak_path_name(p) == name; };
+      if (std::none_of(paths.begin(), paths.end(), named) &&
+          std::none_of(embree_paths.begin(), embree_paths.end(), named)) {
         std::fprintf(stderr, "tritrace_leaks: --path: unknown path '%s'\n", name.c_str());
         return 2;
       }
-      chosen.push_back(*it);
     }
-    paths = chosen;
+    keep(paths);
+    keep(embree_paths);
   }
 
   const auto start = std::chrono::steady_clock::now();
   std::printf(
       "| mesh | triangles | path | kernel | rays | leaks | %% | from inside | from outside | "
       "at vertices |\n|---|---|---|---|---|---|---|---|---|---|\n");
+  // The path x kernel grid first, then one cell per Embree path.
   std::vector<Cell> totals;
   for (const leaks::LeakPath& path : paths) {
     for (Kernel k : kernels) totals.push_back({path, k, {}});
   }
+  for (const leaks::LeakPath& path : embree_paths)
+    totals.push_back({path, Kernel::kWatertight, {}});
   for (const leaks::IndexedMesh& mesh : leaks::leak_test_meshes()) {
     std::vector<leaks::LeakRun> runs;
     for (const Cell& c : totals) {
@@ -133,6 +155,14 @@ int main(int argc, char** argv) {
     std::printf("\n");
   }
   std::printf("\nBold: the accel's default kernel (default_kernel_for).\n");
+  if (!embree_paths.empty()) {
+    std::printf("\n| Embree, its own kernel | leaks / rays |\n|---|---|\n");
+    for (size_t i = paths.size() * kernels.size(); i < totals.size(); ++i) {
+      const Cell& c = totals[i];
+      std::printf("| %s | %llu / %llu (%.3f%%) |\n", leaks::leak_path_name(c.path).c_str(),
+                  ull(c.counts.leaks), ull(c.counts.rays), c.counts.percent());
+    }
+  }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::fprintf(stderr, "tritrace_leaks: %.1f s\n", seconds);
