@@ -37,9 +37,8 @@ void add_scene_flags(CLI::App& app, SceneFlags& flags) {
       ->check(checked(check_accel));
   app.add_option("--kernel", flags.kernel,
                  "Ray/triangle intersection: " + kernel_list() +
-                     " (default: watertight with --accel brute, where it costs 1.06x; "
-                     "moller-trumbore with bvh, whose SIMD leaves and packets have only that "
-                     "kernel; watertight lets no ray through shared edges)")
+                     " (default: watertight, which lets no ray through shared edges, for every "
+                     "accel; Embree always uses its own)")
       ->type_name("NAME")
       ->check(checked(check_kernel));
   app.add_option("--yaw", flags.yaw,

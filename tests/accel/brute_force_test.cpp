@@ -116,12 +116,11 @@ INSTANTIATE_TEST_SUITE_P(AllKernels, BruteForceTest, ::testing::ValuesIn(kAllKer
 namespace tritrace {
 namespace {
 
-// Issue 6's rule: watertight where it costs within 15% of Möller–Trumbore (brute force), the
-// SIMD Möller–Trumbore where the BVH has nothing else yet (docs/PERFORMANCE.md).
-TEST(DefaultKernel, WatertightForBruteForceMollerTrumboreForTheBvh) {
+// Issue 10: watertight on every accel tritrace implements, so that they agree by default.
+TEST(DefaultKernel, WatertightForEveryAccel) {
   EXPECT_EQ(default_kernel_for(AccelKind::kBrute), Kernel::kWatertight);
-  EXPECT_EQ(default_kernel_for(AccelKind::kBvh), Kernel::kMollerTrumbore);
-  EXPECT_EQ(default_kernel_for(AccelKind::kBvhSingle), Kernel::kMollerTrumbore);
+  EXPECT_EQ(default_kernel_for(AccelKind::kBvh), Kernel::kWatertight);
+  EXPECT_EQ(default_kernel_for(AccelKind::kBvhSingle), Kernel::kWatertight);
 }
 
 }  // namespace

@@ -62,8 +62,8 @@ std::vector<AccelKind> available_accels() {
   return out;
 }
 
-Kernel default_kernel_for(AccelKind kind) {
-  return kind == AccelKind::kBrute ? Kernel::kWatertight : kDefaultKernel;
+Kernel default_kernel_for(AccelKind /*kind*/) {
+  return kDefaultKernel;
 }
 
 std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kernel kernel,

@@ -27,12 +27,11 @@ std::optional<AccelKind> parse_accel(std::string_view name);
 bool accel_available(AccelKind kind);  // Embree only when built with it
 std::vector<AccelKind> available_accels();
 
-// The kernel used when none is asked for. Issue 6's rule: the watertight kernel wherever it costs
-// within 15% of Möller–Trumbore. Brute force prepares each ray once, where it costs 1.06x, so it
-// is watertight's; the BVH's packets and SIMD leaves exist for Möller–Trumbore only, where the
-// watertight kernel makes frames about 4x slower (docs/PERFORMANCE.md), so the BVH keeps
-// Möller–Trumbore (kDefaultKernel) until its leaves have a SIMD watertight version. Embree uses
-// its own kernel whatever is asked.
+// The kernel used when none is asked for: the watertight kernel for every accel tritrace
+// implements (brute, bvh, bvh-single), so that they write byte-identical images by default. Issue
+// 6's rule was "watertight wherever it costs within 15% of Möller–Trumbore"; with SIMD watertight
+// leaves and packets the BVH meets it too (docs/PERFORMANCE.md). Embree uses its own kernel
+// whatever is asked.
 Kernel default_kernel_for(AccelKind kind);
 
 struct AccelInfo {

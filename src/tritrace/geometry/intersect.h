@@ -22,12 +22,10 @@ enum class Kernel { kInverse, kCramer, kMollerTrumbore, kWatertight };
 inline constexpr std::array<Kernel, 4> kAllKernels = {Kernel::kInverse, Kernel::kCramer,
                                                       Kernel::kMollerTrumbore, Kernel::kWatertight};
 
-// Measured fastest (docs/PERFORMANCE.md), and the BVH's default. The watertight kernel costs
-// within 15% of it in a loop that prepares each ray once, so brute force defaults to it
-// (default_kernel_for in accel/make_accel.h); the BVH calls it through the per-triangle entry point
-// and has packet code for Möller–Trumbore only (4x slower frames), so it stays on Möller–Trumbore
-// until its leaves get a SIMD watertight version.
-inline constexpr Kernel kDefaultKernel = Kernel::kMollerTrumbore;
+// The default everywhere: no ray slips between two triangles that share an edge or a vertex. The
+// BVH runs it in SIMD leaves and packets at within a few percent of Möller–Trumbore, the fastest
+// kernel, and brute force at 1.06x (docs/PERFORMANCE.md).
+inline constexpr Kernel kDefaultKernel = Kernel::kWatertight;
 
 // "inverse", "cramer", "moller-trumbore", "watertight"
 std::string_view kernel_name(Kernel kernel);
@@ -285,6 +283,7 @@ class PreparedRay<Kernel::kWatertight> {
   bool intersect(const TriangleArrays& tris, size_t i, TriangleHit& out) const {
     return intersect_watertight(ray_, tris.v0[i], tris.v1[i], tris.v2[i], out);
   }
+  const WatertightRay& watertight() const { return ray_; }
 
  private:
   WatertightRay ray_;

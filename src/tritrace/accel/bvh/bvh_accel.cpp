@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cassert>
 #include <cmath>
 
 #if defined(__AVX2__)
@@ -29,24 +30,30 @@ using bvh::kStackSize;
 using bvh::offer;
 #if defined(__AVX2__)
 using bvh::block_moller_trumbore;
+using bvh::block_watertight;
 #endif
 
-// Per-ray constants of the box test: the inverse direction, and for each axis which of a node's
-// lo/hi arrays is the near plane (offsets in floats from WideNode::lo_x).
+// Per-ray constants of the box test: the inverse direction, for each axis which of a node's lo/hi
+// arrays is the near plane (offsets in floats from WideNode::lo_x), and the origin moved by the
+// ray's padding (bvh::origin_padding): forward for near distances, back for far ones, so every box
+// is tested as if grown by the padding on each side.
 struct RayBoxSetup {
-  glm::vec3 origin, inv_dir;
+  glm::vec3 origin_near, origin_far, inv_dir;
   int near_off[3], far_off[3];
 };
 
 RayBoxSetup box_setup(const Ray& ray) {
   RayBoxSetup s;
-  s.origin = ray.origin;
+  const glm::vec3 mag = glm::abs(ray.origin);
+  const float pad = bvh::origin_padding(std::max({mag.x, mag.y, mag.z}));
   for (int a = 0; a < 3; ++a) {
     s.inv_dir[a] = 1.0f / ray.dir[a];  // +-inf for a zero component, by its sign
     const int lo = 16 * a, hi = 16 * a + 8;
     const bool negative = std::signbit(s.inv_dir[a]);
     s.near_off[a] = negative ? hi : lo;
     s.far_off[a] = negative ? lo : hi;
+    s.origin_near[a] = negative ? ray.origin[a] - pad : ray.origin[a] + pad;
+    s.origin_far[a] = negative ? ray.origin[a] + pad : ray.origin[a] - pad;
   }
   return s;
 }
@@ -60,10 +67,10 @@ inline uint32_t intersect_boxes(const WideNode& node, const RayBoxSetup& s, floa
   __m256 tn = _mm256_set1_ps(tmin);
   __m256 tf = _mm256_set1_ps(tmax);
   for (int a = 0; a < 3; ++a) {
-    const __m256 o = _mm256_set1_ps(s.origin[a]);
+    const __m256 on = _mm256_set1_ps(s.origin_near[a]), of = _mm256_set1_ps(s.origin_far[a]);
     const __m256 inv = _mm256_set1_ps(s.inv_dir[a]);
-    const __m256 n = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(base + s.near_off[a]), o), inv);
-    const __m256 f = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(base + s.far_off[a]), o), inv);
+    const __m256 n = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(base + s.near_off[a]), on), inv);
+    const __m256 f = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(base + s.far_off[a]), of), inv);
     tn = _mm256_max_ps(n, tn);  // returns tn when n is NaN
     tf = _mm256_min_ps(f, tf);
   }
@@ -75,8 +82,8 @@ inline uint32_t intersect_boxes(const WideNode& node, const RayBoxSetup& s, floa
   for (int i = 0; i < kWidth; ++i) {
     float tn = tmin, tf = tmax;
     for (int a = 0; a < 3; ++a) {
-      const float n = (base[s.near_off[a] + i] - s.origin[a]) * s.inv_dir[a];
-      const float f = (base[s.far_off[a] + i] - s.origin[a]) * s.inv_dir[a];
+      const float n = (base[s.near_off[a] + i] - s.origin_near[a]) * s.inv_dir[a];
+      const float f = (base[s.far_off[a] + i] - s.origin_far[a]) * s.inv_dir[a];
       tn = n > tn ? n : tn;
       tf = f < tf ? f : tf;
     }
@@ -113,6 +120,7 @@ inline bool intersect_block(const TriangleBlock& b, const TriangleArrays& tris, 
                             const PreparedRay<K>& prepared, Hit* best) {
 #if defined(__AVX2__)
   if constexpr (K == Kernel::kMollerTrumbore) return block_moller_trumbore(b, ray, best);
+  if constexpr (K == Kernel::kWatertight) return block_watertight(b, prepared.watertight(), best);
 #endif
   return block_scalar<K>(b, tris, prepared, best);
 }
@@ -164,6 +172,7 @@ Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray)
           for (; j > 0 && hits[j - 1].t < e.t; --j) hits[j] = hits[j - 1];
           hits[j] = e;
         }
+        assert(sp + n - 1 <= kStackSize);  // the builder bounds the depth (wide_bvh.h)
         for (int i = 0; i < n - 1; ++i) stack[sp++] = hits[i];
         ref = hits[n - 1].ref;
         continue;
@@ -196,6 +205,7 @@ bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray) {
       const WideNode& node = tree.nodes[ref];
       uint32_t mask = intersect_boxes(node, setup, ray.tmin, ray.tmax, tnear);
       while (mask) {
+        assert(sp < kStackSize);
         stack[sp++] = node.child[std::countr_zero(mask)];
         mask &= mask - 1;
       }
@@ -221,14 +231,14 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConf
     : mesh_(mesh),
       bvh_(bvh::build_wide_bvh(mesh, config)),
       kernel_(kernel),
-      packets_(traversal == BvhTraversal::kAuto && bvh::kPacketSize > 0 &&
-               kernel == Kernel::kMollerTrumbore) {}
+      packets_(traversal == BvhTraversal::kAuto && bvh::has_packet_kernel(kernel)) {}
 
 void BvhAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
   if constexpr (bvh::kPacketSize > 0) {
     if (packets_) {
-      for_each_packet(rays, hits,
-                      [&](auto packet, auto out) { bvh::intersect_packet(bvh_, packet, out); });
+      for_each_packet(rays, hits, [&](auto packet, auto out) {
+        bvh::intersect_packet(bvh_, kernel_, packet, out);
+      });
       return;
     }
   }
@@ -241,8 +251,9 @@ void BvhAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
 void BvhAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
   if constexpr (bvh::kPacketSize > 0) {
     if (packets_) {
-      for_each_packet(rays, occluded,
-                      [&](auto packet, auto out) { bvh::occluded_packet(bvh_, packet, out); });
+      for_each_packet(rays, occluded, [&](auto packet, auto out) {
+        bvh::occluded_packet(bvh_, kernel_, packet, out);
+      });
       return;
     }
   }

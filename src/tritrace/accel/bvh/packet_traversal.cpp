@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cassert>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -39,12 +40,35 @@ struct Frustum {
 
 struct Packet {
   VF o[3], d[3], inv[3];
+  // The origin moved by the lane's padding (origin_padding in wide_bvh.h): forward along the
+  // direction for near slab distances, back for far ones, so boxes are tested grown by it.
+  VF o_near[3], o_far[3];
   VF tmin, tmax;
   VM negative[3];
   // Per axis: 0 all directions positive, 1 all negative, -1 mixed (then blend per lane).
   int sign[3];
   uint32_t active;
   Frustum frustum;
+  // The watertight kernel's per-ray set-up (prepare_watertight), lane by lane, when loaded for it:
+  // the origin in the permuted order (kx, ky, kz), the shear (sx, sy, sz), the dominant axis as
+  // masks, and that axis when every active lane shares it (else -1: vertices are permuted per
+  // lane).
+  VF wt_o[3], wt_s[3];
+  VM kz_is_1, kz_is_2;
+  int kz_uniform = 2;
+  // The same set-up stored per lane, for the scalar kernel on single lanes.
+  alignas(64) float lane_o[3][W], lane_s[3][W], lane_tmin[W], lane_tmax[W];
+  alignas(64) int32_t lane_kz[W];
+
+  WatertightRay lane_ray(int l) const {
+    WatertightRay r;
+    r.kz = lane_kz[l];
+    r.ox = lane_o[0][l], r.oy = lane_o[1][l], r.oz = lane_o[2][l];
+    r.sx = lane_s[0][l], r.sy = lane_s[1][l], r.sz = lane_s[2][l];
+    r.tmin = lane_tmin[l];
+    r.tmax = lane_tmax[l];
+    return r;
+  }
 };
 
 static_assert(sizeof(Ray) == 8 * sizeof(float) && offsetof(Ray, dir) == 3 * sizeof(float) &&
@@ -55,7 +79,10 @@ inline VM finite(VF x) {
 }  // NaN and +-inf give NaN
 
 // Transposes up to W rays into lanes (a Ray is one row of 8 floats). Lanes past the batch, or with
-// a non-finite ray or an empty interval, get an empty interval and never hit anything.
+// a non-finite ray or an empty interval, get an empty interval and never hit anything; so do lanes
+// that the watertight kernel's set-up rejects (a zero or overflowing direction), as
+// prepare_watertight does for a single ray.
+template <Kernel K>
 Packet load_packet(std::span<const Ray> rays, bool with_frustum) {
   const int count = static_cast<int>(rays.size());
   // A lane past the batch reads this ray: an empty interval.
@@ -71,8 +98,40 @@ Packet load_packet(std::span<const Ray> rays, bool with_frustum) {
   const VF tmin = column[6], tmax = column[7];
   VM ok = first_lanes(count) & (tmin <= tmax);
   for (int a = 0; a < 3; ++a) ok = ok & finite(o[a]) & finite(d[a]);
+
+  if constexpr (K == Kernel::kWatertight) {
+    // prepare_watertight, lane by lane: the same comparisons, division and product.
+    const VF ax = abs(d[0]), ay = abs(d[1]), az = abs(d[2]);
+    const VM y_over_x = ay > ax;
+    p.kz_is_2 = az > vmax(ax, ay);
+    p.kz_is_1 = andnot(p.kz_is_2, y_over_x);
+    const VM k1 = p.kz_is_1, k2 = p.kz_is_2;
+    // kz = 0: (kx, ky) = (1, 2); kz = 1: (2, 0); kz = 2: (0, 1).
+    auto permute = [&](const VF v[3], VF out[3]) {
+      out[0] = select(k2, v[0], select(k1, v[2], v[1]));
+      out[1] = select(k2, v[1], select(k1, v[0], v[2]));
+      out[2] = select(k2, v[2], select(k1, v[1], v[0]));
+    };
+    VF dp[3];
+    permute(o, p.wt_o);
+    permute(d, dp);
+    p.wt_s[2] = splat(1.0f) / dp[2];
+    p.wt_s[0] = dp[0] * p.wt_s[2];
+    p.wt_s[1] = dp[1] * p.wt_s[2];
+    ok = ok & finite(p.wt_s[0]) & finite(p.wt_s[1]) & finite(p.wt_s[2]) &
+         not_equal(p.wt_s[2], splat(0.0f));
+    const uint32_t on = bits(ok), one = bits(k1) & on, two = bits(k2) & on;
+    p.kz_uniform = two == on ? 2 : one == on ? 1 : (one | two) == 0 ? 0 : -1;
+    for (int a = 0; a < 3; ++a) {
+      store(p.lane_o[a], p.wt_o[a]);
+      store(p.lane_s[a], p.wt_s[a]);
+    }
+    store(p.lane_kz, select(k2, splat_i(2), select(k1, splat_i(1), splat_i(0))));
+  }
+
   p.active = bits(ok);
   const uint32_t all = (1u << W) - 1;
+  VF largest = splat(0.0f);
   for (int a = 0; a < 3; ++a) {
     p.o[a] = select(ok, o[a], splat(0.0f));
     p.d[a] = select(ok, d[a], splat(a == 2 ? 1.0f : 0.0f));
@@ -80,15 +139,27 @@ Packet load_packet(std::span<const Ray> rays, bool with_frustum) {
     p.negative[a] = signbit(p.inv[a]);
     const uint32_t neg = bits(p.negative[a]);
     p.sign[a] = neg == 0 ? 0 : neg == all ? 1 : -1;
+    largest = vmax(largest, abs(p.o[a]));
+  }
+  const VF pad = splat(kOriginPadding) * largest;
+  for (int a = 0; a < 3; ++a) {
+    p.o_near[a] = select(p.negative[a], p.o[a] - pad, p.o[a] + pad);
+    p.o_far[a] = select(p.negative[a], p.o[a] + pad, p.o[a] - pad);
   }
   p.tmin = select(ok, tmin, splat(kInf));
   p.tmax = select(ok, tmax, splat(-kInf));
+  if constexpr (K == Kernel::kWatertight) {
+    store(p.lane_tmin, p.tmin);
+    store(p.lane_tmax, p.tmax);
+  }
 
   Frustum& f = p.frustum;
   f.usable = with_frustum && p.active != 0;
+  const float pad_hi = hmax(select(ok, pad, splat(0.0f)));
   for (int a = 0; a < 3 && f.usable; ++a) {
-    const float o_lo = hmin(select(ok, p.o[a], splat(kInf)));
-    const float o_hi = hmax(select(ok, p.o[a], splat(-kInf)));
+    // The origins' range widened by the largest padding covers every lane's moved origins.
+    const float o_lo = hmin(select(ok, p.o[a], splat(kInf))) - pad_hi;
+    const float o_hi = hmax(select(ok, p.o[a], splat(-kInf))) + pad_hi;
     const float inv_lo = hmin(select(ok, p.inv[a], splat(kInf)));
     const float inv_hi = hmax(select(ok, p.inv[a], splat(-kInf)));
     // Finite bounds (a zero direction component has an infinite inverse) of one sign.
@@ -145,30 +216,36 @@ inline VM hit_box(const WideNode& node, int c, const Packet& p, VF tfar, VF& tne
       near = select(p.negative[a], splat(hi[a]), splat(lo[a]));
       far = select(p.negative[a], splat(lo[a]), splat(hi[a]));
     }
-    tn = vmax((near - p.o[a]) * p.inv[a], tn);  // a NaN slab distance leaves tn as it was
-    tf = vmin((far - p.o[a]) * p.inv[a], tf);
+    tn = vmax((near - p.o_near[a]) * p.inv[a], tn);  // a NaN slab distance leaves tn as it was
+    tf = vmin((far - p.o_far[a]) * p.inv[a], tf);
   }
   tnear = tn;
   return tn <= tf * splat(kFarScale);
 }
 
-// Möller–Trumbore of one triangle against every ray of the packet, lane for lane the scalar
-// kernel's operations (intersect_moller_trumbore) in the same order.
+// One triangle of a block against every ray of the packet: `ok` where the kernel reports a hit,
+// and for the watertight kernel `exact` where a lane needs the scalar kernel's exact fallback.
 struct TriangleHits {
   VM ok;
   VF t, u, v;
+  uint32_t exact = 0;
 };
+
+// Möller–Trumbore, lane for lane the scalar kernel's operations (intersect_moller_trumbore) in the
+// same order; the edges are the mesh's e1 and e2 bit for bit (TriangleBlock).
 inline TriangleHits moller_trumbore(const TriangleBlock& b, int l, const Packet& p) {
-  const VF e1x = splat(b.e1x[l]), e1y = splat(b.e1y[l]), e1z = splat(b.e1z[l]);
-  const VF e2x = splat(b.e2x[l]), e2y = splat(b.e2y[l]), e2z = splat(b.e2z[l]);
+  const float v0[3] = {b.vertex[0][0][l], b.vertex[0][1][l], b.vertex[0][2][l]};
+  const VF e1x = splat(b.vertex[1][0][l] - v0[0]), e1y = splat(b.vertex[1][1][l] - v0[1]),
+           e1z = splat(b.vertex[1][2][l] - v0[2]);
+  const VF e2x = splat(b.vertex[2][0][l] - v0[0]), e2y = splat(b.vertex[2][1][l] - v0[1]),
+           e2z = splat(b.vertex[2][2][l] - v0[2]);
   const VF &dx = p.d[0], &dy = p.d[1], &dz = p.d[2];
   const VF px = dy * e2z - e2y * dz;
   const VF py = dz * e2x - e2z * dx;
   const VF pz = dx * e2y - e2x * dy;
   const VF det = (e1x * px + e1y * py) + e1z * pz;
   const VF inv_det = splat(1.0f) / det;
-  const VF sx = p.o[0] - splat(b.v0x[l]), sy = p.o[1] - splat(b.v0y[l]),
-           sz = p.o[2] - splat(b.v0z[l]);
+  const VF sx = p.o[0] - splat(v0[0]), sy = p.o[1] - splat(v0[1]), sz = p.o[2] - splat(v0[2]);
   const VF u = ((sx * px + sy * py) + sz * pz) * inv_det;
   const VF qx = sy * e1z - e1y * sz;
   const VF qy = sz * e1x - e1z * sx;
@@ -179,6 +256,93 @@ inline TriangleHits moller_trumbore(const TriangleBlock& b, int l, const Packet&
   const VM ok = not_equal(det, zero) & (u >= zero) & (u <= one) & (v >= zero) & (u + v <= one) &
                 (t >= p.tmin) & (t <= p.tmax);
   return {ok, t, u, v};
+}
+
+// The watertight kernel (intersect_watertight), lane for lane the scalar kernel's operations on the
+// lane's own set-up. Kz is the dominant axis shared by every lane, or -1 when lanes differ: then
+// each lane picks its permutation of the vertex coordinates with selects.
+template <int Kz>
+inline TriangleHits watertight(const TriangleBlock& b, int l, const Packet& p) {
+  VF x[3], y[3], z[3];
+  for (int c = 0; c < 3; ++c) {
+    VF pk[3];  // the vertex in the lane's (kx, ky, kz) order
+    if constexpr (Kz >= 0) {
+      pk[0] = splat(b.vertex[c][(Kz + 1) % 3][l]);
+      pk[1] = splat(b.vertex[c][(Kz + 2) % 3][l]);
+      pk[2] = splat(b.vertex[c][Kz][l]);
+    } else {
+      const VF vx = splat(b.vertex[c][0][l]), vy = splat(b.vertex[c][1][l]),
+               vz = splat(b.vertex[c][2][l]);
+      pk[0] = select(p.kz_is_2, vx, select(p.kz_is_1, vz, vy));
+      pk[1] = select(p.kz_is_2, vy, select(p.kz_is_1, vx, vz));
+      pk[2] = select(p.kz_is_2, vz, select(p.kz_is_1, vy, vx));
+    }
+    z[c] = pk[2] - p.wt_o[2];
+    x[c] = (pk[0] - p.wt_o[0]) - p.wt_s[0] * z[c];
+    y[c] = (pk[1] - p.wt_o[1]) - p.wt_s[1] * z[c];
+  }
+  const VF u = x[2] * y[1] - y[2] * x[1];
+  const VF v = x[0] * y[2] - y[0] * x[2];
+  const VF w = x[1] * y[0] - y[1] * x[0];
+  const VF zero = splat(0.0f);
+  const VM on_edge = (u == zero) | (v == zero) | (w == zero);
+  const VM inside =
+      ((u >= zero) & (v >= zero) & (w >= zero)) | ((u <= zero) & (v <= zero) & (w <= zero));
+  const VF det = (u + v) + w;
+  const VF inv_det = splat(1.0f) / det;
+  const VF t = ((u * z[0] + v * z[1]) + w * z[2]) * (p.wt_s[2] * inv_det);
+  const VM ok = andnot(on_edge, inside) & not_equal(det, zero) & (t >= p.tmin) & (t <= p.tmax);
+  return {ok, t, v * inv_det, w * inv_det, bits(on_edge) & p.active};
+}
+
+template <Kernel K, int Kz>
+inline TriangleHits test_triangle(const TriangleBlock& b, int l, const Packet& p) {
+  if constexpr (K == Kernel::kWatertight) {
+    return watertight<Kz>(b, l, p);
+  } else {
+    return moller_trumbore(b, l, p);
+  }
+}
+
+// The scalar watertight kernel for lane `lane` against the block's triangle `l`: the exact
+// fallback for rays through an edge or a vertex.
+inline bool lane_watertight(const Packet& p, int lane, const TriangleBlock& b, int l,
+                            TriangleHit& out) {
+  const glm::vec3 v0(b.vertex[0][0][l], b.vertex[0][1][l], b.vertex[0][2][l]);
+  const glm::vec3 v1(b.vertex[1][0][l], b.vertex[1][1][l], b.vertex[1][2][l]);
+  const glm::vec3 v2(b.vertex[2][0][l], b.vertex[2][1][l], b.vertex[2][2][l]);
+  return intersect_watertight(p.lane_ray(lane), v0, v1, v2, out);
+}
+
+// One ray of the packet against a whole block with the single-ray block kernel.
+template <Kernel K>
+inline bool lane_block(const Packet& p, int lane, const Ray& ray, const TriangleBlock& b,
+                       Hit* best) {
+  if constexpr (K == Kernel::kWatertight) {
+    return block_watertight(b, p.lane_ray(lane), best);
+  } else {
+    return block_moller_trumbore(b, ray, best);
+  }
+}
+
+// Calls fn.template operator()<Kz>() with the packet's shared dominant axis (watertight only), so
+// that a leaf's loop over its triangles is compiled once per axis.
+template <Kernel K, typename Fn>
+inline void with_axis(const Packet& p, Fn&& fn) {
+  if constexpr (K == Kernel::kWatertight) {
+    switch (p.kz_uniform) {
+      case 0:
+        return fn.template operator()<0>();
+      case 1:
+        return fn.template operator()<1>();
+      case 2:
+        return fn.template operator()<2>();
+      default:
+        return fn.template operator()<-1>();
+    }
+  } else {
+    fn.template operator()<2>();
+  }
 }
 
 // The children worth a per-ray box test: those the packet's frustum may hit where the frustum is
@@ -242,12 +406,22 @@ struct LaneHits {
   }
 };
 
-void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<Hit> hits) {
-  const Packet p = load_packet(rays, wants_frustum(tree));
+namespace {
+
+template <Kernel K>
+void intersect_packet_with(const WideBvh& tree, std::span<const Ray> rays, std::span<Hit> hits) {
+  const Packet p = load_packet<K>(rays, wants_frustum(tree));
   // Each lane's best hit so far; (t, prim) ordered lexicographically as in brute force. Starting
   // at tmax makes the box test's far limit simply best_t.
   VF best_t = p.tmax, best_u = splat(0.0f), best_v = splat(0.0f);
   VI best_prim = splat_i(kNoPrim);
+  auto set_lane = [&](int l, const Hit& h) {
+    const VM lane = single_lane(l);
+    best_t = select(lane, splat(h.t), best_t);
+    best_u = select(lane, splat(h.u), best_u);
+    best_v = select(lane, splat(h.v), best_v);
+    best_prim = select(lane, splat_i(static_cast<int32_t>(h.prim)), best_prim);
+  };
 
   if (!tree.nodes.empty() && p.active) {
     Entry stack[kStackSize];
@@ -265,29 +439,39 @@ void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<
             const int l = std::countr_zero(m);
             const Hit before = current[static_cast<size_t>(l)];
             Hit h = before;
-            block_moller_trumbore(b, rays[static_cast<size_t>(l)], &h);
+            lane_block<K>(p, l, rays[static_cast<size_t>(l)], b, &h);
             if (h.prim == before.prim && h.t == before.t) continue;
-            const VM lane = single_lane(l);
-            best_t = select(lane, splat(h.t), best_t);
-            best_u = select(lane, splat(h.u), best_u);
-            best_v = select(lane, splat(h.v), best_v);
-            best_prim = select(lane, splat_i(static_cast<int32_t>(h.prim)), best_prim);
+            set_lane(l, h);
           }
           farthest_best = hmax(best_t);
           goto pop;
         }
-        for (int l = 0; l < kWidth; ++l) {
-          if (b.prim[l] == kNoHit) continue;
-          const TriangleHits h = moller_trumbore(b, l, p);
-          if (!bits(h.ok)) continue;
-          const VI prim = splat_i(static_cast<int32_t>(b.prim[l]));
-          const VM closer = (h.t < best_t) | ((h.t == best_t) & (best_prim > prim));
-          const VM take = h.ok & closer;
-          best_t = select(take, h.t, best_t);
-          best_u = select(take, h.u, best_u);
-          best_v = select(take, h.v, best_v);
-          best_prim = select(take, prim, best_prim);
-        }
+        with_axis<K>(p, [&]<int Kz>() {
+          for (int l = 0; l < kWidth; ++l) {
+            if (b.prim[l] == kNoHit) continue;
+            const TriangleHits h = test_triangle<K, Kz>(b, l, p);
+            if (h.exact) [[unlikely]] {
+              // Lanes through an edge or vertex of this triangle: the scalar kernel decides.
+              const LaneHits current(best_t, best_u, best_v, best_prim);
+              for (uint32_t m = h.exact; m; m &= m - 1) {
+                const int lane = std::countr_zero(m);
+                TriangleHit th;
+                if (!lane_watertight(p, lane, b, l, th)) continue;
+                Hit best = current[static_cast<size_t>(lane)];
+                offer(best, th.t, th.u, th.v, b.prim[l]);
+                if (best.prim == b.prim[l]) set_lane(lane, best);
+              }
+            }
+            if (!bits(h.ok)) continue;
+            const VI prim = splat_i(static_cast<int32_t>(b.prim[l]));
+            const VM closer = (h.t < best_t) | ((h.t == best_t) & (best_prim > prim));
+            const VM take = h.ok & closer;
+            best_t = select(take, h.t, best_t);
+            best_u = select(take, h.u, best_u);
+            best_v = select(take, h.v, best_v);
+            best_prim = select(take, prim, best_prim);
+          }
+        });
         farthest_best = hmax(best_t);
       } else {
         const WideNode& node = tree.nodes[ref];
@@ -307,6 +491,7 @@ void intersect_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<
           insert({node.child[c], hmin(select(hit, tn, splat(kInf))), bits(hit)});
         }
         if (n > 0) {
+          assert(sp + n - 1 <= kStackSize);  // the builder bounds the depth (wide_bvh.h)
           for (int i = 0; i < n - 1; ++i) stack[sp++] = near[i];
           ref = near[n - 1].ref;
           lanes = near[n - 1].lanes;
@@ -328,10 +513,17 @@ done:
   for (size_t l = 0; l < rays.size(); ++l) hits[l] = best[l].found() ? best[l] : Hit{};
 }
 
-void occluded_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<uint8_t> occluded) {
-  Packet p = load_packet(rays, wants_frustum(tree));
+template <Kernel K>
+void occluded_packet_with(const WideBvh& tree, std::span<const Ray> rays,
+                          std::span<uint8_t> occluded) {
+  Packet p = load_packet<K>(rays, wants_frustum(tree));
   uint32_t blocked = 0;
   float farthest_tmax = hmax(p.tmax);  // over the rays not yet blocked
+  // Blocked rays are done: an empty interval takes them out of every later test.
+  auto block = [&](VM lanes) {
+    blocked |= bits(lanes);
+    p.tmax = select(lanes, splat(-kInf), p.tmax);
+  };
   if (!tree.nodes.empty() && p.active) {
     uint32_t stack[kStackSize], stack_lanes[kStackSize];
     int sp = 0;
@@ -343,20 +535,25 @@ void occluded_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<u
         if (std::popcount(open) <= kSingleRayLeafLanes) {
           for (uint32_t m = open; m; m &= m - 1) {
             const int l = std::countr_zero(m);
-            if (!block_moller_trumbore(b, rays[static_cast<size_t>(l)], nullptr)) continue;
-            blocked |= 1u << l;
-            p.tmax = select(single_lane(l), splat(-kInf), p.tmax);
+            if (lane_block<K>(p, l, rays[static_cast<size_t>(l)], b, nullptr)) {
+              block(single_lane(l));
+            }
           }
         } else {
-          for (int l = 0; l < kWidth; ++l) {
-            if (b.prim[l] == kNoHit) continue;
-            const TriangleHits h = moller_trumbore(b, l, p);
-            const uint32_t now = bits(h.ok);
-            if (!now) continue;
-            blocked |= now;
-            // Blocked rays are done: an empty interval takes them out of every later test.
-            p.tmax = select(h.ok, splat(-kInf), p.tmax);
-          }
+          with_axis<K>(p, [&]<int Kz>() {
+            for (int l = 0; l < kWidth; ++l) {
+              if (b.prim[l] == kNoHit) continue;
+              const TriangleHits h = test_triangle<K, Kz>(b, l, p);
+              if (h.exact) [[unlikely]] {
+                for (uint32_t m = h.exact & ~blocked; m; m &= m - 1) {
+                  const int lane = std::countr_zero(m);
+                  TriangleHit th;
+                  if (lane_watertight(p, lane, b, l, th)) block(single_lane(lane));
+                }
+              }
+              if (bits(h.ok)) block(h.ok);
+            }
+          });
         }
         if ((blocked & p.active) == p.active) break;
         farthest_tmax = hmax(p.tmax);
@@ -368,6 +565,7 @@ void occluded_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<u
           const uint32_t hit = bits(hit_box(node, c, p, p.tmax, tn));
           if (hit) {
             prefetch_child(tree, node.child[c]);
+            assert(sp < kStackSize);  // the builder bounds the depth (wide_bvh.h)
             stack_lanes[sp] = hit;
             stack[sp++] = node.child[c];
           }
@@ -380,6 +578,26 @@ void occluded_packet(const WideBvh& tree, std::span<const Ray> rays, std::span<u
     }
   }
   for (size_t l = 0; l < rays.size(); ++l) occluded[l] = (blocked >> l) & 1u;
+}
+
+}  // namespace
+
+void intersect_packet(const WideBvh& tree, Kernel kernel, std::span<const Ray> rays,
+                      std::span<Hit> hits) {
+  if (kernel == Kernel::kWatertight) {
+    intersect_packet_with<Kernel::kWatertight>(tree, rays, hits);
+  } else {
+    intersect_packet_with<Kernel::kMollerTrumbore>(tree, rays, hits);
+  }
+}
+
+void occluded_packet(const WideBvh& tree, Kernel kernel, std::span<const Ray> rays,
+                     std::span<uint8_t> occluded) {
+  if (kernel == Kernel::kWatertight) {
+    occluded_packet_with<Kernel::kWatertight>(tree, rays, occluded);
+  } else {
+    occluded_packet_with<Kernel::kMollerTrumbore>(tree, rays, occluded);
+  }
 }
 
 }  // namespace tritrace::bvh

@@ -26,10 +26,12 @@ constexpr float kBoxPadding = 0x1p-16f;
 
 Bounds3 widened_triangle_bounds(const TriangleMesh& mesh, size_t tri, float pad) {
   Bounds3 b = mesh.triangle_bounds(tri);
-  if (!(std::isfinite(b.area()) &&
-        std::isfinite(b.lo.x + b.lo.y + b.lo.z + b.hi.x + b.hi.y + b.hi.z))) {
+  bool finite = true;
+  for (int a = 0; a < 3; ++a) finite = finite && std::isfinite(b.lo[a]) && std::isfinite(b.hi[a]);
+  if (!finite) {
     // A triangle with a non-finite vertex can never be hit (every kernel's test fails on NaN);
-    // a point box keeps the build's arithmetic finite.
+    // a point box keeps the build's arithmetic finite. Only the coordinates are checked: a finite
+    // triangle whose box area overflows float is still a real triangle that brute force can hit.
     return Bounds3{glm::vec3(0.0f), glm::vec3(0.0f)};
   }
   constexpr float inf = std::numeric_limits<float>::infinity();
@@ -71,16 +73,14 @@ class Collapser {
   uint32_t make_block(const BinaryNode& leaf) {
     const uint32_t index = static_cast<uint32_t>(out_.blocks.size());
     TriangleBlock& b = out_.blocks.emplace_back();
+    constexpr float nan = std::numeric_limits<float>::quiet_NaN();
     for (int lane = 0; lane < kWidth; ++lane) {
       const bool used = lane < static_cast<int>(leaf.count);
       const uint32_t p = used ? tree_.prim_index[leaf.first + lane] : 0;
-      // Padding lanes are zero-area triangles at the origin: every kernel rejects them.
-      const glm::vec3 v0 = used ? mesh_.v0()[p] : glm::vec3(0.0f);
-      const glm::vec3 e1 = used ? mesh_.e1()[p] : glm::vec3(0.0f);
-      const glm::vec3 e2 = used ? mesh_.e2()[p] : glm::vec3(0.0f);
-      b.v0x[lane] = v0.x, b.v0y[lane] = v0.y, b.v0z[lane] = v0.z;
-      b.e1x[lane] = e1.x, b.e1y[lane] = e1.y, b.e1z[lane] = e1.z;
-      b.e2x[lane] = e2.x, b.e2y[lane] = e2.y, b.e2z[lane] = e2.z;
+      for (int corner = 0; corner < 3; ++corner) {
+        const glm::vec3 v = used ? mesh_.vertex(p, corner) : glm::vec3(nan);
+        for (int axis = 0; axis < 3; ++axis) b.vertex[corner][axis][lane] = v[axis];
+      }
       b.prim[lane] = used ? p : kNoHit;
     }
     return index;

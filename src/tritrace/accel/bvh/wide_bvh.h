@@ -1,6 +1,6 @@
 // WideBvh: the traversal layout. Eight children per node with their boxes as structure of arrays
-// (one AVX register per bound), and leaves of up to eight triangles stored as one SIMD block in the
-// kernels' (v0, e1, e2) form. Made from the binary reference tree of binned_sah_builder.h.
+// (one AVX register per bound), and leaves of up to eight triangles stored as one SIMD block of
+// their exact vertices. Made from the binary reference tree of binned_sah_builder.h.
 #pragma once
 
 #include <cstdint>
@@ -23,6 +23,20 @@ inline constexpr float kFarScale = 1.0f + 2.0f * kGamma3;
 // The builder bounds the binary depth by 64 + log2(n); at most 7 stacked children per level.
 inline constexpr int kStackSize = 1024;
 
+// A kernel computes with the triangle relative to the ray origin, so its rounding grows with the
+// origin's distance as well as with the scene's size: the watertight kernel's sheared vertices are
+// within 6 eps (|o| + |p|) of exact (eps = 2^-24; |p| the largest vertex coordinate, |o| the
+// origin's; Woop et al. 2013 sec. 3), so a ray it reports hitting a triangle passes within that
+// distance of it on each axis. The triangle boxes carry the scene's share (2^-16 |p|,
+// wide_bvh.cpp); the traversals grow every box by origin_padding on each side for the origin's
+// share, 16 eps |o|, without touching the tree: they compute near slab distances from the origin
+// moved by +pad along the direction and far ones from the origin moved back by pad. So a camera at
+// 1e7 sees the same hits through the BVH as through brute force (tests/accel/bvh_test.cpp).
+inline constexpr float kOriginPadding = 0x1p-20f;
+inline float origin_padding(float largest_origin_coordinate) {
+  return kOriginPadding * largest_origin_coordinate;
+}
+
 struct alignas(32) WideNode {
   // Per child: box bounds. Empty slots hold an inverted box (lo = +inf, hi = -inf) that no ray
   // hits.
@@ -31,11 +45,14 @@ struct alignas(32) WideNode {
 };
 static_assert(sizeof(WideNode) == 224);
 
+// Up to eight triangles, one per lane, as the mesh stores them: the vertices bit for bit (the
+// watertight kernel needs shared vertices to be identical in neighbouring triangles, and v0 + e1
+// is not always v1 in float). Möller–Trumbore takes its edges as v1 - v0 and v2 - v0, the same
+// operation that made the mesh's e1 and e2, so it reads the same bits. Padding lanes hold NaN
+// vertices, which every kernel rejects, and prim kNoHit.
 struct alignas(32) TriangleBlock {
-  float v0x[kWidth], v0y[kWidth], v0z[kWidth];
-  float e1x[kWidth], e1y[kWidth], e1z[kWidth];
-  float e2x[kWidth], e2y[kWidth], e2z[kWidth];
-  uint32_t prim[kWidth];  // the triangle's index in the mesh; kNoHit in padding lanes
+  float vertex[3][3][kWidth];  // [corner][axis][lane]
+  uint32_t prim[kWidth];       // the triangle's index in the mesh; kNoHit in padding lanes
 };
 static_assert(sizeof(TriangleBlock) == 320);
 
@@ -48,9 +65,10 @@ struct WideBvh {
   size_t block_bytes() const { return blocks.size() * sizeof(TriangleBlock); }
 };
 
-// Builds the binary tree over the mesh's triangles, then collapses it into eight-wide nodes. The
-// triangle boxes are widened by one float step so that they contain the exact triangle, whose
-// vertices v0 + e1 and v0 + e2 the kernels never round.
+// Builds the binary tree over the mesh's triangles, then collapses it into eight-wide nodes. Each
+// triangle's box is padded for the kernels' rounding near the scene (kBoxPadding in wide_bvh.cpp);
+// rounding that grows with the ray origin's distance is padded per ray by the traversals
+// (origin_padding below).
 [[nodiscard]] WideBvh build_wide_bvh(const TriangleMesh& mesh, const BuildConfig& config = {});
 
 }  // namespace tritrace::bvh
