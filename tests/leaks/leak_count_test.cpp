@@ -190,9 +190,9 @@ TEST(LeakCount, WatertightKernelLetsNoRayThroughAnyAccel) {
   expect_no_leaks(accel_runs([](AccelKind) { return Kernel::kWatertight; }));
 }
 
-// What users run: each accel with the kernel it takes when none is asked for. Fails while the
-// BVH's default is Möller–Trumbore (bvh-single, bvh, bvh bundles leak about 7%); passes once
-// default_kernel_for gives the watertight kernel to every accel (issue 10).
+// What users run: each accel with the kernel it takes when none is asked for (default_kernel_for).
+// While the BVH defaulted to Möller–Trumbore this failed for bvh-single, bvh and bvh bundles (about
+// 7% leaked); it keeps a default that leaks from coming back.
 TEST(LeakCount, DefaultKernelLeaksNothingThroughEveryAccel) {
   expect_no_leaks(accel_runs(default_kernel_for));
 }
