@@ -4,6 +4,7 @@
 # CMake stays the real build; BUILD_DIR and CMAKE_FLAGS can be overridden.
 #   make test-asan  the test suite built with AddressSanitizer + UndefinedBehaviorSanitizer
 #   make test-tsan  the multi-threaded tests built with ThreadSanitizer
+#   make test-portable  the BVH, renderer and kernel tests built for any AVX2 CPU (x86-64-v3)
 #   make leaks      the full closed-mesh leak count for every kernel (docs/RELIABILITY.md)
 #   make lint       clang-tidy over src/ and apps/ (.clang-tidy)
 BUILD_DIR ?= build
@@ -11,9 +12,19 @@ CMAKE_FLAGS ?=
 JOBS ?= $(shell nproc)
 ASAN_DIR ?= build-asan
 TSAN_DIR ?= build-tsan
+PORTABLE_DIR ?= build-portable
+# -Werror where the project asks for it: every test target (and so CI) configures with it, while
+# TRITRACE_WERROR defaults to OFF for a plain CMake build, so that a newer compiler's new warning
+# does not stop a user's build. `make run` and `make build` pass nothing, so build/'s cache decides:
+# off in a fresh folder, and still on after a `make test` there (that build passed with it, so
+# keeping it costs nothing, while switching it back and forth would recompile everything each
+# time). `make CMAKE_FLAGS=-DTRITRACE_WERROR=OFF run` turns it off again.
+WERROR = -DTRITRACE_WERROR=ON
 # Sanitized builds: optimised (the tests trace millions of rays) with debug info for reports; no
 # benchmarks.
-SANITIZE_FLAGS = -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRITRACE_BUILD_BENCH=OFF
+SANITIZE_FLAGS = -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRITRACE_BUILD_BENCH=OFF $(WERROR)
+# UBSan's `undefined` group leaves out float-cast-overflow (a float-to-int cast of a value out of
+# the int's range, inf or NaN: undefined behaviour), so it is named as well.
 # Left out under ASan: this test feeds libassimp a file that crashes it, on purpose, in the isolated
 # importer's child process; ASan then prints its report of that (third-party) crash on the stderr
 # the test checks holds exactly one line. The parent's behaviour is still right (exit 1, one
@@ -24,7 +35,16 @@ ASAN_EXCLUDE = CliTest.ModelThatCrashesTheImporterIsAnError
 # The multi-threaded renderer tests: thread-count invariance, statistics, whole images.
 TSAN_TESTS = Renderer.*:Placements/*
 
-.PHONY: all deps configure build run test test-asan test-tsan leaks bench format lint clean
+# The portable build (TRITRACE_NATIVE=OFF: -march=x86-64-v3, AVX2) compiles the AVX2 code paths,
+# which a -march=native build on an AVX-512 machine does not; only the test binary is built, and
+# only the tests of the code that differs between the two run: BVH build and traversal, kernels,
+# leak counts, the lab integrator and the renderer.
+PORTABLE_FLAGS = -DCMAKE_BUILD_TYPE=Release -DTRITRACE_NATIVE=OFF -DTRITRACE_BUILD_BENCH=OFF \
+  -DTRITRACE_VIEWER=OFF $(WERROR)
+PORTABLE_TESTS = *Bvh*:*BinnedSah*:*BruteForce*:*Kernel*:*Leak*:ClosedMeshes.*:*Lab*:*Renderer*:Placements/*
+
+.PHONY: all deps configure build run test test-asan test-tsan test-portable leaks bench format \
+  lint clean
 
 all: build
 
@@ -41,11 +61,14 @@ run: build
 	@mkdir -p out
 	@$(BUILD_DIR)/tritrace render -o out/cornell.png
 
-test: build
+test: deps
+	@cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release $(WERROR) $(CMAKE_FLAGS) >/dev/null
+	@cmake --build $(BUILD_DIR) -j $(JOBS)
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
 test-asan: deps
-	@cmake -S . -B $(ASAN_DIR) $(SANITIZE_FLAGS) -DTRITRACE_SANITIZE=address,undefined >/dev/null
+	@cmake -S . -B $(ASAN_DIR) $(SANITIZE_FLAGS) \
+	  -DTRITRACE_SANITIZE=address,undefined,float-cast-overflow >/dev/null
 	@cmake --build $(ASAN_DIR) -j $(JOBS)
 	@cd $(ASAN_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/.ci/lsan.supp:print_suppressions=0 \
@@ -56,6 +79,11 @@ test-tsan: deps
 	@cmake --build $(TSAN_DIR) -j $(JOBS) --target tritrace_tests
 	@TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/.ci/tsan.supp" \
 	  $(TSAN_DIR)/tests/tritrace_tests --gtest_filter='$(TSAN_TESTS)'
+
+test-portable: deps
+	@cmake -S . -B $(PORTABLE_DIR) $(PORTABLE_FLAGS) >/dev/null
+	@cmake --build $(PORTABLE_DIR) -j $(JOBS) --target tritrace_tests
+	@$(PORTABLE_DIR)/tests/tritrace_tests --gtest_filter='$(PORTABLE_TESTS)'
 
 leaks: build
 	@$(BUILD_DIR)/tritrace_leaks
@@ -71,4 +99,4 @@ lint: configure
 	@git ls-files 'src/*.cpp' 'apps/*.cpp' | xargs clang-tidy -p $(BUILD_DIR) --quiet
 
 clean:
-	@rm -rf $(BUILD_DIR) $(ASAN_DIR) $(TSAN_DIR) out
+	@rm -rf $(BUILD_DIR) $(ASAN_DIR) $(TSAN_DIR) $(PORTABLE_DIR) out

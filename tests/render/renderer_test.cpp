@@ -1,17 +1,24 @@
-// Whole images: bit-identical for any thread count and tile size, and the same for every
-// kernel except at edge pixels, where float rounding may pick a different triangle or flip a
-// shadow.
+// Whole images: bit-identical for any thread count and tile size, through brute force and through
+// the BVH's packet path, and the same for every kernel except at edge pixels, where float rounding
+// may pick a different triangle or flip a shadow; the threads a render really ran.
 #include "tritrace/render/renderer.h"
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <cstring>
+#include <mutex>
+#include <set>
+#include <thread>
 
 #include "lab_view.h"
 #include "tritrace/accel/brute_force.h"
+#include "tritrace/accel/bvh/bvh_accel.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/procedural.h"
 
 namespace tritrace {
 namespace {
@@ -43,11 +50,86 @@ TEST(Renderer, SameBitsForAnyThreadCountAndTileSize) {
   }
 }
 
+// The BVH traces a tile's coherent camera rays as packets: tiles of other sizes (1, 5, 7, 13
+// pixels) cut the batches into other packets, and threads take other tiles, yet every pixel must
+// come out as brute force computes it with the same kernel.
+TEST(Renderer, BvhSameBitsForAnyThreadCountAndTileSizeAndAsBruteForce) {
+  const Scene cornell = make_cornell_box({.width = 203, .height = 157, .yaw = 0.3});
+  const Scene terrain = make_terrain_scene(5000, {.width = 97, .height = 61, .yaw = -0.4});
+  struct Split {
+    int threads, tile_size;
+  };
+  constexpr Split kSplits[] = {{1, 16}, {2, 16}, {5, 16}, {2, 7}, {5, 13}, {1, 5}, {5, 1}};
+  for (const Scene* scene : {&cornell, &terrain}) {
+    for (Kernel k : kAllKernels) {
+      SCOPED_TRACE(testing::Message()
+                   << (scene == &cornell ? "cornell " : "terrain ") << kernel_name(k));
+      const Image brute = render_with(*scene, k, {.threads = 2});
+      const BvhAccel bvh(scene->mesh, k);
+      for (const Split& split : kSplits) {
+        const Image image = render(*scene, bvh, LabIntegrator{},
+                                   {.threads = split.threads, .tile_size = split.tile_size});
+        EXPECT_TRUE(identical(image, brute))
+            << split.threads << " threads, tiles of " << split.tile_size;
+      }
+    }
+  }
+}
+
+// Notes which threads finish tiles (the renderer tells RenderProgress from the thread that finished
+// one). Each thread's first tile is held until `expected` threads have finished one, or 20 s have
+// passed, so that every thread of the arena takes part however late the system starts some of
+// them; an arena with fewer threads than expected shows as a count below it.
+class ThreadRendezvous final : public RenderProgress {
+ public:
+  explicit ThreadRendezvous(int expected) : expected_(expected) {}
+  void tiles_done(int /*done*/, int /*total*/) noexcept override {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!ids_.insert(std::this_thread::get_id()).second) return;
+    arrived_.notify_all();
+    arrived_.wait_for(lock, std::chrono::seconds(20),
+                      [&] { return static_cast<int>(ids_.size()) >= expected_; });
+  }
+  int count() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return static_cast<int>(ids_.size());
+  }
+
+ private:
+  const int expected_;
+  mutable std::mutex mutex_;
+  std::condition_variable arrived_;
+  std::set<std::thread::id> ids_;
+};
+
+// TBB runs at most as many threads as there are cores unless told otherwise: asked for more (one
+// more than the cores here), the renderer must still run them all, and its statistics must count
+// the threads that really rendered, as the tiles' own thread ids show.
+TEST(Renderer, RunsAndCountsTheThreadsAskedFor) {
+  const Scene scene = make_cornell_box({.width = 96, .height = 96});  // 36 tiles
+  for (int threads : {1, 2, 3, default_thread_count() + 1}) {
+    ThreadRendezvous rendezvous(threads);
+    RenderStats stats;
+    render_with(scene, kDefaultKernel, {.threads = threads, .progress = &rendezvous}, &stats);
+    EXPECT_EQ(rendezvous.count(), threads) << threads << " threads asked for";
+    EXPECT_EQ(stats.threads, rendezvous.count()) << threads << " threads asked for";
+  }
+  // An image of one tile is rendered by one thread, whatever the count asked for.
+  ThreadRendezvous one(1);
+  RenderStats stats;
+  render_with(make_cornell_box({.width = 8, .height = 8}), kDefaultKernel,
+              {.threads = 4, .progress = &one}, &stats);
+  EXPECT_EQ(one.count(), 1);
+  EXPECT_EQ(stats.threads, 1);
+}
+
 TEST(Renderer, CountsPrimaryAndShadowRays) {
   const Scene scene = make_cornell_box({.width = 64, .height = 48});
   RenderStats stats;
   render_with(scene, kDefaultKernel, {.threads = 2}, &stats);
-  EXPECT_EQ(stats.threads, 2);
+  // 12 tiles: the second thread may start after the first took them all.
+  EXPECT_GE(stats.threads, 1);
+  EXPECT_LE(stats.threads, 2);
   // Every pixel sees the room, and most surfaces face the light: one primary ray each, plus a
   // shadow ray for most.
   EXPECT_GT(stats.rays, 64u * 48u * 3 / 2);

@@ -1,7 +1,8 @@
-// Tiles over a TBB task arena limited to the requested thread count.
+// Tiles over a TBB task arena of the requested thread count.
 #include "tritrace/render/renderer.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -11,6 +12,8 @@
 #include <atomic>
 #include <cassert>
 #include <chrono>
+#include <optional>
+#include <vector>
 
 // ThreadSanitizer cannot see the synchronisation inside Debian's libtbb.so (it is not built with
 // TSan), so in a TSan build the hand-over of work that tbb::parallel_for guarantees is told to it
@@ -123,10 +126,14 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
   // whichever thread is free (balanced whatever each tile costs), and every pixel is still written
   // by exactly one tile.
   std::atomic<int> next_tile{0};
+  // Marks the arena slots (threads) that rendered at least one tile, for the statistics: a thread
+  // that joins after the last tile was taken did no work.
+  std::vector<std::atomic<uint8_t>> slot_rendered(static_cast<size_t>(threads));
   auto run_tiles = [&] {
     thread_local std::array<Ray, kMaxBatch> batch;  // per thread: Ray initialises its members
     std::array<glm::vec3, kMaxBatch> radiance;
     uint64_t traced = 0;
+    bool rendered = false;
     for (int t = next_tile.fetch_add(1, std::memory_order_relaxed); t < tiles_total;
          t = next_tile.fetch_add(1, std::memory_order_relaxed)) {
       const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
@@ -144,14 +151,29 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
           for (int x = bx; x < ex; ++x) image.at(x, y) = radiance[n++];
         }
       });
+      rendered = true;
       if (options.progress) {
         options.progress->tiles_done(tiles_done.fetch_add(1, std::memory_order_relaxed) + 1,
                                      tiles_total);
       }
     }
     rays.fetch_add(traced, std::memory_order_relaxed);
+    const int slot = tbb::this_task_arena::current_thread_index();
+    if (rendered && slot >= 0 && slot < threads) {
+      slot_rendered[static_cast<size_t>(slot)].store(1, std::memory_order_relaxed);
+    }
   };
   using Body = TsanVisibleBody<decltype(run_tiles)>;
+  // TBB gives all arenas together at most max_allowed_parallelism threads, by default the number of
+  // cores; an arena asked for more prints "number of workers is currently limited" and gets fewer.
+  // Raised for as long as the render runs, the limit lets the arena have every thread asked for.
+  std::optional<tbb::global_control> allow_threads;
+  const size_t limit =
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  if (static_cast<size_t>(threads) > limit) {
+    allow_threads.emplace(tbb::global_control::max_allowed_parallelism,
+                          static_cast<size_t>(threads));
+  }
   tbb::task_arena arena(threads);
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, threads, 1), Body(&run_tiles),
@@ -163,7 +185,9 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
   if (stats) {
     stats->milliseconds = std::chrono::duration<double, std::milli>(stop - start).count();
     stats->rays = rays.load();
-    stats->threads = threads;
+    stats->threads = static_cast<int>(std::count_if(
+        slot_rendered.begin(), slot_rendered.end(),
+        [](const std::atomic<uint8_t>& r) { return r.load(std::memory_order_relaxed) != 0; }));
   }
   return image;
 }

@@ -29,6 +29,8 @@ struct RenderOptions {
 struct RenderStats {
   double milliseconds = 0.0;
   uint64_t rays = 0;  // primary and secondary rays traced
+  // Threads that rendered at least one tile: RenderOptions::threads for an image with enough
+  // tiles, fewer for a tiny one (or, rarely, when a thread started after the last tile was taken).
   int threads = 0;
 
   double mrays_per_second() const {

@@ -1,7 +1,9 @@
 // Binned SAH construction. Each task splits one node's range of the primitive permutation: it bins
 // centroids along all three axes, sweeps the bins for the cheapest plane, partitions in place and
 // recurses, spawning a task for large halves. Nodes go into a concurrent vector; a node's index is
-// reserved before its children are built, so the tree needs no fix-up pass.
+// reserved before its children are built, so the tree needs no fix-up pass. Surface areas (SAH
+// costs) are computed in double, since float's overflow for boxes beyond about 1e19; bin indices
+// are clamped in float before the cast to int, which is undefined for inf and NaN.
 #include "tritrace/accel/bvh/binned_sah_builder.h"
 
 #include <tbb/blocked_range.h>
@@ -12,7 +14,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <limits>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 
 namespace tritrace::bvh {
 namespace {
@@ -27,6 +33,53 @@ struct Bin {
   uint32_t count = 0;
 };
 
+// Surface area in double: finite for every finite box (float's would be inf beyond about 1e19), so
+// SAH costs compare as numbers instead of inf against inf.
+double area_of(const Bounds3& b) {
+  if (b.is_empty()) return 0.0;
+  const double x = double{b.hi.x} - b.lo.x, y = double{b.hi.y} - b.lo.y,
+               z = double{b.hi.z} - b.lo.z;
+  return 2.0 * (x * y + y * z + z * x);
+}
+
+// Bounds3::centre(), except where lo + hi overflows float (bounds beyond about 1.7e38): there the
+// halves are summed instead, which cannot overflow. (Halving first everywhere would round
+// denormal centroids.)
+glm::vec3 centroid_of(const Bounds3& b) {
+  glm::vec3 c = b.centre();
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(c[a])) c[a] = b.lo[a] * 0.5f + b.hi[a] * 0.5f;
+  }
+  return c;
+}
+
+// Maps a centroid coordinate to its bin along one axis of a node's centroid bounds, in float (the
+// build's innermost loop). An axis is split only where bins / extent is a finite float: not for a
+// zero, denormal or non-finite extent, whose range is then halved instead.
+struct AxisBins {
+  float lo = 0.0f;
+  float scale = 0.0f;  // bins / extent
+  float last = 0.0f;   // bins - 1
+  bool splittable = false;
+
+  AxisBins() = default;
+  AxisBins(float lo_f, float hi_f, int bins) : lo(lo_f), last(static_cast<float>(bins - 1)) {
+    // In double: hi - lo of finite floats cannot overflow, nor bins / extent for a denormal one.
+    const double extent = double{hi_f} - lo;
+    const double scale_d = extent > 0.0 ? bins / extent : 0.0;
+    splittable = std::isfinite(extent) && scale_d > 0.0 &&
+                 scale_d <= double{std::numeric_limits<float>::max()};
+    scale = splittable ? static_cast<float>(scale_d) : 0.0f;
+  }
+  int bin_of(float c) const {
+    // Clamped in float before the cast, so that the cast is defined for any x, NaN and inf
+    // included (c - lo overflows to inf for centroids more than FLT_MAX apart).
+    const float x = (c - lo) * scale;
+    if (!(x > 0.0f)) return 0;
+    return static_cast<int>(std::min(x, last));
+  }
+};
+
 struct BinSet {
   std::array<std::array<Bin, kMaxBins>, 3> axis;
   Bounds3 bounds = Bounds3::empty();  // of the primitives, not only their centroids
@@ -39,7 +92,7 @@ class Builder {
     config_.bins = std::clamp(config_.bins, 2, kMaxBins);
     centroids_.resize(prim_bounds.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, prim_bounds.size()), [&](const auto& r) {
-      for (size_t i = r.begin(); i != r.end(); ++i) centroids_[i] = prim_bounds[i].centre();
+      for (size_t i = r.begin(); i != r.end(); ++i) centroids_[i] = centroid_of(prim_bounds[i]);
     });
   }
 
@@ -60,9 +113,9 @@ class Builder {
   }
 
  private:
-  float leaf_cost(uint32_t count) const {
+  double leaf_cost(uint32_t count) const {
     const uint32_t blocks = (count + config_.block_size - 1) / config_.block_size;  // rounded up
-    return config_.block_cost * static_cast<float>(blocks);
+    return double{config_.block_cost} * blocks;
   }
 
   // Centroid bounds and primitive bounds of a range.
@@ -87,22 +140,12 @@ class Builder {
                                 });
   }
 
-  int bin_of(float c, float lo, float scale) const {
-    const int b = static_cast<int>((c - lo) * scale);
-    return std::clamp(b, 0, config_.bins - 1);
-  }
-
-  BinSet bin_range(uint32_t begin, uint32_t end, const Bounds3& cb) const {
-    glm::vec3 scale;
-    for (int a = 0; a < 3; ++a) {
-      const float extent = cb.hi[a] - cb.lo[a];
-      scale[a] = extent > 0.0f ? static_cast<float>(config_.bins) / extent : 0.0f;
-    }
+  BinSet bin_range(uint32_t begin, uint32_t end, const std::array<AxisBins, 3>& axes) const {
     auto body = [&](const tbb::blocked_range<uint32_t>& r, BinSet acc) {
       for (uint32_t i = r.begin(); i != r.end(); ++i) {
         const uint32_t p = prims_[i];
         for (int a = 0; a < 3; ++a) {
-          Bin& bin = acc.axis[a][bin_of(centroids_[p][a], cb.lo[a], scale[a])];
+          Bin& bin = acc.axis[a][axes[a].bin_of(centroids_[p][a])];
           bin.bounds.extend(bounds_[p]);
           ++bin.count;
         }
@@ -140,20 +183,22 @@ class Builder {
     };
 
     // Find the cheapest binned split over the three axes.
-    float best_cost = std::numeric_limits<float>::infinity();
+    std::array<AxisBins, 3> axes;
+    for (int a = 0; a < 3; ++a) axes[a] = AxisBins(cb.lo[a], cb.hi[a], config_.bins);
+    double best_cost = std::numeric_limits<double>::infinity();
     int best_axis = -1, best_split = 0;
-    const float parent_area = bounds.area();
+    const double parent_area = area_of(bounds);
     if (count > 1) {
-      const BinSet bins = bin_range(begin, end, cb);
+      const BinSet bins = bin_range(begin, end, axes);
       for (int a = 0; a < 3; ++a) {
-        if (!(cb.hi[a] > cb.lo[a])) continue;
-        std::array<float, kMaxBins> right_cost{};
+        if (!axes[a].splittable) continue;
+        std::array<double, kMaxBins> right_cost{};
         Bounds3 acc = Bounds3::empty();
         uint32_t n = 0;
         for (int i = config_.bins - 1; i > 0; --i) {
           acc.extend(bins.axis[a][i].bounds);
           n += bins.axis[a][i].count;
-          right_cost[i] = n > 0 ? acc.area() * leaf_cost(n) : 0.0f;
+          right_cost[i] = n > 0 ? area_of(acc) * leaf_cost(n) : 0.0;
         }
         acc = Bounds3::empty();
         n = 0;
@@ -161,7 +206,7 @@ class Builder {
           acc.extend(bins.axis[a][i].bounds);
           n += bins.axis[a][i].count;
           if (n == 0 || n == count) continue;
-          const float cost = acc.area() * leaf_cost(n) + right_cost[i + 1];
+          const double cost = area_of(acc) * leaf_cost(n) + right_cost[i + 1];
           if (cost < best_cost) {
             best_cost = cost;
             best_axis = a;
@@ -172,19 +217,18 @@ class Builder {
     }
 
     if (count <= config_.max_leaf_size) {
-      const float split_cost =
-          config_.traversal_cost + (parent_area > 0.0f ? best_cost / parent_area : 0.0f);
-      if (best_axis < 0 || leaf_cost(count) <= split_cost) return make_leaf();
+      const double split_cost =
+          config_.traversal_cost + (parent_area > 0.0 ? best_cost / parent_area : 0.0);
+      // Written so that a NaN cost (only from boxes outside the input contract) makes a leaf.
+      if (best_axis < 0 || !(leaf_cost(count) > split_cost)) return make_leaf();
     }
 
     uint32_t mid;
     if (best_axis >= 0 && depth < kMaxSahDepth) {
+      const AxisBins& axis = axes[best_axis];
       const int a = best_axis;
-      const float extent = cb.hi[a] - cb.lo[a];
-      const float scale = static_cast<float>(config_.bins) / extent;
-      const float lo = cb.lo[a];
       const auto it = std::partition(prims_.begin() + begin, prims_.begin() + end, [&](uint32_t p) {
-        return bin_of(centroids_[p][a], lo, scale) < best_split;
+        return axis.bin_of(centroids_[p][a]) < best_split;
       });
       mid = static_cast<uint32_t>(it - prims_.begin());
     } else {
@@ -223,6 +267,15 @@ class Builder {
 }  // namespace
 
 BinaryBvh build_binned_sah(std::span<const Bounds3> prim_bounds, const BuildConfig& config) {
+  // Refused rather than clamped, so that a caller never silently gets a tree other than the one it
+  // configured; the wide BVH would lose every lane of a leaf past the eighth.
+  if (config.max_leaf_size == 0 || config.max_leaf_size > kMaxLeafSize) {
+    throw std::invalid_argument("BuildConfig::max_leaf_size is " +
+                                std::to_string(config.max_leaf_size) + "; it must be 1 to " +
+                                std::to_string(kMaxLeafSize) +
+                                " (a leaf is one eight-lane triangle block)");
+  }
+  if (config.block_size == 0) throw std::invalid_argument("BuildConfig::block_size must be >= 1");
   return Builder(prim_bounds, config).build();
 }
 

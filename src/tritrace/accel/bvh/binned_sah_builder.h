@@ -11,12 +11,16 @@
 
 namespace tritrace::bvh {
 
+// The most primitives a leaf may hold: the wide BVH stores a leaf as one eight-lane triangle block
+// (wide_bvh.h), which has no room for a ninth.
+inline constexpr uint32_t kMaxLeafSize = 8;
+
 struct BuildConfig {
-  int bins = 16;
-  // Leaves hold at most this many primitives (one SIMD block of triangles).
-  uint32_t max_leaf_size = 8;
-  // The SAH prices a leaf per started block of `block_size` primitives, since a SIMD block costs
-  // the same whether it holds one triangle or eight.
+  int bins = 16;  // clamped to [2, 32]
+  // Leaves hold at most this many primitives, 1 to kMaxLeafSize.
+  uint32_t max_leaf_size = kMaxLeafSize;
+  // The SAH prices a leaf per started block of `block_size` primitives (at least 1), since a SIMD
+  // block costs the same whether it holds one triangle or eight.
   uint32_t block_size = 8;
   float traversal_cost = 1.0f;  // one node visit
   float block_cost = 1.2f;      // one block of triangle tests, relative to a node visit
@@ -37,7 +41,10 @@ struct BinaryBvh {
   std::vector<uint32_t> prim_index;  // leaves index into this permutation of the primitives
 };
 
-// Builds over the primitives' bounding boxes. Boxes must be non-empty and finite.
+// Builds over the primitives' bounding boxes. Boxes must be non-empty and finite; boxes at any
+// finite magnitude (surface areas that overflow float, extents too small for 1 / extent) still
+// give a valid tree. Throws std::invalid_argument when max_leaf_size is 0 or above kMaxLeafSize,
+// or block_size is 0.
 [[nodiscard]] BinaryBvh build_binned_sah(std::span<const Bounds3> prim_bounds,
                                          const BuildConfig& config = {});
 
