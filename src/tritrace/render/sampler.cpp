@@ -11,7 +11,7 @@ void Sampler::start_pixel_sample(int x, int y, uint32_t sample_index) {
   // not in any way a test here can see.
   const uint64_t pixel = (static_cast<uint64_t>(static_cast<uint32_t>(y)) << 32) |
                          static_cast<uint64_t>(static_cast<uint32_t>(x));
-  const uint64_t key = hash_words(seed_, pixel, sample_index);
+  const uint64_t key = hash_combine(hash_combine(seed_hash_, pixel), sample_index);
   rng_.seed(key, hash_combine(key, 0x5eed5eed5eed5eedull));
   dimension_ = 0;
 }

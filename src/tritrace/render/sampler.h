@@ -12,16 +12,20 @@ namespace tritrace {
 // Each (seed, x, y, sample index) owns a PCG32 stream: its initial state and its stream selector
 // are two hashes of the four values (mix64 avalanches every bit, so neighbouring pixels and indices
 // get unrelated streams), and dimension d of the sample is the stream's d-th number. Starting a
-// sample costs two hashes and two LCG steps; a number costs one LCG step and its output
+// sample costs three 64-bit mixes and two LCG steps; a number costs one LCG step and its output
 // permutation. Sample i is reproduced exactly without drawing samples 0..i-1, which lets sample
-// ranges be rendered apart and merged (pbrt-v4's IndependentSampler is the same shape; its
-// StartPixelSample(pPixel, sampleIndex) is start_pixel_sample here).
+// ranges be rendered apart and merged. pbrt-v4's StartPixelSample(pPixel, sampleIndex) is
+// start_pixel_sample here; its IndependentSampler keeps one stream per pixel and jumps ahead 65536
+// numbers per sample index, which caps a sample's dimensions, while a hashed stream per sample has
+// no cap.
 //
 // Independent numbers converge at the plain Monte Carlo rate; a stratified or low-discrepancy
 // sampler (Owen-scrambled Sobol) can later keep this interface.
 class Sampler {
  public:
-  explicit Sampler(uint64_t seed = 0) : seed_(seed) { start_pixel_sample(0, 0, 0); }
+  explicit Sampler(uint64_t seed = 0) : seed_(seed), seed_hash_(hash_words(seed)) {
+    start_pixel_sample(0, 0, 0);
+  }
 
   // Starts sample `sample_index` of pixel (x, y) at dimension 0. The same arguments replay the same
   // numbers whatever was drawn before.
@@ -49,6 +53,7 @@ class Sampler {
  private:
   Pcg32 rng_;
   uint64_t seed_;
+  uint64_t seed_hash_;  // hash_words(seed_), the first link of every key
   uint32_t dimension_ = 0;
 };
 
