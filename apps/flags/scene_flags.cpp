@@ -3,6 +3,8 @@
 #include "flags/scene_flags.h"
 
 #include "flags/flag_values.h"
+
+#include <limits>
 #include "tritrace/error.h"
 #include "tritrace/scene/io/scene_loader.h"
 #include "tritrace/scene/procedural.h"
@@ -59,6 +61,57 @@ void add_scene_flags(CLI::App& app, SceneFlags& flags) {
   app.add_option("--threads", flags.threads, "Worker threads (default: all cores)")
       ->type_name("N")
       ->check(checked([](std::string& s) { return check_integer_in(s, 1, kMaxThreads); }));
+  app.add_option("--integrator", flags.integrator,
+                 "lab (the lab's shading: direct light, a shadow ray and a constant indirect term, "
+                 "one ray through each pixel corner) or path (unbiased path tracing with "
+                 "next-event estimation and MIS); default: the scene's (lab for cornell and "
+                 "terrain:*, path for cornell-area, mesh files and scene files that do not say)")
+      ->type_name("NAME")
+      ->check(checked([](std::string& s) {
+        return s == "lab" || s == "path" ? std::string()
+                                         : "unknown integrator '" + s + "' (use lab or path)";
+      }));
+  app.add_option("--spp", flags.spp,
+                 "Samples per pixel for path, 1 to 16777216 (default: the scene's, 64)")
+      ->type_name("N")
+      ->check(checked([](std::string& s) { return check_integer_in(s, 1, kMaxSpp); }));
+  app.add_option("--seed", flags.seed,
+                 "Seed of the random numbers for path, 0 to 2^63-1 (default: the scene's, 0)")
+      ->type_name("N")
+      ->check(checked([](std::string& s) {
+        return check_integer_in(s, 0, std::numeric_limits<long long>::max());
+      }));
+  app.add_option("--max-depth", flags.max_depth,
+                 "Most bounces of a path, 0 to 65536 (0: only emitters the camera sees, 1: direct "
+                 "light only; default: the scene's, 1024, so that Russian roulette ends paths)")
+      ->type_name("N")
+      ->check(checked([](std::string& s) { return check_integer_in(s, 0, kMaxMaxDepth); }));
+  app.add_option("--filter", flags.filter,
+                 "Pixel filter for path: box (one pixel), gaussian or blackman-harris (radius 1.5 "
+                 "pixels)")
+      ->type_name("NAME")
+      ->capture_default_str()
+      ->check(checked([](std::string& s) {
+        return parse_filter(s)
+                   ? std::string()
+                   : "unknown filter '" + s + "' (use box, gaussian or blackman-harris)";
+      }));
+}
+
+IntegratorSpec integrator_spec(const SceneFlags& flags, const LoadedScene& loaded) {
+  IntegratorSpec spec = loaded.integrator;
+  if (!flags.integrator.empty()) {
+    spec.kind =
+        flags.integrator == "lab" ? IntegratorSpec::Kind::kLab : IntegratorSpec::Kind::kPath;
+  }
+  if (!flags.spp.empty()) spec.spp = static_cast<uint32_t>(*parse_integer(flags.spp));
+  if (!flags.seed.empty()) spec.seed = static_cast<uint64_t>(*parse_integer(flags.seed));
+  if (!flags.max_depth.empty()) spec.max_depth = static_cast<int>(*parse_integer(flags.max_depth));
+  return spec;
+}
+
+FilterKind filter_choice(const SceneFlags& flags) {
+  return parse_filter(flags.filter).value_or(FilterKind::kBox);
 }
 
 SceneOverrides scene_overrides(const SceneFlags& flags) {

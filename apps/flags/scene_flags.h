@@ -8,6 +8,7 @@
 
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/geometry/intersect.h"
+#include "tritrace/render/film.h"
 #include "tritrace/scene/io/loaded_scene.h"
 
 namespace tritrace::cli {
@@ -24,6 +25,12 @@ struct SceneFlags {
   std::string distance;
   std::string light;
   std::string threads;  // empty: all cores
+  // How to render (empty: the scene's own choice, see IntegratorSpec).
+  std::string integrator;
+  std::string spp;
+  std::string seed;
+  std::string max_depth;
+  std::string filter = "box";
 };
 
 void add_scene_flags(CLI::App& app, SceneFlags& flags);
@@ -33,6 +40,9 @@ SceneOverrides scene_overrides(const SceneFlags& flags);
 AccelKind accel_kind(const SceneFlags& flags);
 Kernel kernel_choice(const SceneFlags& flags);
 int thread_count(const SceneFlags& flags);  // 0: all cores
+// The scene's integrator settings with the flags given applied over them.
+IntegratorSpec integrator_spec(const SceneFlags& flags, const LoadedScene& loaded);
+FilterKind filter_choice(const SceneFlags& flags);
 
 // The built-in scene or FILE with `overrides`. Throws Error (usage) when both FILE and --scene are
 // given, and whatever load_scene throws.

@@ -13,7 +13,7 @@
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/image/image_io.h"
-#include "tritrace/render/lab_integrator.h"
+#include "tritrace/render/make_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/cornell_box.h"
 #include "tritrace/scene/io/scene_loader.h"
@@ -42,7 +42,7 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
   CLI::App* sub = app.add_subcommand(
       "render",
       "Render a scene (.json), a mesh file, or with no FILE the built-in Cornell box, with the "
-      "lab's shading");
+      "lab's shading or the path tracer");
   add_scene_flags(*sub, args.scene);
   sub->add_option("-o,--output", args.output,
                   "Output image: .png, .ppm (8-bit) or .pfm (float); default: the scene's "
@@ -82,19 +82,32 @@ int run_render(const RenderArgs& args) {
   }
 
   const Scene& scene = loaded.scene;
+  const IntegratorSpec spec = integrator_spec(args.scene, loaded);
+  const bool path = spec.kind == IntegratorSpec::Kind::kPath;
+  render_options.spp = spec.spp;
+  render_options.seed = spec.seed;
+  render_options.filter = filter_choice(args.scene);
   const std::unique_ptr<Accel> accel = make_accel(accel_kind, scene.mesh, kernel);
-  const LabIntegrator integrator;
+  const std::unique_ptr<Integrator> integrator = make_integrator(spec, scene);
   ProgressBar bar(stderr);
   if (!args.quiet && ::isatty(STDERR_FILENO)) render_options.progress = &bar;
   RenderStats stats;
-  const Image image = render(scene, *accel, integrator, render_options, &stats);
+  const Image image = render(scene, *accel, *integrator, render_options, &stats);
   bar.finish();
-  write_image(image, output);
+  write_image(image, output, path ? ImageEncoding::srgb() : ImageEncoding::lab());
 
   if (!args.quiet) {
-    std::printf("rendered %dx%d in %.1f ms (%.3g Mrays/s, %d thread%s) to %s\n", image.width(),
-                image.height(), stats.milliseconds, stats.mrays_per_second(), stats.threads,
-                stats.threads == 1 ? "" : "s", output.c_str());
+    if (path) {
+      std::printf(
+          "rendered %dx%d, %u spp in %.1f ms (%.3g Mpaths/s, %.3g Mrays/s, %d thread%s) to %s\n",
+          image.width(), image.height(), stats.spp, stats.milliseconds,
+          stats.samples_per_second() * 1e-6, stats.mrays_per_second(), stats.threads,
+          stats.threads == 1 ? "" : "s", output.c_str());
+    } else {
+      std::printf("rendered %dx%d in %.1f ms (%.3g Mrays/s, %d thread%s) to %s\n", image.width(),
+                  image.height(), stats.milliseconds, stats.mrays_per_second(), stats.threads,
+                  stats.threads == 1 ? "" : "s", output.c_str());
+    }
   }
   return 0;
 }

@@ -10,6 +10,7 @@
 
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/render/lab_integrator.h"
+#include "tritrace/render/path_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/procedural.h"
 
@@ -46,26 +47,53 @@ namespace {
 
 class HotPath : public ::testing::TestWithParam<AccelKind> {};
 
+// Every 16 x 16 tile of the image, as the renderer runs them, through `integrator`.
+uint64_t trace_all_tiles(const Scene& scene, const Accel& accel, const Integrator& integrator,
+                         std::vector<Ray>& rays, std::vector<Sampler>& samplers,
+                         std::vector<glm::vec3>& radiance) {
+  uint64_t traced = 0;
+  for (int ty = 0; ty < 128; ty += 16) {
+    for (int tx = 0; tx < 128; tx += 16) {
+      size_t n = 0;
+      for (int y = ty; y < ty + 16; ++y) {
+        for (int x = tx; x < tx + 16; ++x) {
+          samplers[n].start_pixel_sample(x, y, 0);
+          rays[n++] = scene.camera.primary_ray(x, y);
+        }
+      }
+      const SampleBatch batch{rays, integrator.pixel_corner_only() ? std::span<Sampler>()
+                                                                   : std::span<Sampler>(samplers)};
+      traced += integrator.radiance(batch, SampleOutput{radiance}, scene, accel);
+    }
+  }
+  return traced;
+}
+
 TEST_P(HotPath, TileLoopAllocatesNothing) {
   const Scene scene = make_builtin_scene("terrain:20k", {.width = 128, .height = 128});
   const std::unique_ptr<Accel> accel = make_accel(GetParam(), scene.mesh, kDefaultKernel);
   const LabIntegrator integrator;
   std::vector<Ray> rays(kMaxBatch);
+  std::vector<Sampler> samplers(kMaxBatch);
   std::vector<glm::vec3> radiance(kMaxBatch);
-  uint64_t traced = 0;
   const long before = g_allocations.load();
-  // Every 16 x 16 tile of the image, as the renderer runs them.
-  for (int ty = 0; ty < 128; ty += 16) {
-    for (int tx = 0; tx < 128; tx += 16) {
-      size_t n = 0;
-      for (int y = ty; y < ty + 16; ++y) {
-        for (int x = tx; x < tx + 16; ++x) rays[n++] = scene.camera.primary_ray(x, y);
-      }
-      traced += integrator.radiance(rays, radiance, scene, *accel);
-    }
-  }
+  const uint64_t traced = trace_all_tiles(scene, *accel, integrator, rays, samplers, radiance);
   EXPECT_EQ(g_allocations.load() - before, 0);
   EXPECT_GT(traced, 128u * 128u);  // the loop really traced primary and shadow rays
+}
+
+TEST_P(HotPath, PathTracerTileLoopAllocatesNothing) {
+  const Scene scene = make_builtin_scene("cornell-area", {.width = 128, .height = 128});
+  const std::unique_ptr<Accel> accel = make_accel(GetParam(), scene.mesh, kDefaultKernel);
+  const PathIntegrator integrator(scene);
+  std::vector<Ray> rays(kMaxBatch);
+  std::vector<Sampler> samplers(kMaxBatch);
+  std::vector<glm::vec3> radiance(kMaxBatch);
+  trace_all_tiles(scene, *accel, integrator, rays, samplers, radiance);  // thread-locals first
+  const long before = g_allocations.load();
+  const uint64_t traced = trace_all_tiles(scene, *accel, integrator, rays, samplers, radiance);
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_GT(traced, 3u * 128u * 128u);  // camera rays, shadow rays and bounces
 }
 
 TEST_P(HotPath, WholeRenderAllocationsDoNotGrowWithTheImage) {

@@ -21,6 +21,16 @@ class Accel {
   // For each ray, 1 when any triangle is hit with t in [tmin, tmax], else 0.
   virtual void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const = 0;
 
+  // The same queries for rays that share nothing (a path tracer's bounce and shadow rays): an
+  // accel that traces coherent batches as packets traces these one by one instead. By default
+  // the batch queries above. Same answers, bit for bit.
+  virtual void intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const {
+    intersect(rays, hits);
+  }
+  virtual void occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+    this->occluded(rays, occluded);
+  }
+
   // Single-ray conveniences for tests and tools.
   Hit intersect(const Ray& ray) const {
     Hit hit;

@@ -39,4 +39,11 @@ inline uint8_t to_byte_lab(float c) {
 // Interleaved RGB bytes, row 0 first, using to_byte_lab.
 std::vector<uint8_t> to_rgb8_lab(const Image& image);
 
+// A linear value as an sRGB byte: the IEC 61966-2-1 transfer curve (12.92 c below 0.0031308, else
+// 1.055 c^(1/2.4) - 0.055), clamped to [0, 1] and rounded to the nearest of 0..255. NaN maps to 0.
+uint8_t to_byte_srgb(float linear);
+
+// Interleaved sRGB bytes, row 0 first, of the image scaled by 2^exposure_stops.
+std::vector<uint8_t> to_rgb8_srgb(const Image& image, float exposure_stops = 0.0f);
+
 }  // namespace tritrace

@@ -16,8 +16,14 @@
 namespace tritrace {
 namespace {
 
-std::vector<uint8_t> encode_png(const Image& image) {
-  const std::vector<uint8_t> rgb = to_rgb8_lab(image);
+std::vector<uint8_t> bytes_of(const Image& image, const ImageEncoding& encoding) {
+  return encoding.curve == ImageEncoding::Curve::kSrgb
+             ? to_rgb8_srgb(image, encoding.exposure_stops)
+             : to_rgb8_lab(image);
+}
+
+std::vector<uint8_t> encode_png(const Image& image, const ImageEncoding& encoding) {
+  const std::vector<uint8_t> rgb = bytes_of(image, encoding);
   std::vector<uint8_t> out;
   auto append = [](void* context, void* data, int size) {
     auto* dst = static_cast<std::vector<uint8_t>*>(context);
@@ -30,11 +36,11 @@ std::vector<uint8_t> encode_png(const Image& image) {
   return out;
 }
 
-std::vector<uint8_t> encode_ppm(const Image& image) {
+std::vector<uint8_t> encode_ppm(const Image& image, const ImageEncoding& encoding) {
   const std::string header =
       "P6\n" + std::to_string(image.width()) + " " + std::to_string(image.height()) + "\n255\n";
   std::vector<uint8_t> out(header.begin(), header.end());
-  const std::vector<uint8_t> rgb = to_rgb8_lab(image);
+  const std::vector<uint8_t> rgb = bytes_of(image, encoding);
   out.insert(out.end(), rgb.begin(), rgb.end());
   return out;
 }
@@ -67,22 +73,23 @@ std::optional<ImageFormat> image_format_for(const std::string& path) {
   return std::nullopt;
 }
 
-std::vector<uint8_t> encode_image(const Image& image, ImageFormat format) {
+std::vector<uint8_t> encode_image(const Image& image, ImageFormat format,
+                                  const ImageEncoding& encoding) {
   switch (format) {
     case ImageFormat::kPng:
-      return encode_png(image);
+      return encode_png(image, encoding);
     case ImageFormat::kPpm:
-      return encode_ppm(image);
+      return encode_ppm(image, encoding);
     case ImageFormat::kPfm:
       return encode_pfm(image);
   }
   return {};
 }
 
-void write_image(const Image& image, const std::string& path) {
+void write_image(const Image& image, const std::string& path, const ImageEncoding& encoding) {
   const std::optional<ImageFormat> format = image_format_for(path);
   if (!format) throw Error(path, "unknown image extension (use .png, .ppm or .pfm)");
-  write_file_atomic(path, encode_image(image, *format));
+  write_file_atomic(path, encode_image(image, *format, encoding));
 }
 
 Rgb8Image read_image_rgb8(const std::string& path) {

@@ -16,12 +16,25 @@ enum class ImageFormat { kPng, kPpm, kPfm };
 // From the extension, case-insensitively: .png, .ppm, .pfm. nullopt for anything else.
 std::optional<ImageFormat> image_format_for(const std::string& path);
 
-// Encoded file contents. PNG and PPM use to_byte_lab; PFM stores the floats (rows bottom-up, as the
+// How 8-bit formats turn linear values into bytes: the lab's clamp without gamma (the lab
+// integrator's images), or the sRGB curve after an exposure of 2^stops (physically based images).
+// Float formats store the linear values whatever this says.
+struct ImageEncoding {
+  enum class Curve { kLab, kSrgb };
+  Curve curve = Curve::kLab;
+  float exposure_stops = 0.0f;
+  static ImageEncoding lab() { return {}; }
+  static ImageEncoding srgb(float stops = 0.0f) { return {Curve::kSrgb, stops}; }
+};
+
+// Encoded file contents. PNG and PPM use `encoding`; PFM stores the floats (rows bottom-up, as the
 // format requires, little-endian).
-std::vector<uint8_t> encode_image(const Image& image, ImageFormat format);
+std::vector<uint8_t> encode_image(const Image& image, ImageFormat format,
+                                  const ImageEncoding& encoding = ImageEncoding::lab());
 
 // Encodes by extension and writes atomically. Throws Error(path, reason).
-void write_image(const Image& image, const std::string& path);
+void write_image(const Image& image, const std::string& path,
+                 const ImageEncoding& encoding = ImageEncoding::lab());
 
 struct Rgb8Image {
   int width = 0;

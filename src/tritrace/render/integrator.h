@@ -1,5 +1,6 @@
-// Integrator: turns a batch of primary rays into radiance. A batch is at most kMaxBatch rays (one
-// tile), so integrators keep their working memory on the stack and never allocate while rendering.
+// Integrator: turns a batch of camera samples into radiance. A batch is one tile at one sample
+// index, at most kMaxBatch rays, so integrators keep their working memory on the stack and never
+// allocate while rendering; the virtual call happens once per batch.
 #pragma once
 
 #include <cstdint>
@@ -7,20 +8,47 @@
 #include <span>
 
 #include "tritrace/accel/accel.h"
+#include "tritrace/render/film.h"
+#include "tritrace/render/sampler.h"
 #include "tritrace/scene/scene.h"
 
 namespace tritrace {
 
 inline constexpr size_t kMaxBatch = 256;
 
+// The camera samples of one batch: rays[i] is sample i's camera ray, samplers[i] its random
+// numbers, already past the dimensions the camera used (empty for integrators that draw none).
+struct SampleBatch {
+  std::span<const Ray> rays{};
+  std::span<Sampler> samplers{};
+};
+
+// Where an integrator writes: radiance always; the AOVs of the first hit (albedo, shading normal,
+// distance along the camera ray; zero where the ray escapes) when their spans are not empty.
+struct SampleOutput {
+  std::span<glm::vec3> radiance{};
+  std::span<glm::vec3> albedo{};
+  std::span<glm::vec3> normal{};
+  std::span<float> depth{};
+};
+
+// Fills out's AOV spans (those not empty) from the camera rays' first hits: the hit material's
+// albedo, the geometric normal facing the ray, and the distance t; zero where a ray escapes.
+void write_first_hit_aovs(const Scene& scene, std::span<const Ray> rays, std::span<const Hit> hits,
+                          const SampleOutput& out);
+
 class Integrator {
  public:
   virtual ~Integrator() = default;
 
-  // radiance.size() == rays.size() <= kMaxBatch. Returns the number of rays traced (primary and
-  // secondary), for the renderer's statistics.
-  virtual uint64_t radiance(std::span<const Ray> rays, std::span<glm::vec3> radiance,
-                            const Scene& scene, const Accel& accel) const = 0;
+  // True for the lab's integrator: one deterministic sample through each pixel's corner, no random
+  // numbers. Otherwise the renderer places samples over the pixel with the film's filter.
+  virtual bool pixel_corner_only() const { return false; }
+
+  // out.radiance.size() == batch.rays.size() <= kMaxBatch. Returns the number of rays traced
+  // (camera and secondary), for the renderer's statistics.
+  virtual uint64_t radiance(const SampleBatch& batch, const SampleOutput& out, const Scene& scene,
+                            const Accel& accel) const = 0;
 };
 
 }  // namespace tritrace

@@ -244,8 +244,10 @@ void lab_shadow_rays(const TriangleMesh& mesh, std::span<const Hit> hits, glm::v
   }
 }
 
-uint64_t LabIntegrator::radiance(std::span<const Ray> rays, std::span<glm::vec3> radiance,
+uint64_t LabIntegrator::radiance(const SampleBatch& batch, const SampleOutput& out,
                                  const Scene& scene, const Accel& accel) const {
+  const std::span<const Ray> rays = batch.rays;
+  const std::span<glm::vec3> radiance = out.radiance;
   assert(rays.size() <= kMaxBatch && radiance.size() == rays.size());
   const size_t n = rays.size();
   Scratch& scratch = thread_scratch();
@@ -293,6 +295,7 @@ uint64_t LabIntegrator::radiance(std::span<const Ray> rays, std::span<glm::vec3>
     const glm::vec3& albedo = scene.materials[scene.mesh.material()[hits[i].prim]].albedo;
     radiance[i] = albedo * (direct[i] + scene.ambient);
   }
+  write_first_hit_aovs(scene, rays, std::span<const Hit>(hits.data(), n), out);
   return traced;
 }
 

@@ -40,7 +40,9 @@ class LabIntegrator final : public Integrator {
  public:
   explicit LabIntegrator(const RayOffsetParams& offset = {}) : offset_(offset) {}
 
-  uint64_t radiance(std::span<const Ray> rays, std::span<glm::vec3> radiance, const Scene& scene,
+  // The lab's camera: one ray through each pixel's corner, no random numbers.
+  bool pixel_corner_only() const override { return true; }
+  uint64_t radiance(const SampleBatch& batch, const SampleOutput& out, const Scene& scene,
                     const Accel& accel) const override;
 
  private:

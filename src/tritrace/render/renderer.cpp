@@ -105,8 +105,15 @@ int default_thread_count() {
   return std::max(1, tbb::info::default_concurrency());
 }
 
-Image render(const Scene& scene, const Accel& accel, const Integrator& integrator,
-             const RenderOptions& options, RenderStats* stats) {
+namespace {
+
+// Renders every tile of the image once per sample index of options' range and hands each sample
+// to sink(x, y, sample, weight), from the thread that owns the sample's tile: tiles are disjoint,
+// so a sink may write its pixel without locking. Samples of a pixel arrive in sample order.
+template <typename Sink>
+void render_tiles(const Scene& scene, const Accel& accel, const Integrator& integrator,
+                  const RenderOptions& options, const AovSet& aovs, Sink&& sink,
+                  RenderStats* stats) {
   const Camera& camera = scene.camera;
   const int width = camera.width();
   const int height = camera.height();
@@ -115,8 +122,11 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
   const int tiles_x = (width + tile - 1) / tile;
   const int tiles_y = (height + tile - 1) / tile;
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
+  const bool corner = integrator.pixel_corner_only();
+  const uint32_t first = corner ? 0 : options.first_sample;
+  const uint32_t spp = corner ? 1 : options.spp;
+  const PixelFilter filter(options.filter);
 
-  Image image(width, height);
   std::atomic<uint64_t> rays{0};
   std::atomic<int> tiles_done{0};
   const int tiles_total = tiles_x * tiles_y;
@@ -130,27 +140,60 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
   // that joins after the last tile was taken did no work.
   std::vector<std::atomic<uint8_t>> slot_rendered(static_cast<size_t>(threads));
   auto run_tiles = [&] {
-    thread_local std::array<Ray, kMaxBatch> batch;  // per thread: Ray initialises its members
-    std::array<glm::vec3, kMaxBatch> radiance;
+    // Per thread, reused by every tile: Ray and Sampler initialise their members.
+    thread_local std::array<Ray, kMaxBatch> batch;
+    thread_local std::array<Sampler, kMaxBatch> samplers;
+    std::array<glm::vec3, kMaxBatch> radiance, albedo, normal;
+    std::array<float, kMaxBatch> depth, weight;
+    std::array<int, kMaxBatch> pixel_x, pixel_y;
     uint64_t traced = 0;
     bool rendered = false;
     for (int t = next_tile.fetch_add(1, std::memory_order_relaxed); t < tiles_total;
          t = next_tile.fetch_add(1, std::memory_order_relaxed)) {
       const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
       const int x1 = std::min(x0 + tile, width), y1 = std::min(y0 + tile, height);
-      size_t n = 0;
-      for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
-        camera.primary_rays(bx, by, ex, ey, batch.data() + n);
-        n += static_cast<size_t>((ex - bx) * (ey - by));
-      });
-      traced += integrator.radiance(std::span<const Ray>(batch.data(), n),
-                                    std::span(radiance).first(n), scene, accel);
-      n = 0;
-      for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
-        for (int y = by; y < ey; ++y) {
-          for (int x = bx; x < ex; ++x) image.at(x, y) = radiance[n++];
+      for (uint32_t s = first; s < first + spp; ++s) {
+        size_t n = 0;
+        for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
+          if (corner) camera.primary_rays(bx, by, ex, ey, batch.data() + n);
+          for (int y = by; y < ey; ++y) {
+            for (int x = bx; x < ex; ++x) {
+              pixel_x[n] = x;
+              pixel_y[n] = y;
+              if (corner) {
+                weight[n] = 1.0f;
+              } else {
+                Sampler& sampler = samplers[n];
+                sampler = Sampler(options.seed);
+                sampler.start_pixel_sample(x, y, s);
+                const glm::vec2 u = sampler.get_pixel_2d();
+                const PixelFilter::Sample f = filter.sample(u.x, u.y);
+                batch[n] =
+                    camera.ray_through(static_cast<float>(x) + f.x, static_cast<float>(y) + f.y);
+                weight[n] = f.weight;
+              }
+              ++n;
+            }
+          }
+        });
+        const size_t count = n;
+        const SampleBatch in{std::span<const Ray>(batch.data(), count),
+                             corner ? std::span<Sampler>() : std::span(samplers).first(count)};
+        const SampleOutput out{
+            std::span(radiance).first(count),
+            aovs.albedo ? std::span(albedo).first(count) : std::span<glm::vec3>(),
+            aovs.normal ? std::span(normal).first(count) : std::span<glm::vec3>(),
+            aovs.depth ? std::span(depth).first(count) : std::span<float>()};
+        traced += integrator.radiance(in, out, scene, accel);
+        for (size_t i = 0; i < count; ++i) {
+          FilmSample sample;
+          sample.radiance = radiance[i];
+          if (aovs.albedo) sample.albedo = albedo[i];
+          if (aovs.normal) sample.normal = normal[i];
+          if (aovs.depth) sample.depth = depth[i];
+          sink(pixel_x[i], pixel_y[i], sample, weight[i]);
         }
-      });
+      }
       rendered = true;
       if (options.progress) {
         options.progress->tiles_done(tiles_done.fetch_add(1, std::memory_order_relaxed) + 1,
@@ -185,11 +228,39 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
   if (stats) {
     stats->milliseconds = std::chrono::duration<double, std::milli>(stop - start).count();
     stats->rays = rays.load();
+    stats->samples = static_cast<uint64_t>(width) * static_cast<uint64_t>(height) * spp;
+    stats->spp = spp;
     stats->threads = static_cast<int>(std::count_if(
         slot_rendered.begin(), slot_rendered.end(),
         [](const std::atomic<uint8_t>& r) { return r.load(std::memory_order_relaxed) != 0; }));
   }
-  return image;
+}
+
+}  // namespace
+
+void render_to_film(const Scene& scene, const Accel& accel, const Integrator& integrator,
+                    Film& film, const RenderOptions& options, RenderStats* stats) {
+  render_tiles(
+      scene, accel, integrator, options, film.aovs(),
+      [&](int x, int y, const FilmSample& sample, float weight) { film.add(x, y, sample, weight); },
+      stats);
+}
+
+Image render(const Scene& scene, const Accel& accel, const Integrator& integrator,
+             const RenderOptions& options, RenderStats* stats) {
+  if (integrator.pixel_corner_only()) {
+    // One unit-weight sample per pixel: the pixel is the sample, written straight to the image
+    // (what a film would resolve to, bit for bit, without its sums).
+    Image image(scene.camera.width(), scene.camera.height());
+    render_tiles(
+        scene, accel, integrator, options, AovSet{},
+        [&](int x, int y, const FilmSample& sample, float) { image.at(x, y) = sample.radiance; },
+        stats);
+    return image;
+  }
+  Film film(scene.camera.width(), scene.camera.height());
+  render_to_film(scene, accel, integrator, film, options, stats);
+  return film.resolve();
 }
 
 }  // namespace tritrace

@@ -48,6 +48,22 @@ class Camera {
   glm::vec3 down() const { return down_; }
   glm::vec3 forward() const { return forward_; }
 
+  // The ray through the image position (px, py), in pixels from the image's top-left corner: a
+  // sample at (x + u, y + v) of pixel (x, y) looks along (x + u - W/2, y + v - H/2, f) in the
+  // camera's frame. primary_ray(x, y) is the same through the pixel's corner, with the offsets
+  // computed in integers as the lab does.
+  Ray ray_through(float px, float py) const {
+    const float dx = px - static_cast<float>(width_ / 2);
+    const float dy = py - static_cast<float>(height_ / 2);
+    const glm::vec3 d(right_.x * dx + down_.x * dy + forward_.x * focal_,
+                      right_.y * dx + down_.y * dy + forward_.y * focal_,
+                      right_.z * dx + down_.z * dy + forward_.z * focal_);
+    Ray ray;
+    ray.origin = position_;
+    ray.dir = glm::normalize(d);
+    return ray;
+  }
+
   // The ray through pixel (x, y); its direction is normalised, so t is a distance. Inline: the
   // renderer calls it once per pixel.
   Ray primary_ray(int x, int y) const {

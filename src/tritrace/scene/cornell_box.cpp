@@ -26,7 +26,7 @@ glm::vec3 scale_to_unit_box(glm::vec3 v) {
   return v;
 }
 
-void add(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, Colour colour) {
+void add(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t colour) {
   mesh.add(scale_to_unit_box(a), scale_to_unit_box(b), scale_to_unit_box(c), colour);
 }
 
@@ -79,6 +79,19 @@ Scene make_cornell_box(const CornellOptions& options) {
   scene.lights.push_back({options.light_position, kLabLightPower});
   scene.ambient = kLabAmbient;
   scene.camera = Camera(options.width, options.height, options.yaw, kLabCameraDistance);
+  return scene;
+}
+
+Scene make_cornell_area(const CornellOptions& options) {
+  Scene scene = make_cornell_box(options);
+  scene.lights.clear();
+  const uint32_t light = static_cast<uint32_t>(scene.materials.size());
+  scene.materials.push_back({.albedo = glm::vec3(0.0f), .emission = kAreaLightRadiance});
+  const glm::vec3 a(343, 554, 227), b(343, 554, 332), c(213, 554, 332), d(213, 554, 227);
+  // Wound so that the lab normal, normalize(cross(e2, e1)), points down to the floor (+y in the
+  // world): the emitting side.
+  add(scene.mesh, a, c, b, light);
+  add(scene.mesh, a, d, c, light);
   return scene;
 }
 

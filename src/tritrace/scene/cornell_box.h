@@ -22,4 +22,13 @@ struct CornellOptions {
 
 Scene make_cornell_box(const CornellOptions& options = {});
 
+// The classic Cornell box light: the quad (343, 554, 227), (343, 554, 332), (213, 554, 332),
+// (213, 554, 227) in the box's 555-unit coordinates, mapped like the box's vertices.
+inline constexpr glm::vec3 kAreaLightRadiance{10.0f, 10.0f, 10.0f};
+
+// The lab's box (the same 30 triangles and colours, camera and ambient) without the point light,
+// lit by the ceiling quad above as two emissive triangles (32 in all, after the box's 30): they
+// emit kAreaLightRadiance from their lower face only, towards the floor, and reflect nothing.
+Scene make_cornell_area(const CornellOptions& options = {});
+
 }  // namespace tritrace

@@ -121,11 +121,12 @@ Scene make_terrain_scene(uint64_t triangles, const CornellOptions& options) {
 }
 
 bool is_builtin_scene(std::string_view name) {
-  return name == "cornell" || parse_terrain_triangles(name).has_value();
+  return name == "cornell" || name == "cornell-area" || parse_terrain_triangles(name).has_value();
 }
 
 Scene make_builtin_scene(std::string_view name, const CornellOptions& options) {
   if (name == "cornell") return make_cornell_box(options);
+  if (name == "cornell-area") return make_cornell_area(options);
   if (const std::optional<uint64_t> triangles = parse_terrain_triangles(name)) {
     return make_terrain_scene(*triangles, options);
   }

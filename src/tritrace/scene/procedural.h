@@ -24,12 +24,13 @@ Scene make_terrain_scene(uint64_t triangles, const CornellOptions& options = {})
 // Whether `name` is one of the scene names below.
 bool is_builtin_scene(std::string_view name);
 
-// The scene names the CLI accepts: "cornell" and "terrain:<count>". Throws
+// The scene names the CLI accepts: "cornell", "cornell-area" and "terrain:<count>". Throws
 // Error(name, reason, kUsage) for anything else.
 Scene make_builtin_scene(std::string_view name, const CornellOptions& options = {});
 
 // For --help and error messages.
 inline constexpr std::string_view kBuiltinSceneHelp =
-    "cornell (the lab's box) or terrain:<triangles> (e.g. terrain:1m, terrain:10m, terrain:250k)";
+    "cornell (the lab's box), cornell-area (the box lit by a ceiling light, for the path tracer) "
+    "or terrain:<triangles> (e.g. terrain:1m, terrain:10m, terrain:250k)";
 
 }  // namespace tritrace

@@ -10,10 +10,18 @@
 
 namespace tritrace {
 
+// A two-sided Lambertian (diffuse) surface that may also emit light.
 struct Material {
   glm::vec3 albedo{0.75f};  // diffuse reflectance rho, linear RGB
+  // Emitted radiance Le (linear RGB, W/(m^2 sr) per channel), from the triangle's front (the side
+  // its lab normal, normalize(cross(e2, e1)), points to), or from both sides when two_sided.
+  glm::vec3 emission{0.0f};
+  bool two_sided = false;
+
+  bool emits() const { return emission.x > 0.0f || emission.y > 0.0f || emission.z > 0.0f; }
 };
 
+// Radiates intensity power / (4 pi) in every direction (the lab's light).
 struct PointLight {
   glm::vec3 position{0.0f};
   glm::vec3 power{0.0f};  // P, radiant power per channel

@@ -242,10 +242,7 @@ void BvhAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
       return;
     }
   }
-  with_kernel(kernel_, [&]<Kernel K>() {
-    const TriangleArrays tris = mesh_.arrays();
-    for (size_t i = 0; i < rays.size(); ++i) hits[i] = closest_hit<K>(bvh_, tris, rays[i]);
-  });
+  intersect_incoherent(rays, hits);
 }
 
 void BvhAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
@@ -257,6 +254,17 @@ void BvhAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) 
       return;
     }
   }
+  occluded_incoherent(rays, occluded);
+}
+
+void BvhAccel::intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const {
+  with_kernel(kernel_, [&]<Kernel K>() {
+    const TriangleArrays tris = mesh_.arrays();
+    for (size_t i = 0; i < rays.size(); ++i) hits[i] = closest_hit<K>(bvh_, tris, rays[i]);
+  });
+}
+
+void BvhAccel::occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
   with_kernel(kernel_, [&]<Kernel K>() {
     const TriangleArrays tris = mesh_.arrays();
     for (size_t i = 0; i < rays.size(); ++i) occluded[i] = any_hit<K>(bvh_, tris, rays[i]) ? 1 : 0;

@@ -26,6 +26,9 @@ class BvhAccel final : public Accel {
   using Accel::occluded;
   void intersect(std::span<const Ray> rays, std::span<Hit> hits) const override;
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
+  // Single-ray traversal whatever the traversal setting.
+  void intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const override;
+  void occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
 
   const bvh::WideBvh& tree() const { return bvh_; }
   Kernel kernel() const { return kernel_; }

@@ -119,7 +119,8 @@ class Parser {
     const Json doc = parse_text(text_, path_);
     if (!doc.is_object()) fail("", "a scene must be a JSON object, got " + describe(doc));
     check_keys(doc, "",
-               {"description", "camera", "lights", "ambient", "materials", "meshes", "output"});
+               {"description", "camera", "lights", "ambient", "materials", "meshes", "output",
+                "integrator"});
     if (doc.contains("description") && !doc["description"].is_string()) {
       fail("/description", "must be a string, got " + describe(doc["description"]));
     }
@@ -133,6 +134,7 @@ class Parser {
     if (!doc.contains("meshes")) fail("", "no geometry: the scene has no \"meshes\"");
     parse_meshes(doc["meshes"]);
     if (doc.contains("output")) parse_output(doc["output"]);
+    if (doc.contains("integrator")) parse_integrator(doc["integrator"]);
     return std::move(out_);
   }
 
@@ -273,17 +275,27 @@ class Parser {
     for (size_t i = 0; i < j.size(); ++i) {
       const std::string where = "/materials/" + std::to_string(i);
       object(j[i], where);
-      check_keys(j[i], where, {"name", "albedo"});
+      check_keys(j[i], where, {"name", "albedo", "emission", "two_sided"});
       if (!j[i].contains("name")) fail(where, "missing \"name\"");
       if (!j[i].contains("albedo")) fail(where, "missing \"albedo\"");
       const std::string name = string(j[i]["name"], where + "/name");
       if (name.empty()) fail(where + "/name", "must not be empty");
-      const glm::vec3 albedo = non_negative_vec3(j[i]["albedo"], where + "/albedo");
+      Material m;
+      m.albedo = non_negative_vec3(j[i]["albedo"], where + "/albedo");
       for (int k = 0; k < 3; ++k) {
-        if (albedo[k] > 1.0f) fail(where + "/albedo/" + std::to_string(k), "must be at most 1");
+        if (m.albedo[k] > 1.0f) fail(where + "/albedo/" + std::to_string(k), "must be at most 1");
+      }
+      if (j[i].contains("emission")) {
+        m.emission = non_negative_vec3(j[i]["emission"], where + "/emission");
+      }
+      if (j[i].contains("two_sided")) {
+        if (!j[i]["two_sided"].is_boolean()) {
+          fail(where + "/two_sided", "must be true or false, got " + describe(j[i]["two_sided"]));
+        }
+        m.two_sided = j[i]["two_sided"].get<bool>();
       }
       if (named_.count(name)) fail(where + "/name", "duplicate material '" + shown(name) + "'");
-      named_[name] = add_material({albedo});
+      named_[name] = add_material(m);
     }
   }
 
@@ -492,6 +504,33 @@ class Parser {
              "'" + shown(file) + "' has an unknown extension (use .png, .ppm or .pfm)");
       }
       out_.output = file;
+    }
+  }
+
+  void parse_integrator(const Json& j) {
+    object(j, "/integrator");
+    check_keys(j, "/integrator", {"type", "spp", "max_depth", "seed"});
+    IntegratorSpec& spec = out_.integrator;
+    if (j.contains("type")) {
+      const std::string type = string(j["type"], "/integrator/type");
+      if (type == "lab") {
+        spec.kind = IntegratorSpec::Kind::kLab;
+      } else if (type == "path") {
+        spec.kind = IntegratorSpec::Kind::kPath;
+      } else {
+        fail("/integrator/type", "must be \"lab\" or \"path\", got '" + shown(type) + "'");
+      }
+    }
+    if (j.contains("spp")) {
+      spec.spp = static_cast<uint32_t>(integer_in(j["spp"], "/integrator/spp", 1, kMaxSpp));
+    }
+    if (j.contains("max_depth")) {
+      spec.max_depth =
+          static_cast<int>(integer_in(j["max_depth"], "/integrator/max_depth", 0, kMaxMaxDepth));
+    }
+    if (j.contains("seed")) {
+      spec.seed = static_cast<uint64_t>(
+          integer_in(j["seed"], "/integrator/seed", 0, std::numeric_limits<long long>::max()));
     }
   }
 

@@ -80,6 +80,9 @@ LoadedScene load_builtin_scene(const std::string& name, const SceneOverrides& ov
   LoadedScene loaded;
   // The geometry does not depend on the view; apply_overrides sets camera and light.
   loaded.scene = make_builtin_scene(name, CornellOptions{});
+  // The lab's own scenes keep the lab's shading; the area-lit box is for the path tracer.
+  loaded.integrator.kind =
+      name == "cornell-area" ? IntegratorSpec::Kind::kPath : IntegratorSpec::Kind::kLab;
   loaded.camera.position = glm::vec3(0.0f, 0.0f, -kLabCameraDistance);
   loaded.camera.lab_orbit = true;
   loaded.stats.meshes = 1;

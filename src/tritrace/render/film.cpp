@@ -1,0 +1,147 @@
+// Film resolution and the pixel filters (box, Gaussian, Blackman-Harris) with their sampling.
+#include "tritrace/render/film.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace tritrace {
+
+Film::Film(int width, int height, AovSet aovs) : width_(width), height_(height), aovs_(aovs) {
+  const size_t n = static_cast<size_t>(width) * static_cast<size_t>(height);
+  radiance_.assign(n, glm::vec3(0.0f));
+  weight_.assign(n, 0.0f);
+  if (aovs.albedo) albedo_.assign(n, glm::vec3(0.0f));
+  if (aovs.normal) normal_.assign(n, glm::vec3(0.0f));
+  if (aovs.depth) depth_.assign(n, 0.0f);
+}
+
+Image Film::resolve_sums(const std::vector<glm::vec3>& sums) const {
+  if (sums.empty()) return {};
+  Image image(width_, height_);
+  for (int y = 0; y < height_; ++y) {
+    for (int x = 0; x < width_; ++x) {
+      const size_t i = index(x, y);
+      // A weight of exactly 1 (one unit sample: the lab) divides to the sum bit for bit.
+      image.at(x, y) = weight_[i] != 0.0f ? sums[i] / weight_[i] : glm::vec3(0.0f);
+    }
+  }
+  return image;
+}
+
+Image Film::resolve() const {
+  return resolve_sums(radiance_);
+}
+
+Image Film::resolve_depth() const {
+  if (depth_.empty()) return {};
+  Image image(width_, height_);
+  for (int y = 0; y < height_; ++y) {
+    for (int x = 0; x < width_; ++x) {
+      const size_t i = index(x, y);
+      image.at(x, y) = glm::vec3(weight_[i] != 0.0f ? depth_[i] / weight_[i] : 0.0f);
+    }
+  }
+  return image;
+}
+
+std::string_view filter_name(FilterKind kind) {
+  switch (kind) {
+    case FilterKind::kBox:
+      return "box";
+    case FilterKind::kGaussian:
+      return "gaussian";
+    case FilterKind::kBlackmanHarris:
+      return "blackman-harris";
+  }
+  return "box";
+}
+
+std::optional<FilterKind> parse_filter(std::string_view name) {
+  for (FilterKind k : {FilterKind::kBox, FilterKind::kGaussian, FilterKind::kBlackmanHarris}) {
+    if (filter_name(k) == name) return k;
+  }
+  return std::nullopt;
+}
+
+namespace {
+// Radii in pixels: the Gaussian's and Blackman-Harris's as pbrt-v4's defaults (1.5 pixels).
+constexpr float kGaussianRadius = 1.5f;
+constexpr float kGaussianSigma = 0.5f;
+constexpr float kBlackmanHarrisRadius = 1.5f;
+
+float gaussian(float x) {
+  return std::exp(-x * x / (2.0f * kGaussianSigma * kGaussianSigma));
+}
+}  // namespace
+
+PixelFilter::PixelFilter(FilterKind kind) : kind_(kind) {
+  if (kind == FilterKind::kBox) return;
+  radius_ = kind == FilterKind::kGaussian ? kGaussianRadius : kBlackmanHarrisRadius;
+  // Cell masses by the midpoint rule on a fine grid inside each cell.
+  std::vector<double> mass(kBins);
+  const double cell = 2.0 * radius_ / kBins;
+  for (int i = 0; i < kBins; ++i) {
+    double sum = 0.0;
+    constexpr int kSteps = 32;
+    for (int k = 0; k < kSteps; ++k) {
+      const double x = -radius_ + (i + (k + 0.5) / kSteps) * cell;
+      sum += std::abs(evaluate_1d(static_cast<float>(x)));
+    }
+    mass[static_cast<size_t>(i)] = sum / kSteps * cell;
+  }
+  double total = 0.0;
+  for (double m : mass) total += m;
+  cdf_.assign(kBins + 1, 0.0f);
+  pdf_.assign(kBins, 0.0f);
+  double running = 0.0;
+  for (int i = 0; i < kBins; ++i) {
+    running += mass[static_cast<size_t>(i)];
+    cdf_[static_cast<size_t>(i) + 1] = static_cast<float>(running / total);
+    pdf_[static_cast<size_t>(i)] = static_cast<float>(mass[static_cast<size_t>(i)] / total / cell);
+  }
+  cdf_[kBins] = 1.0f;
+}
+
+float PixelFilter::evaluate_1d(float offset) const {
+  const float x = std::abs(offset);
+  if (x > radius_) return 0.0f;
+  switch (kind_) {
+    case FilterKind::kBox:
+      return 1.0f;
+    case FilterKind::kGaussian:
+      // Shifted to reach 0 at the radius, as pbrt does, so the filter has no step there.
+      return std::max(0.0f, gaussian(x) - gaussian(radius_));
+    case FilterKind::kBlackmanHarris: {
+      // Harris, "On the use of windows for harmonic analysis with the discrete Fourier
+      // transform", Proc. IEEE 66(1), 1978: the 4-term window over [-radius, radius].
+      const double t = (static_cast<double>(offset) + radius_) / (2.0 * radius_);
+      constexpr double a0 = 0.35875, a1 = 0.48829, a2 = 0.14128, a3 = 0.01168;
+      const double w = 2.0 * std::numbers::pi * t;
+      return static_cast<float>(a0 - a1 * std::cos(w) + a2 * std::cos(2.0 * w) -
+                                a3 * std::cos(3.0 * w));
+    }
+  }
+  return 0.0f;
+}
+
+float PixelFilter::sample_1d(float u, float& pdf) const {
+  const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), u);
+  const int i = std::clamp(static_cast<int>(it - cdf_.begin()) - 1, 0, kBins - 1);
+  const float lo = cdf_[static_cast<size_t>(i)], hi = cdf_[static_cast<size_t>(i) + 1];
+  const float within = hi > lo ? std::clamp((u - lo) / (hi - lo), 0.0f, 1.0f) : 0.5f;
+  const float cell = 2.0f * radius_ / kBins;
+  pdf = pdf_[static_cast<size_t>(i)];
+  return -radius_ + (static_cast<float>(i) + within) * cell;
+}
+
+PixelFilter::Sample PixelFilter::sample(float ux, float uy) const {
+  if (kind_ == FilterKind::kBox) return {ux, uy, 1.0f};
+  float px = 0.0f, py = 0.0f;
+  const float dx = sample_1d(ux, px), dy = sample_1d(uy, py);
+  const float weight =
+      px > 0.0f && py > 0.0f ? evaluate_1d(dx) * evaluate_1d(dy) / (px * py) : 0.0f;
+  return {0.5f + dx, 0.5f + dy, weight};
+}
+
+}  // namespace tritrace

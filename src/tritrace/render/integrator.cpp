@@ -1,0 +1,28 @@
+// The AOVs every integrator writes the same way.
+#include "tritrace/render/integrator.h"
+
+#include <glm/geometric.hpp>
+
+namespace tritrace {
+
+void write_first_hit_aovs(const Scene& scene, std::span<const Ray> rays, std::span<const Hit> hits,
+                          const SampleOutput& out) {
+  for (size_t i = 0; i < hits.size(); ++i) {
+    const Hit& h = hits[i];
+    if (!out.albedo.empty()) {
+      out.albedo[i] =
+          h.found() ? scene.materials[scene.mesh.material()[h.prim]].albedo : glm::vec3(0.0f);
+    }
+    if (!out.normal.empty()) {
+      glm::vec3 n(0.0f);
+      if (h.found()) {
+        n = scene.mesh.normal()[h.prim];
+        if (glm::dot(n, rays[i].dir) > 0.0f) n = -n;
+      }
+      out.normal[i] = n;
+    }
+    if (!out.depth.empty()) out.depth[i] = h.found() ? h.t : 0.0f;
+  }
+}
+
+}  // namespace tritrace

@@ -1,0 +1,58 @@
+// LightSampler: every emitter of a scene (point lights and emissive triangles) in one list, chosen
+// in proportion to its power through an alias table, with the densities that next-event estimation
+// and multiple importance sampling need. Built once per scene, then read-only.
+#pragma once
+
+#include <cstdint>
+#include <glm/vec3.hpp>
+#include <vector>
+
+#include "tritrace/math/sampling.h"
+#include "tritrace/scene/scene.h"
+
+namespace tritrace {
+
+struct LightSample {
+  glm::vec3 point{0.0f};     // on the light
+  glm::vec3 normal{0.0f};    // the light's lab normal at `point` (zero for a point light)
+  glm::vec3 radiance{0.0f};  // Le towards the shading point, or intensity for a point light
+  float pdf = 0.0f;          // solid angle density at the shading point; inf for a point light
+  bool delta = false;        // a point light: no other strategy can sample it
+  uint32_t prim = 0;         // the emissive triangle (unused for a point light)
+};
+
+class LightSampler {
+ public:
+  explicit LightSampler(const Scene& scene);
+
+  bool empty() const { return table_.empty(); }
+  size_t size() const { return lights_.size(); }
+
+  // Chooses a light with u_select and a point on it with u_point, as seen from x. pdf 0 when the
+  // sample carries nothing (a triangle seen from behind, x on the light's plane).
+  LightSample sample(const Scene& scene, glm::vec3 x, float u_select, glm::vec2 u_point) const;
+
+  // The solid angle density with which sample() picks the point `y` of emissive triangle `prim`
+  // seen from x (for the MIS weight of a BSDF-sampled ray that hit it); 0 for a non-emitter.
+  float pdf_triangle(const Scene& scene, uint32_t prim, glm::vec3 x, glm::vec3 y) const;
+
+  // The probability of choosing light i (point lights first, then emissive triangles in mesh
+  // order), for tests.
+  float pmf(size_t i) const { return table_.pmf(static_cast<uint32_t>(i)); }
+
+ private:
+  struct Light {
+    uint32_t index;  // into scene.lights for a point light, else the triangle's prim
+    bool point;
+  };
+  std::vector<Light> lights_;
+  std::vector<uint32_t> emissive_prims_;  // sorted, for pdf_triangle
+  std::vector<float> emissive_pmf_;       // parallel to emissive_prims_
+  AliasTable table_;
+};
+
+// The radiance an emissive material sends from a triangle with lab normal `n` along `w` (pointing
+// away from the surface): Le on the front (dot(n, w) > 0) or on both sides when two-sided.
+glm::vec3 emitted_radiance(const Material& m, glm::vec3 n, glm::vec3 w);
+
+}  // namespace tritrace

@@ -1,0 +1,20 @@
+// The integrator registry.
+#include "tritrace/render/make_integrator.h"
+
+#include "tritrace/render/lab_integrator.h"
+#include "tritrace/render/path_integrator.h"
+
+namespace tritrace {
+
+std::string_view integrator_name(IntegratorSpec::Kind kind) {
+  return kind == IntegratorSpec::Kind::kLab ? "lab" : "path";
+}
+
+std::unique_ptr<Integrator> make_integrator(const IntegratorSpec& spec, const Scene& scene) {
+  if (spec.kind == IntegratorSpec::Kind::kLab) return std::make_unique<LabIntegrator>();
+  PathSettings settings;
+  settings.max_depth = spec.max_depth;
+  return std::make_unique<PathIntegrator>(scene, settings);
+}
+
+}  // namespace tritrace

@@ -1,0 +1,198 @@
+// The path tracer, wavefront style within a batch: all paths of a batch meet their next surface
+// together, then all their shadow rays are traced together, then all their bounce rays.
+#include "tritrace/render/path_integrator.h"
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cmath>
+#include <glm/geometric.hpp>
+
+#include "tritrace/math/sampling.h"
+
+namespace tritrace {
+namespace {
+
+// Per thread, reused by every batch: Ray and Hit initialise their members, which costs when done
+// for hundreds of them per batch.
+struct Scratch {
+  std::array<Ray, kMaxBatch> rays, shadow_rays;
+  std::array<Hit, kMaxBatch> hits;
+  std::array<uint8_t, kMaxBatch> blocked;
+};
+
+Scratch& thread_scratch() {
+  thread_local Scratch scratch;
+  return scratch;
+}
+
+// A point on triangle `prim` moved off it towards the side `n` (its normal, facing the way the ray
+// leaves), first towards the centroid (a point on an edge lies on the neighbour's plane too) then
+// off the surface, as the lab's shadow rays start (lab_integrator.cpp; Wächter and Binder 2019).
+glm::vec3 leave_surface(const TriangleMesh& mesh, uint32_t prim, glm::vec3 x, glm::vec3 n,
+                        const RayOffsetParams& offset) {
+  const glm::vec3 e1 = mesh.e1()[prim], e2 = mesh.e2()[prim];
+  const float extent = triangle_extent(e1, e2);
+  const glm::vec3 inward = mesh.v0()[prim] + (e1 + e2) / 3.0f - x;
+  const float inward_length = std::sqrt(glm::dot(inward, inward));
+  const glm::vec3 inside =
+      inward_length > 0.0f ? offset_ray_origin(x, inward / inward_length, extent, offset) : x;
+  return offset_ray_origin(inside, n, extent, offset);
+}
+
+float max_component(glm::vec3 c) {
+  return std::max({c.x, c.y, c.z});
+}
+
+}  // namespace
+
+PathIntegrator::PathIntegrator(const Scene& scene, const PathSettings& settings,
+                               const RayOffsetParams& offset)
+    : settings_(settings), offset_(offset), lights_(scene) {}
+
+uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& out,
+                                  const Scene& scene, const Accel& accel) const {
+  const size_t n = batch.rays.size();
+  assert(n <= kMaxBatch && batch.samplers.size() == n && out.radiance.size() == n);
+  const TriangleMesh& mesh = scene.mesh;
+  const bool mis = settings_.strategy == PathSettings::Strategy::kMis;
+  const bool light_sampling = settings_.strategy != PathSettings::Strategy::kBsdfOnly;
+  const bool bsdf_finds_lights = settings_.strategy != PathSettings::Strategy::kLightOnly;
+
+  Scratch& scratch = thread_scratch();
+  std::array<glm::vec3, kMaxBatch> throughput, origin_point;
+  std::array<float, kMaxBatch> bsdf_pdf;
+  std::array<uint16_t, kMaxBatch> path;  // active slot -> path index
+  // Shadow rays of the current vertex: their owner and what they bring if unblocked.
+  std::array<uint16_t, kMaxBatch> shadow_owner;
+  std::array<glm::vec3, kMaxBatch> shadow_contribution;
+
+  for (size_t i = 0; i < n; ++i) {
+    out.radiance[i] = glm::vec3(0.0f);
+    throughput[i] = glm::vec3(1.0f);
+    path[i] = static_cast<uint16_t>(i);
+    scratch.rays[i] = batch.rays[i];
+  }
+  size_t active = n;
+  uint64_t traced = n;
+  accel.intersect(std::span<const Ray>(scratch.rays.data(), n), std::span(scratch.hits).first(n));
+  write_first_hit_aovs(scene, batch.rays, std::span<const Hit>(scratch.hits.data(), n), out);
+
+  for (int depth = 0; active > 0; ++depth) {
+    size_t shadows = 0, next = 0;
+    for (size_t k = 0; k < active; ++k) {
+      const Hit& hit = scratch.hits[k];
+      if (!hit.found()) continue;  // escaped: no environment light yet
+      const uint16_t i = path[k];
+      Sampler& sampler = batch.samplers[i];
+      // A fixed number of dimensions per vertex, whichever branches are taken.
+      const float u_light = sampler.get_1d();
+      const glm::vec2 u_light_point = sampler.get_2d();
+      const glm::vec2 u_bsdf = sampler.get_2d();
+      const float u_roulette = sampler.get_1d();
+
+      const uint32_t prim = hit.prim;
+      const Material& material = scene.materials[mesh.material()[prim]];
+      const glm::vec3 x = mesh.v0()[prim] + hit.u * mesh.e1()[prim] + hit.v * mesh.e2()[prim];
+      const glm::vec3 wo = -scratch.rays[k].dir;
+      const glm::vec3 n_lab = mesh.normal()[prim];
+
+      if (material.emits()) {
+        const glm::vec3 le = emitted_radiance(material, n_lab, wo);
+        if (depth == 0) {
+          out.radiance[i] += throughput[i] * le;
+        } else if (bsdf_finds_lights) {
+          const float weight =
+              mis ? power_heuristic(1.0f, bsdf_pdf[i], 1.0f,
+                                    lights_.pdf_triangle(scene, prim, origin_point[i], x))
+                  : 1.0f;
+          out.radiance[i] += throughput[i] * le * weight;
+        }
+      }
+      if (depth == settings_.max_depth) continue;
+
+      // The side the path arrived from: the two-sided surface reflects there.
+      const glm::vec3 n = glm::dot(n_lab, wo) >= 0.0f ? n_lab : -n_lab;
+      const glm::vec3 f = material.albedo * kInvPi;  // Lambert
+      if (light_sampling && !lights_.empty()) {
+        const LightSample ls = lights_.sample(scene, x, u_light, u_light_point);
+        const glm::vec3 to_light = ls.point - x;
+        const float dist2 = glm::dot(to_light, to_light);
+        const float dist = std::sqrt(dist2);
+        const glm::vec3 wi = to_light / dist;
+        const float cos_theta = glm::dot(n, wi);
+        if (ls.pdf > 0.0f && dist > 0.0f && cos_theta > 0.0f && max_component(ls.radiance) > 0.0f) {
+          glm::vec3 contribution;
+          glm::vec3 end;
+          if (ls.delta) {
+            // Intensity / r^2 is the irradiance normal to the light's direction.
+            contribution = throughput[i] * f * ls.radiance * (cos_theta / (dist2 * ls.pdf));
+            end = offset_ray_origin(ls.point, -wi,
+                                    triangle_extent(mesh.e1()[prim], mesh.e2()[prim]), offset_);
+          } else {
+            const float weight =
+                mis ? power_heuristic(1.0f, ls.pdf, 1.0f, cosine_hemisphere_pdf(cos_theta)) : 1.0f;
+            contribution = throughput[i] * f * ls.radiance * (cos_theta * weight / ls.pdf);
+            const glm::vec3 light_side = glm::dot(ls.normal, wi) < 0.0f ? ls.normal : -ls.normal;
+            end =
+                offset_ray_origin(ls.point, light_side,
+                                  triangle_extent(mesh.e1()[ls.prim], mesh.e2()[ls.prim]), offset_);
+          }
+          const glm::vec3 start = leave_surface(mesh, prim, x, n, offset_);
+          const glm::vec3 segment = end - start;
+          const float length = std::sqrt(glm::dot(segment, segment));
+          if (length > 0.0f && glm::dot(segment, wi) > 0.0f) {
+            Ray& r = scratch.shadow_rays[shadows];
+            r.origin = start;
+            r.dir = segment / length;
+            r.tmin = 0.0f;
+            r.tmax = length;
+            shadow_owner[shadows] = i;
+            shadow_contribution[shadows] = contribution;
+            ++shadows;
+          } else {
+            out.radiance[i] += contribution;  // nothing fits between the offsets
+          }
+        }
+      }
+
+      const glm::vec3 local = sample_cosine_hemisphere(u_bsdf);
+      const float pdf = cosine_hemisphere_pdf(local.z);
+      if (!(pdf > 0.0f)) continue;
+      glm::vec3 t = throughput[i] * material.albedo;  // f cos / pdf = albedo for Lambert
+      if (depth + 1 >= settings_.roulette_depth) {
+        const float survive = std::min(1.0f, max_component(t));
+        if (!(u_roulette < survive)) continue;
+        t /= survive;
+      }
+      if (!(max_component(t) > 0.0f)) continue;
+      throughput[i] = t;
+      bsdf_pdf[i] = pdf;
+      origin_point[i] = x;
+      Ray& r = scratch.rays[next];  // next <= k: overwrites only rays already consumed
+      r.origin = leave_surface(mesh, prim, x, n, offset_);
+      r.dir = Frame::from_normal(n).to_world(local);
+      r.tmin = 0.0f;
+      r.tmax = kRayTMax;
+      path[next] = i;
+      ++next;
+    }
+
+    if (shadows > 0) {
+      accel.occluded_incoherent(std::span<const Ray>(scratch.shadow_rays.data(), shadows),
+                                std::span(scratch.blocked).first(shadows));
+      traced += shadows;
+      for (size_t s = 0; s < shadows; ++s) {
+        if (!scratch.blocked[s]) out.radiance[shadow_owner[s]] += shadow_contribution[s];
+      }
+    }
+    active = next;
+    if (active == 0) break;
+    accel.intersect_incoherent(std::span<const Ray>(scratch.rays.data(), active),
+                               std::span(scratch.hits).first(active));
+    traced += active;
+  }
+  return traced;
+}
+
+}  // namespace tritrace

@@ -1,0 +1,45 @@
+// PathIntegrator: unbiased path tracing of diffuse scenes lit by point lights and emissive
+// triangles. At every vertex: next-event estimation (one light chosen by power, one shadow ray) and
+// a cosine-sampled bounce, the two combined by multiple importance sampling with the power
+// heuristic (Veach 1997) where both can find the light; Russian roulette after a few bounces. No
+// clamping. The paths of a batch advance together, one bounce at a time, so each bounce is one
+// batch query to the accel (traced ray by ray: bounce rays are incoherent).
+#pragma once
+
+#include "tritrace/math/offset_ray.h"
+#include "tritrace/render/integrator.h"
+#include "tritrace/render/light_sampler.h"
+
+namespace tritrace {
+
+struct PathSettings {
+  // Path vertices after the camera's: 1 is direct light only (emitters seen by the camera, and
+  // light reaching the first hit directly). High by default, so that Russian roulette, not
+  // truncation, ends paths: the energy a depth of 1024 drops is below albedo^1024.
+  int max_depth = 1024;
+  // Bounces before Russian roulette may end a path.
+  int roulette_depth = 3;
+  // Which strategies find emissive triangles: both, combined by MIS (the default), or one alone
+  // (for tests: each alone is unbiased too).
+  enum class Strategy { kMis, kLightOnly, kBsdfOnly };
+  Strategy strategy = Strategy::kMis;
+};
+
+class PathIntegrator final : public Integrator {
+ public:
+  // Keeps a reference to the scene's emitters (built here): the scene must outlive it.
+  PathIntegrator(const Scene& scene, const PathSettings& settings = {},
+                 const RayOffsetParams& offset = {});
+
+  uint64_t radiance(const SampleBatch& batch, const SampleOutput& out, const Scene& scene,
+                    const Accel& accel) const override;
+
+  const PathSettings& settings() const { return settings_; }
+
+ private:
+  PathSettings settings_;
+  RayOffsetParams offset_;
+  LightSampler lights_;
+};
+
+}  // namespace tritrace
