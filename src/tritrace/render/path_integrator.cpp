@@ -56,7 +56,8 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
   assert(n <= kMaxBatch && batch.samplers.size() == n && out.radiance.size() == n);
   const TriangleMesh& mesh = scene.mesh;
   const bool mis = settings_.strategy == PathSettings::Strategy::kMis;
-  const bool light_sampling = settings_.strategy != PathSettings::Strategy::kBsdfOnly;
+  // Point lights are found by light sampling only, whatever the strategy for emissive triangles.
+  const bool light_finds_triangles = settings_.strategy != PathSettings::Strategy::kBsdfOnly;
   const bool bsdf_finds_lights = settings_.strategy != PathSettings::Strategy::kLightOnly;
 
   Scratch& scratch = thread_scratch();
@@ -114,8 +115,9 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       // The side the path arrived from: the two-sided surface reflects there.
       const glm::vec3 n = glm::dot(n_lab, wo) >= 0.0f ? n_lab : -n_lab;
       const glm::vec3 f = material.albedo * kInvPi;  // Lambert
-      if (light_sampling && !lights_.empty()) {
-        const LightSample ls = lights_.sample(scene, x, u_light, u_light_point);
+      if (!lights_.empty()) {
+        LightSample ls = lights_.sample(scene, x, u_light, u_light_point);
+        if (!ls.delta && !light_finds_triangles) ls.pdf = 0.0f;
         const glm::vec3 to_light = ls.point - x;
         const float dist2 = glm::dot(to_light, to_light);
         const float dist = std::sqrt(dist2);

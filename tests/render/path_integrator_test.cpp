@@ -1,0 +1,361 @@
+// The path tracer against exact answers: a white furnace (a closed room of albedo a emitting Le
+// everywhere has radiance Le / (1 - a) at every point), direct light from the lab's point light at
+// hand-computed pixels, agreement of its three ways of finding emitters (MIS, light sampling only,
+// BSDF sampling only), the solid angle density of light sampling against the analytic solid angle
+// of a triangle, and images independent of threads, tiles and how samples are split into calls.
+#include "tritrace/render/path_integrator.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <numbers>
+#include <vector>
+
+#include "tritrace/accel/brute_force.h"
+#include "tritrace/accel/bvh/bvh_accel.h"
+#include "tritrace/math/sampling.h"
+#include "tritrace/render/renderer.h"
+#include "tritrace/scene/cornell_box.h"
+
+namespace tritrace {
+namespace {
+
+// The lab's box, its front (z = -1) closed by two more triangles, every surface of albedo `a`
+// emitting `le` from both sides; the camera inside, half way to the back wall.
+Scene furnace(float a, float le, int side) {
+  Scene scene = make_cornell_box({.width = side, .height = side});
+  scene.lights.clear();
+  scene.mesh.add({1, 1, -1}, {-1, 1, -1}, {-1, -1, -1}, 0);
+  scene.mesh.add({1, 1, -1}, {-1, -1, -1}, {1, -1, -1}, 0);
+  for (Material& m : scene.materials) {
+    m = Material{.albedo = glm::vec3(a), .emission = glm::vec3(le), .two_sided = true};
+  }
+  scene.camera = Camera(side, side, 0.3, 0.5f);
+  return scene;
+}
+
+struct PixelStats {
+  double mean = 0.0;  // over the pixels and channels
+  double pixel_sd = 0.0;
+  double max_abs_z = 0.0;  // of single pixels, against `expected`, in units of pixel_sd
+};
+
+PixelStats stats_against(const Image& image, double expected) {
+  std::vector<double> v;
+  for (const glm::vec3& p : image.pixels()) v.push_back((p.x + p.y + p.z) / 3.0);
+  PixelStats s;
+  for (double x : v) s.mean += x;
+  s.mean /= static_cast<double>(v.size());
+  double var = 0.0;
+  for (double x : v) var += (x - s.mean) * (x - s.mean);
+  s.pixel_sd = std::sqrt(var / static_cast<double>(v.size() - 1));
+  for (double x : v) s.max_abs_z = std::max(s.max_abs_z, std::abs(x - expected) / s.pixel_sd);
+  return s;
+}
+
+class WhiteFurnace : public ::testing::TestWithParam<float> {};
+
+// In a furnace every pixel has the same distribution, so the spread over the pixels measures each
+// pixel's noise; the image mean is a z-test with that standard error.
+TEST_P(WhiteFurnace, EveryPixelIsEmissionOverOneMinusAlbedo) {
+  const float a = GetParam();
+  const float le = 0.75f;
+  const Scene scene = furnace(a, le, 32);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator integrator(scene);
+  const Image image = render(scene, accel, integrator, {.spp = 256, .seed = 7});
+  const double expected = le / (1.0 - a);
+  const PixelStats s = stats_against(image, expected);
+  const double standard_error = s.pixel_sd / std::sqrt(static_cast<double>(image.pixels().size()));
+  EXPECT_LT(std::abs(s.mean - expected), 4.0 * standard_error)
+      << "mean " << s.mean << " expected " << expected << " se " << standard_error;
+  // No pixel strays: 5 standard deviations over 1024 pixels.
+  EXPECT_LT(s.max_abs_z, 5.0);
+  // The test has the power to tell an albedo 1% off (a transport that loses or gains 1% per
+  // bounce): its answer is more than 4 standard errors away.
+  const double off = le / (1.0 - 1.01 * a);
+  EXPECT_GT(off - expected, 4.0 * standard_error);
+}
+
+INSTANTIATE_TEST_SUITE_P(Albedos, WhiteFurnace, ::testing::Values(0.5f, 0.8f, 0.95f),
+                         [](const auto& info) {
+                           // Appended rather than "a" + ..., which trips GCC 12's -Wrestrict.
+                           std::string name = "a";
+                           name += std::to_string(static_cast<int>(info.param * 100));
+                           return name;
+                         });
+
+// Direct light only (max depth 1) from the lab's point light, through pixel centres: radiance
+// rho / pi * 14 max(n.l, 0) / (4 pi r^2), worked out in double from where the camera ray meets
+// the wall (not by tracing).
+struct D3 {
+  double x, y, z;
+};
+
+D3 centre_ray_meets_plane(int px, int py, int axis, double value) {
+  const D3 o{0.0, 0.0, -3.0};
+  const D3 d{px + 0.5 - 250.0, py + 0.5 - 250.0, 500.0};
+  const double oc[3] = {o.x, o.y, o.z}, dc[3] = {d.x, d.y, d.z};
+  const double s = (value - oc[axis]) / dc[axis];
+  return {o.x + s * d.x, o.y + s * d.y, o.z + s * d.z};
+}
+
+double direct_radiance(D3 x, D3 n, double rho) {
+  const D3 light{0.0, -0.5, -0.7};
+  const D3 r{light.x - x.x, light.y - x.y, light.z - x.z};
+  const double r2 = r.x * r.x + r.y * r.y + r.z * r.z;
+  const double cos = std::max(0.0, (r.x * n.x + r.y * n.y + r.z * n.z) / std::sqrt(r2));
+  return rho / std::numbers::pi * 14.0 * cos / (4.0 * std::numbers::pi * r2);
+}
+
+glm::vec3 trace_pixel_centre(const Scene& scene, const Accel& accel, const PathIntegrator& pt,
+                             int x, int y) {
+  const Ray ray =
+      scene.camera.ray_through(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f);
+  Sampler sampler(3);
+  sampler.start_pixel_sample(x, y, 0);
+  glm::vec3 radiance;
+  pt.radiance(SampleBatch{std::span<const Ray>(&ray, 1), std::span<Sampler>(&sampler, 1)},
+              SampleOutput{std::span<glm::vec3>(&radiance, 1)}, scene, accel);
+  return radiance;
+}
+
+TEST(PathDirectLight, MatchesTheLabFormulaAtPixelCentres) {
+  const Scene scene = make_cornell_box();
+  const BruteForceAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator pt(scene, PathSettings{.max_depth = 1});
+  struct Case {
+    int x, y, axis;
+    double plane;
+    D3 normal;
+    glm::vec3 rho;
+  };
+  const Case cases[] = {
+      {250, 150, 2, 1.0, {0, 0, -1}, {0.75f, 0.75f, 0.75f}},  // back wall above the tall block
+      {100, 250, 0, -1.0, {1, 0, 0}, {0.75f, 0.15f, 0.75f}},  // purple wall
+      {400, 200, 0, 1.0, {-1, 0, 0}, {0.75f, 0.75f, 0.15f}},  // yellow wall
+      {96, 474, 1, 1.0, {0, -1, 0}, {0.15f, 0.75f, 0.15f}},   // floor in front of the blocks
+  };
+  for (const Case& c : cases) {
+    const D3 x = centre_ray_meets_plane(c.x, c.y, c.axis, c.plane);
+    const glm::vec3 got = trace_pixel_centre(scene, accel, pt, c.x, c.y);
+    for (int k = 0; k < 3; ++k) {
+      const double want = direct_radiance(x, c.normal, c.rho[k]);
+      EXPECT_NEAR(got[k], want, 1e-5 * want + 1e-7) << "pixel " << c.x << "," << c.y;
+    }
+  }
+  // In the tall block's shadow (the lab test's pixel, a separate tracer's choice): no direct light.
+  EXPECT_EQ(trace_pixel_centre(scene, accel, pt, 138, 402), glm::vec3(0.0f));
+}
+
+TEST(PathDirectLight, MaxDepthZeroSeesOnlyEmitters) {
+  const Scene scene = make_cornell_area({.width = 64, .height = 64});
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator pt(scene, PathSettings{.max_depth = 0});
+  const Image image = render(scene, accel, pt, {.spp = 1});
+  int lit = 0;
+  for (const glm::vec3& p : image.pixels()) {
+    EXPECT_TRUE(p == glm::vec3(0.0f) || p == kAreaLightRadiance);
+    lit += p == kAreaLightRadiance;
+  }
+  EXPECT_GT(lit, 0) << "the camera sees the ceiling light";
+}
+
+// Mean radiance over blocks of the image and over the whole image, from independent renders
+// (different seeds): the batch-to-batch spread gives each mean's standard error without assuming
+// anything about the estimator.
+struct BlockMeans {
+  std::vector<double> mean, standard_error;  // per 8 x 8 block, then the whole image last
+};
+
+BlockMeans block_means(const Scene& scene, const Accel& accel, const PathSettings& settings,
+                       uint64_t seed0, uint32_t spp) {
+  constexpr int kBatches = 16, kBlock = 8;
+  const PathIntegrator pt(scene, settings);
+  const int w = scene.camera.width(), h = scene.camera.height();
+  const int blocks = (w / kBlock) * (h / kBlock);
+  std::vector<std::vector<double>> per_batch(kBatches, std::vector<double>(blocks + 1, 0.0));
+  for (int b = 0; b < kBatches; ++b) {
+    const Image image = render(scene, accel, pt, {.spp = spp, .seed = seed0 + b});
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const glm::vec3 p = image.at(x, y);
+        const double v = (p.x + p.y + p.z) / 3.0;
+        per_batch[b][(y / kBlock) * (w / kBlock) + x / kBlock] += v / (kBlock * kBlock);
+        per_batch[b][blocks] += v / (w * h);
+      }
+    }
+  }
+  BlockMeans out;
+  for (int k = 0; k <= blocks; ++k) {
+    double m = 0.0, v = 0.0;
+    for (int b = 0; b < kBatches; ++b) m += per_batch[b][k] / kBatches;
+    for (int b = 0; b < kBatches; ++b) v += (per_batch[b][k] - m) * (per_batch[b][k] - m);
+    out.mean.push_back(m);
+    out.standard_error.push_back(std::sqrt(v / (kBatches - 1) / kBatches));
+  }
+  return out;
+}
+
+// Each strategy alone is unbiased, and so is their MIS combination: they must agree. MIS and light
+// sampling are precise enough that the image means resolve a fraction of a percent (a strategy
+// counted twice, or a wrong density, shows); BSDF sampling alone is far noisier with this small
+// light and is compared with what its noise allows.
+// k-th block (the last entry: the whole image) of a and b differ by less than 4.5 standard errors.
+int expect_agree(const BlockMeans& a, const BlockMeans& b, const char* what) {
+  int checked = 0;
+  for (size_t k = 0; k < a.mean.size(); ++k) {
+    const double se = std::hypot(a.standard_error[k], b.standard_error[k]);
+    if (se == 0.0 && a.mean[k] == b.mean[k]) continue;
+    ++checked;
+    EXPECT_LT(std::abs(a.mean[k] - b.mean[k]), 4.5 * se)
+        << what << (k + 1 == a.mean.size() ? " image" : " block ") << k << ": " << a.mean[k]
+        << " vs " << b.mean[k] << " (se " << se << ")";
+  }
+  return checked;
+}
+
+using Strategy = PathSettings::Strategy;
+
+// cornell-area seen from the lab camera's position looking down at the blocks and floor: the light
+// itself is out of view, so that pixels straddling its edge (10 against about 0.1 around them) do
+// not dominate the noise of the image means.
+Scene cornell_area_below_the_light() {
+  Scene scene = make_cornell_area({.width = 32, .height = 32});
+  scene.camera =
+      Camera::look_at(32, 32, {0.0f, 0.0f, -3.0f}, {0.0f, 0.6f, 0.2f}, {0.0f, -1.0f, 0.0f}, 40.0f);
+  return scene;
+}
+
+TEST(PathStrategies, MisLightOnlyAndBsdfOnlyAgreeOnCornellArea) {
+  const Scene scene = cornell_area_below_the_light();
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const BlockMeans mis = block_means(scene, accel, {.strategy = Strategy::kMis}, 100, 16);
+  const BlockMeans light = block_means(scene, accel, {.strategy = Strategy::kLightOnly}, 200, 16);
+  const BlockMeans bsdf = block_means(scene, accel, {.strategy = Strategy::kBsdfOnly}, 300, 16);
+  EXPECT_GT(expect_agree(mis, light, "mis vs light only"), 16);
+  EXPECT_GT(expect_agree(mis, bsdf, "mis vs bsdf only"), 16);
+  // MIS is the least noisy of the three over the image (the point of combining them).
+  double se_mis = 0.0, se_bsdf = 0.0;
+  for (size_t k = 0; k < mis.mean.size(); ++k) {
+    se_mis += mis.standard_error[k];
+    se_bsdf += bsdf.standard_error[k];
+  }
+  EXPECT_LT(se_mis, se_bsdf);
+}
+
+// Light found directly and after one bounce (max depth 2), where MIS and light sampling are precise
+// enough for the image means to resolve half a percent: a strategy counted twice, or a density
+// off by a factor, shows here.
+TEST(PathStrategies, MisAndLightSamplingAgreeToHalfAPercent) {
+  const Scene scene = cornell_area_below_the_light();
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const BlockMeans mis =
+      block_means(scene, accel, {.max_depth = 2, .strategy = Strategy::kMis}, 400, 48);
+  const BlockMeans light =
+      block_means(scene, accel, {.max_depth = 2, .strategy = Strategy::kLightOnly}, 500, 48);
+  expect_agree(mis, light, "mis vs light only, depth 2");
+  const double image_se = std::hypot(mis.standard_error.back(), light.standard_error.back());
+  ::testing::Test::RecordProperty("image_mean", std::to_string(mis.mean.back()));
+  ::testing::Test::RecordProperty("image_standard_error", std::to_string(image_se));
+  EXPECT_LT(4.5 * image_se, 0.005 * mis.mean.back()) << "the test resolves half a percent";
+}
+
+// The solid angle a triangle subtends from x: Van Oosterom and Strackee, "The Solid Angle of a
+// Plane Triangle", IEEE Trans. Biomed. Eng. 30(2), 1983, in double.
+double solid_angle(glm::dvec3 x, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) {
+  const glm::dvec3 r1 = a - x, r2 = b - x, r3 = c - x;
+  const double l1 = glm::length(r1), l2 = glm::length(r2), l3 = glm::length(r3);
+  const double num = glm::dot(r1, glm::cross(r2, r3));
+  const double den =
+      l1 * l2 * l3 + glm::dot(r1, r2) * l3 + glm::dot(r1, r3) * l2 + glm::dot(r2, r3) * l1;
+  return std::abs(2.0 * std::atan2(num, den));
+}
+
+// E[1 / pdf] over light samples is the solid angle of what the sampler covers: the check that
+// the density pdf_triangle and sample() report is the density of the points sample() draws.
+TEST(LightSampling, SolidAngleDensityMatchesTheAnalyticSolidAngle) {
+  Scene scene;
+  scene.materials.push_back({.albedo = glm::vec3(0.0f), .emission = glm::vec3(1.0f)});
+  const glm::vec3 a(-0.3f, 1.0f, 0.2f), b(0.9f, 1.1f, -0.4f), c(0.1f, 0.8f, 0.9f);
+  scene.mesh.add(a, b, c, 0);
+  scene.materials[0].two_sided = true;
+  const LightSampler lights(scene);
+  for (const glm::vec3 x :
+       {glm::vec3(0.0f), glm::vec3(0.5f, -1.0f, 2.0f), glm::vec3(0.2f, 0.9f, 0.3f)}) {
+    Sampler sampler(11);
+    double sum = 0.0;
+    constexpr int kN = 200000;
+    for (int i = 0; i < kN; ++i) {
+      sampler.start_pixel_sample(i, 0, 0);
+      const LightSample s = lights.sample(scene, x, sampler.get_1d(), sampler.get_2d());
+      ASSERT_GT(s.pdf, 0.0f);
+      EXPECT_NEAR(lights.pdf_triangle(scene, 0, x, s.point), s.pdf, 1e-4f * s.pdf);
+      sum += 1.0 / s.pdf;
+    }
+    const double want = solid_angle(x, a, b, c);
+    EXPECT_NEAR(sum / kN, want, 0.01 * want) << "from " << x.x << "," << x.y << "," << x.z;
+  }
+}
+
+// Lights are chosen in proportion to their power: a point light of power 14 (mean over channels)
+// against a triangle of area 0.5 emitting 2 on one side (power 2 * 0.5 * pi).
+TEST(LightSampling, ChoosesLightsInProportionToPower) {
+  Scene scene;
+  scene.lights.push_back({glm::vec3(0.0f, -1.0f, 0.0f), glm::vec3(10.0f, 14.0f, 18.0f)});
+  scene.materials.push_back({.albedo = glm::vec3(0.0f), .emission = glm::vec3(2.0f)});
+  scene.mesh.add({0, 0, 0}, {1, 0, 0}, {0, 0, 1}, 0);
+  const LightSampler lights(scene);
+  const double point = 14.0, tri = 2.0 * 0.5 * std::numbers::pi;
+  EXPECT_NEAR(lights.pmf(0), point / (point + tri), 1e-6);
+  EXPECT_NEAR(lights.pmf(1), tri / (point + tri), 1e-6);
+  int points = 0;
+  constexpr int kN = 100000;
+  for (int i = 0; i < kN; ++i) {
+    const float u = (static_cast<float>(i) + 0.5f) / kN;
+    points += lights.sample(scene, glm::vec3(0.3f, 1.0f, 0.3f), u, {0.5f, 0.5f}).delta;
+  }
+  EXPECT_NEAR(static_cast<double>(points) / kN, point / (point + tri), 1e-3);
+}
+
+bool same_bits(const Image& a, const Image& b) {
+  return a.pixels().size() == b.pixels().size() &&
+         std::memcmp(a.pixels().data(), b.pixels().data(), a.pixels().size() * sizeof(glm::vec3)) ==
+             0;
+}
+
+TEST(PathRender, BitIdenticalForAnyThreadCountAndTileSize) {
+  const Scene scene = make_cornell_area({.width = 40, .height = 24});
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator pt(scene);
+  const Image want = render(scene, accel, pt, {.threads = 1, .tile_size = 16, .spp = 4});
+  for (int threads : {1, 2, 5}) {
+    for (int tile : {16, 7, 5, 1}) {
+      const Image got = render(scene, accel, pt, {.threads = threads, .tile_size = tile, .spp = 4});
+      EXPECT_TRUE(same_bits(want, got)) << threads << " threads, tile " << tile;
+    }
+  }
+  const BruteForceAccel brute(scene.mesh, kDefaultKernel);
+  EXPECT_TRUE(same_bits(want, render(scene, brute, pt, {.spp = 4})))
+      << "brute force and the BVH return the same hits, so the same image";
+}
+
+TEST(PathRender, SampleRangesAddUpToTheWholeRender) {
+  const Scene scene = make_cornell_area({.width = 24, .height = 24});
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator pt(scene);
+  Film whole(24, 24), parts(24, 24);
+  render_to_film(scene, accel, pt, whole, {.spp = 6, .seed = 5});
+  render_to_film(scene, accel, pt, parts, {.spp = 2, .first_sample = 0, .seed = 5});
+  render_to_film(scene, accel, pt, parts, {.spp = 1, .first_sample = 2, .seed = 5});
+  render_to_film(scene, accel, pt, parts, {.spp = 3, .first_sample = 3, .seed = 5});
+  EXPECT_TRUE(same_bits(whole.resolve(), parts.resolve()));
+  Film other_seed(24, 24);
+  render_to_film(scene, accel, pt, other_seed, {.spp = 6, .seed = 6});
+  EXPECT_FALSE(same_bits(whole.resolve(), other_seed.resolve()));
+}
+
+}  // namespace
+}  // namespace tritrace
