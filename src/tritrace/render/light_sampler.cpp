@@ -6,6 +6,8 @@
 #include <glm/geometric.hpp>
 #include <limits>
 
+#include "tritrace/math/offset_ray.h"
+
 namespace tritrace {
 namespace {
 
@@ -27,9 +29,15 @@ glm::vec3 emitted_radiance(const Material& m, glm::vec3 n, glm::vec3 w) {
 LightSampler::LightSampler(const Scene& scene) {
   std::vector<float> power;
   for (uint32_t i = 0; i < scene.lights.size(); ++i) {
-    const float p = mean(scene.lights[i].power);
+    const PointLight& l = scene.lights[i];
+    const float p = mean(l.power);
     if (!(p > 0.0f)) continue;
-    lights_.push_back({i, true});
+    Light light{};
+    light.index = i;
+    light.point = true;
+    light.p0 = l.position;
+    light.radiance = l.power / (4.0f * kPi);
+    lights_.push_back(light);
     power.push_back(p);
   }
   const TriangleMesh& mesh = scene.mesh;
@@ -40,46 +48,57 @@ LightSampler::LightSampler(const Scene& scene) {
     // Flux of a Lambertian emitter: Le * area * pi per side.
     const float p = mean(m.emission) * area * kPi * (m.two_sided ? 2.0f : 1.0f);
     if (!(p > 0.0f) || !std::isfinite(p)) continue;
-    lights_.push_back({prim, false});
+    Light light{};
+    light.index = prim;
+    light.point = false;
+    light.two_sided = m.two_sided;
+    light.p0 = mesh.v0()[prim];
+    light.e1 = mesh.e1()[prim];
+    light.e2 = mesh.e2()[prim];
+    light.normal = mesh.normal()[prim];
+    light.radiance = m.emission;
+    light.extent = triangle_extent(light.e1, light.e2);
+    lights_.push_back(light);
     power.push_back(p);
     emissive_prims_.push_back(prim);
   }
   table_ = AliasTable(power);
   const size_t first_triangle = lights_.size() - emissive_prims_.size();
-  for (size_t k = 0; k < emissive_prims_.size(); ++k) {
-    emissive_pmf_.push_back(table_.pmf(static_cast<uint32_t>(first_triangle + k)));
+  for (size_t k = 0; k < lights_.size(); ++k) {
+    Light& light = lights_[k];
+    const float pmf = table_.pmf(static_cast<uint32_t>(k));
+    if (!light.point) light.pmf_over_area = pmf / triangle_area(mesh, light.index);
+    if (k >= first_triangle) emissive_pmf_over_area_.push_back(light.pmf_over_area);
   }
 }
 
-LightSample LightSampler::sample(const Scene& scene, glm::vec3 x, float u_select,
+LightSample LightSampler::sample(const Scene& /*scene*/, glm::vec3 x, float u_select,
                                  glm::vec2 u_point) const {
   LightSample out;
   if (table_.empty()) return out;
   const AliasTable::Sample pick = table_.sample(u_select);
   const Light& light = lights_[pick.index];
   if (light.point) {
-    const PointLight& p = scene.lights[light.index];
-    out.point = p.position;
-    out.radiance = p.power / (4.0f * kPi);  // intensity
-    out.pdf = pick.pmf;                     // a probability, not a density: delta
+    out.point = light.p0;
+    out.radiance = light.radiance;  // intensity
+    out.pdf = pick.pmf;             // a probability, not a density: delta
     out.delta = true;
     return out;
   }
-  const TriangleMesh& mesh = scene.mesh;
-  const uint32_t prim = light.index;
-  out.prim = prim;
+  out.prim = light.index;
+  out.extent = light.extent;
   const glm::vec3 b = sample_uniform_triangle(u_point);
-  const glm::vec3 v0 = mesh.v0()[prim];
-  out.point = v0 + b.y * mesh.e1()[prim] + b.z * mesh.e2()[prim];
-  out.normal = mesh.normal()[prim];
+  out.point = light.p0 + b.y * light.e1 + b.z * light.e2;
+  out.normal = light.normal;
   const glm::vec3 to_x = x - out.point;
   const float dist2 = glm::dot(to_x, to_x);
   if (!(dist2 > 0.0f)) return out;
-  const glm::vec3 w = to_x / std::sqrt(dist2);
-  const float cos_light = std::abs(glm::dot(out.normal, w));
-  out.radiance = emitted_radiance(scene.materials[mesh.material()[prim]], out.normal, w);
+  const float cos_out = glm::dot(light.normal, to_x);  // times the distance
+  if (!(light.two_sided || cos_out > 0.0f)) return out;
+  const float cos_light = std::abs(cos_out) / std::sqrt(dist2);
   if (!(cos_light > 0.0f)) return out;
-  out.pdf = pick.pmf * dist2 / (triangle_area(mesh, prim) * cos_light);
+  out.radiance = light.radiance;
+  out.pdf = light.pmf_over_area * dist2 / cos_light;
   return out;
 }
 
@@ -87,12 +106,13 @@ float LightSampler::pdf_triangle(const Scene& scene, uint32_t prim, glm::vec3 x,
                                  glm::vec3 y) const {
   const auto it = std::lower_bound(emissive_prims_.begin(), emissive_prims_.end(), prim);
   if (it == emissive_prims_.end() || *it != prim) return 0.0f;
-  const float pmf = emissive_pmf_[static_cast<size_t>(it - emissive_prims_.begin())];
+  const float pmf_over_area =
+      emissive_pmf_over_area_[static_cast<size_t>(it - emissive_prims_.begin())];
   const glm::vec3 d = x - y;
   const float dist2 = glm::dot(d, d);
   const float cos_light = std::abs(glm::dot(scene.mesh.normal()[prim], d)) / std::sqrt(dist2);
   if (!(cos_light > 0.0f)) return 0.0f;
-  return pmf * dist2 / (triangle_area(scene.mesh, prim) * cos_light);
+  return pmf_over_area * dist2 / cos_light;
 }
 
 }  // namespace tritrace

@@ -19,6 +19,7 @@ struct LightSample {
   float pdf = 0.0f;          // solid angle density at the shading point; inf for a point light
   bool delta = false;        // a point light: no other strategy can sample it
   uint32_t prim = 0;         // the emissive triangle (unused for a point light)
+  float extent = 0.0f;       // the triangle's largest edge component (for the shadow ray's end)
 };
 
 class LightSampler {
@@ -41,13 +42,20 @@ class LightSampler {
   float pmf(size_t i) const { return table_.pmf(static_cast<uint32_t>(i)); }
 
  private:
+  // What sampling a light reads, in one place (no trips through the scene's arrays): for a point
+  // light its position and intensity; for a triangle its vertex, edges, normal and radiance.
   struct Light {
     uint32_t index;  // into scene.lights for a point light, else the triangle's prim
     bool point;
+    bool two_sided;
+    glm::vec3 p0, e1, e2, normal;
+    glm::vec3 radiance;   // Le, or a point light's intensity P / (4 pi)
+    float pmf_over_area;  // the probability of choosing it, per unit area (triangles)
+    float extent;         // the triangle's largest edge component, for ray offsets
   };
   std::vector<Light> lights_;
-  std::vector<uint32_t> emissive_prims_;  // sorted, for pdf_triangle
-  std::vector<float> emissive_pmf_;       // parallel to emissive_prims_
+  std::vector<uint32_t> emissive_prims_;       // sorted, for pdf_triangle
+  std::vector<float> emissive_pmf_over_area_;  // parallel to emissive_prims_
   AliasTable table_;
 };
 

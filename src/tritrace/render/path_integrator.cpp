@@ -112,8 +112,10 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       }
       if (depth == settings_.max_depth) continue;
 
-      // The side the path arrived from: the two-sided surface reflects there.
+      // The side the path arrived from: the two-sided surface reflects there, and both the shadow
+      // ray and the bounce leave from that side.
       const glm::vec3 n = glm::dot(n_lab, wo) >= 0.0f ? n_lab : -n_lab;
+      const glm::vec3 start = leave_surface(mesh, prim, x, n, offset_);
       const glm::vec3 f = material.albedo * kInvPi;  // Lambert
       if (!lights_.empty()) {
         LightSample ls = lights_.sample(scene, x, u_light, u_light_point);
@@ -140,7 +142,6 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
                 offset_ray_origin(ls.point, light_side,
                                   triangle_extent(mesh.e1()[ls.prim], mesh.e2()[ls.prim]), offset_);
           }
-          const glm::vec3 start = leave_surface(mesh, prim, x, n, offset_);
           const glm::vec3 segment = end - start;
           const float length = std::sqrt(glm::dot(segment, segment));
           if (length > 0.0f && glm::dot(segment, wi) > 0.0f) {
@@ -172,7 +173,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       bsdf_pdf[i] = pdf;
       origin_point[i] = x;
       Ray& r = scratch.rays[next];  // next <= k: overwrites only rays already consumed
-      r.origin = leave_surface(mesh, prim, x, n, offset_);
+      r.origin = start;
       r.dir = Frame::from_normal(n).to_world(local);
       r.tmin = 0.0f;
       r.tmax = kRayTMax;

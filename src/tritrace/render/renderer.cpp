@@ -164,7 +164,7 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
                 weight[n] = 1.0f;
               } else {
                 Sampler& sampler = samplers[n];
-                sampler = Sampler(options.seed);
+                if (sampler.seed() != options.seed) sampler = Sampler(options.seed);
                 sampler.start_pixel_sample(x, y, s);
                 const glm::vec2 u = sampler.get_pixel_2d();
                 const PixelFilter::Sample f = filter.sample(u.x, u.y);
