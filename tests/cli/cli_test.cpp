@@ -781,6 +781,79 @@ void WriteText(const fs::path& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
 }
 
+// ---- The path tracer ------------------------------------------------------------------------
+
+TEST_F(CliTest, CornellAreaIsPathTracedAndTheSummaryGivesSpp) {
+  const RunResult r = Run({"render", "--scene", "cornell-area", "--spp", "4", "--width", "32",
+                           "--height", "24", "-o", "area.png"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("rendered 32x24, 4 spp in "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Mpaths/s"), std::string::npos) << r.out;
+  ExpectRgb8Image(work_ / "area.png", 32, 24);
+}
+
+TEST_F(CliTest, PathImagesAreByteIdenticalForAnyThreadCountAndChangeWithTheSeed) {
+  const std::vector<std::string> base = {"--scene", "cornell-area", "--spp",    "3",
+                                         "--width", "40",           "--height", "40"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = base;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  };
+  const std::string one = RenderQuietly(with({"--threads", "1"}), "one.pfm");
+  const std::string two = RenderQuietly(with({"--threads", "2"}), "two.pfm");
+  const std::string seeded = RenderQuietly(with({"--seed", "9"}), "seeded.pfm");
+  EXPECT_FALSE(one.empty());
+  EXPECT_TRUE(one == two);
+  EXPECT_FALSE(one == seeded) << "--seed changes the random numbers";
+}
+
+TEST_F(CliTest, IntegratorFlagSwitchesTheLabBoxToPathTracing) {
+  const std::string lab = RenderQuietly({"--width", "32", "--height", "32"}, "lab.pfm");
+  const std::string path = RenderQuietly(
+      {"--width", "32", "--height", "32", "--integrator", "path", "--spp", "2"}, "path.pfm");
+  const std::string lab_again = RenderQuietly(
+      {"--width", "32", "--height", "32", "--integrator", "lab", "--spp", "7"}, "lab7.pfm");
+  EXPECT_FALSE(lab == path);
+  EXPECT_TRUE(lab == lab_again) << "the lab integrator takes one sample whatever --spp says";
+}
+
+TEST_F(CliTest, BadPathFlagsNameTheFlagAndExitTwo) {
+  ExpectErrorLine(Run({"render", "--integrator", "whitted"}), 2, "--integrator",
+                  "unknown integrator 'whitted'");
+  ExpectErrorLine(Run({"render", "--spp", "0"}), 2, "--spp", "");
+  ExpectErrorLine(Run({"render", "--max-depth", "-1"}), 2, "--max-depth", "");
+  ExpectErrorLine(Run({"render", "--seed", "x"}), 2, "--seed", "");
+  ExpectErrorLine(Run({"render", "--filter", "mitchell"}), 2, "--filter", "unknown filter");
+  ExpectOnlyFiles(work_, {});
+}
+
+TEST_F(CliTest, SceneFileIntegratorObjectIsReadAndChecked) {
+  const std::string scene = R"({
+    "camera": {"width": 16, "height": 16},
+    "materials": [{"name": "lamp", "albedo": [0, 0, 0], "emission": [2, 2, 2], "two_sided": true}],
+    "meshes": [{"material": "lamp", "positions": [[-5, -5, 1], [5, -5, 1], [0, 5, 1]],
+                "triangles": [[0, 1, 2]]}],
+    "integrator": {"type": "path", "spp": 2, "max_depth": 0, "seed": 1}
+  })";
+  WriteText(work_ / "lamp.json", scene);
+  const std::string pfm = RenderQuietly({"lamp.json"}, "lamp.pfm");
+  // The camera sees the two-sided emitter straight ahead: the centre pixel is its radiance, 2.
+  const size_t header = pfm.find("-1.0\n");
+  ASSERT_NE(header, std::string::npos);
+  float centre[3];
+  std::memcpy(centre, pfm.data() + header + 5 + (8 * 16 + 8) * 3 * sizeof(float), sizeof centre);
+  EXPECT_EQ(centre[0], 2.0f);
+  EXPECT_EQ(centre[2], 2.0f);
+
+  WriteText(work_ / "bad.json", R"({"meshes": [{"generator": "cornell"}],
+                                     "integrator": {"type": "bidirectional"}})");
+  ExpectErrorLine(Run({"render", "bad.json"}), 1, "bad.json", "/integrator/type");
+  WriteText(work_ / "bad2.json", R"({"meshes": [{"generator": "cornell"}],
+                                      "integrator": {"spp": 0}})");
+  ExpectErrorLine(Run({"render", "bad2.json"}), 1, "bad2.json", "/integrator/spp");
+}
+
 struct FileErrorCase {
   std::string name;
   std::string file;                                        // the argument to render
