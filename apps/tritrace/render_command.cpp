@@ -77,8 +77,9 @@ void check_output_options(const RenderArgs& args, const std::string& output) {
   if (args.exr_half && format != ImageFormat::kExr) {
     throw Error("--exr-half", "needs an .exr output, got '" + output + "'", ExitCode::kUsage);
   }
-  // Exposure is part of the display transform, as in pbrt and Blender: float files keep the
-  // radiance the renderer computed, so a viewer can expose them however it likes.
+  // Exposure is a display choice: float files keep the radiance the renderer computed, and a
+  // viewer or compositor exposes them however it likes. Ignoring the flag silently would hide a
+  // mistake, so it is refused.
   if (!args.exposure.empty() && is_float_format(format)) {
     throw Error("--exposure",
                 "applies to 8-bit outputs (.png, .ppm); .pfm and .exr store the radiance "
