@@ -7,6 +7,8 @@ packages=(
   build-essential cmake pkg-config git
   libglm-dev libtbb-dev libcli11-dev libstb-dev libembree-dev nlohmann-json3-dev
   libassimp-dev assimp-testmodels
+  # OpenEXR 3.1 for .exr output (float or half RGB with AOV layers).
+  libopenexr-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   # tritrace-view: SDL2, SDL2_ttf and the overlay's font; its tests run it in Xvfb and press keys
   # with xdotool; libx11-dev for the viewer's X error handler and for the test that closes its

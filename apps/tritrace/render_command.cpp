@@ -6,6 +6,8 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <optional>
+#include <string_view>
 
 #include "flags/flag_values.h"
 #include "progress.h"
@@ -31,7 +33,58 @@ std::string default_output(const std::string& file, const LoadedScene& loaded) {
 
 void check_output_extension(const std::string& output) {
   if (!image_format_for(output)) {
-    throw Error("--output", "'" + output + "' has an unknown extension (use .png, .ppm or .pfm)",
+    throw Error(
+        "--output",
+        "'" + output + "' has an unknown extension (use " + std::string(kImageExtensions) + ")",
+        ExitCode::kUsage);
+  }
+}
+
+constexpr std::string_view kAovNames = "albedo, normal, depth";
+
+// "albedo,normal,depth" or any subset, in any order; a name given twice counts once. nullopt
+// with the reason in `why` for an empty list, an empty name or an unknown one.
+std::optional<AovSet> parse_aovs(const std::string& text, std::string* why) {
+  AovSet set;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = text.find(',', start);
+    const std::string name =
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (name == "albedo") {
+      set.albedo = true;
+    } else if (name == "normal") {
+      set.normal = true;
+    } else if (name == "depth") {
+      set.depth = true;
+    } else {
+      *why = (name.empty() ? std::string("empty AOV name") : "unknown AOV '" + name + "'") +
+             " in '" + text + "' (use a comma-separated list of " + std::string(kAovNames) + ")";
+      return std::nullopt;
+    }
+    if (comma == std::string::npos) return set;
+    start = comma + 1;
+  }
+}
+
+// The checks between --aovs, --exr-half, --exposure and the output's format, once the output's
+// name is known (from -o before loading, from the scene file after).
+void check_output_options(const RenderArgs& args, const std::string& output) {
+  const ImageFormat format = *image_format_for(output);
+  if (!args.aovs.empty() && format != ImageFormat::kExr) {
+    throw Error("--aovs", "needs an .exr output, got '" + output + "'", ExitCode::kUsage);
+  }
+  if (args.exr_half && format != ImageFormat::kExr) {
+    throw Error("--exr-half", "needs an .exr output, got '" + output + "'", ExitCode::kUsage);
+  }
+  // Exposure is a display choice: float files keep the radiance the renderer computed, and a
+  // viewer or compositor exposes them however it likes. Ignoring the flag silently would hide a
+  // mistake, so it is refused.
+  if (!args.exposure.empty() && is_float_format(format)) {
+    throw Error("--exposure",
+                "applies to 8-bit outputs (.png, .ppm); .pfm and .exr store the radiance "
+                "unscaled, got '" +
+                    output + "'",
                 ExitCode::kUsage);
   }
 }
@@ -45,10 +98,29 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
       "lab's shading or the path tracer");
   add_scene_flags(*sub, args.scene);
   sub->add_option("-o,--output", args.output,
-                  "Output image: .png, .ppm (8-bit) or .pfm (float); default: the scene's "
-                  "output, else FILE's name with .png, else cornell.png")
+                  "Output image: .png, .ppm (8-bit), .pfm or .exr (float, linear radiance); "
+                  "default: the scene's output, else FILE's name with .png, else cornell.png")
       ->type_name("PATH")
       ->each([&args](const std::string&) { args.output_given = true; });
+  sub->add_option("--aovs", args.aovs,
+                  "Extra EXR layers of the first hit, comma-separated: albedo (albedo.R/G/B), "
+                  "normal (normal.X/Y/Z, world space, facing the camera), depth (Z, distance "
+                  "along the camera ray; 0 where nothing is hit); needs an .exr output")
+      ->type_name("LIST")
+      ->check(checked([](std::string& s) {
+        std::string why;
+        return parse_aovs(s, &why) ? std::string() : why;
+      }));
+  sub->add_flag("--exr-half", args.exr_half,
+                "Store the EXR's colour channels as 16-bit half floats instead of 32-bit floats "
+                "(depth stays 32-bit); needs an .exr output");
+  sub->add_option("--exposure", args.exposure,
+                  "Scale path images by 2^STOPS before the sRGB curve of .png and .ppm outputs "
+                  "(default 0); float outputs store the radiance unscaled")
+      ->type_name("STOPS")
+      ->check(checked([](std::string& s) {
+        return parse_float(s) ? std::string() : "must be a finite number, got '" + s + "'";
+      }));
   sub->add_flag("-q,--quiet", args.quiet, "Print nothing on success: no summary, no progress bar");
   return sub;
 }
@@ -58,8 +130,10 @@ int run_render(const RenderArgs& args) {
   // time and leaves no file.
   if (args.output_given) {
     check_output_extension(args.output);
+    check_output_options(args, args.output);
     check_writable_path(args.output);
   } else if (args.scene.file.empty()) {
+    check_output_options(args, "cornell.png");
     check_writable_path("cornell.png");
   }
 
@@ -72,7 +146,10 @@ int run_render(const RenderArgs& args) {
   const LoadedScene loaded = load_scene_from(args.scene, overrides);
   const std::string output =
       args.output_given ? args.output : default_output(args.scene.file, loaded);
-  if (!args.output_given) check_writable_path(output);
+  if (!args.output_given) {
+    check_output_options(args, output);
+    check_writable_path(output);
+  }
 
   const size_t dropped = loaded.stats.dropped_degenerate + loaded.stats.dropped_non_finite;
   if (dropped > 0 && !args.quiet) {
@@ -84,6 +161,11 @@ int run_render(const RenderArgs& args) {
   const Scene& scene = loaded.scene;
   const IntegratorSpec spec = integrator_spec(args.scene, loaded);
   const bool path = spec.kind == IntegratorSpec::Kind::kPath;
+  if (!path && !args.exposure.empty()) {
+    throw Error("--exposure",
+                "applies to path images; the lab integrator keeps the lab's clamp without gamma",
+                ExitCode::kUsage);
+  }
   render_options.spp = spec.spp;
   render_options.seed = spec.seed;
   render_options.filter = filter_choice(args.scene);
@@ -92,9 +174,26 @@ int run_render(const RenderArgs& args) {
   ProgressBar bar(stderr);
   if (!args.quiet && ::isatty(STDERR_FILENO)) render_options.progress = &bar;
   RenderStats stats;
-  const Image image = render(scene, *accel, *integrator, render_options, &stats);
+  std::string aov_error;
+  const AovSet aovs = args.aovs.empty() ? AovSet{} : *parse_aovs(args.aovs, &aov_error);
+  Image image;
+  AovImages aov_images;  // empty images for the AOVs not asked for
+  if (aovs.any()) {
+    Film film(scene.camera.width(), scene.camera.height(), aovs);
+    render_to_film(scene, *accel, *integrator, film, render_options, &stats);
+    image = film.resolve();
+    aov_images = {film.resolve_albedo(), film.resolve_normal(), film.resolve_depth()};
+  } else {
+    image = render(scene, *accel, *integrator, render_options, &stats);
+  }
   bar.finish();
-  write_image(image, output, path ? ImageEncoding::srgb() : ImageEncoding::lab());
+  if (*image_format_for(output) == ImageFormat::kExr) {
+    write_exr(image, output, aov_images,
+              args.exr_half ? ExrPixelType::kHalf : ExrPixelType::kFloat);
+  } else {
+    const float stops = args.exposure.empty() ? 0.0f : *parse_float(args.exposure);
+    write_image(image, output, path ? ImageEncoding::srgb(stops) : ImageEncoding::lab());
+  }
 
   if (!args.quiet) {
     if (path) {

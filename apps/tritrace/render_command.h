@@ -1,5 +1,5 @@
 // `tritrace render [FILE]`: renders a built-in scene, a JSON scene or a mesh file with the lab
-// integrator to an image file.
+// integrator or the path tracer to an image file (8-bit, PFM, or EXR with AOV layers).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -14,6 +14,9 @@ struct RenderArgs {
   std::string output;         // the scene file's output, else <file stem>.png or cornell.png
   bool output_given = false;  // -o was on the command line (its value may still be empty)
   bool quiet = false;
+  std::string aovs;       // --aovs: "albedo,normal,depth" or a subset; empty: not given
+  bool exr_half = false;  // --exr-half: half floats in the EXR
+  std::string exposure;   // --exposure STOPS for path's 8-bit images; empty: not given
 };
 
 // Registers the subcommand and its flags on `app`; values land in `args` when parsed.

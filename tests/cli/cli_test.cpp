@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -22,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "../image/exr_read_back.h"
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/image/image_io.h"
 
@@ -414,7 +416,8 @@ const char kThreadRange[] = "must be an integer from 1 to 1024";
 const char kVec3[] = "must be three finite numbers X,Y,Z";
 const char kFinite[] = "must be a finite number";
 const char kDistance[] = "must be a finite number greater than 0";
-const char kExtension[] = "unknown extension";
+const char kExtension[] = "unknown extension (use .png, .ppm, .pfm or .exr)";
+const char kNeedsExr[] = "needs an .exr output";
 
 INSTANTIATE_TEST_SUITE_P(
     Errors, CliErrorTest,
@@ -472,6 +475,59 @@ INSTANTIATE_TEST_SUITE_P(
                   kFinite},
         // A bad extension is reported before the folder is looked at.
         ErrorCase{"BadExtensionInMissingFolder", {"-o", "nodir/x.jpg"}, 2, "--output", kExtension},
+        ErrorCase{"AovsUnknownName",
+                  {"--aovs", "albedo,colour", "-o", "x.exr"},
+                  2,
+                  "--aovs",
+                  "unknown AOV 'colour' in 'albedo,colour' (use a comma-separated list of albedo, "
+                  "normal, depth)"},
+        ErrorCase{"AovsEmptyName",
+                  {"--aovs", "albedo,,depth", "-o", "x.exr"},
+                  2,
+                  "--aovs",
+                  "empty AOV name"},
+        ErrorCase{"AovsEmpty", {"--aovs", "", "-o", "x.exr"}, 2, "--aovs", "empty AOV name"},
+        ErrorCase{"AovsUpperCase",
+                  {"--aovs", "Albedo", "-o", "x.exr"},
+                  2,
+                  "--aovs",
+                  "unknown AOV 'Albedo'"},
+        ErrorCase{"AovsMissingValue", {"-o", "x.exr", "--aovs"}, 2, "--aovs", "missing value"},
+        ErrorCase{"AovsWithPng", {"--aovs", "albedo", "-o", "x.png"}, 2, "--aovs", kNeedsExr},
+        ErrorCase{"AovsWithPfm", {"--aovs", "depth", "-o", "x.pfm"}, 2, "--aovs", kNeedsExr},
+        // Without -o the built-in scene writes cornell.png.
+        ErrorCase{"AovsWithTheDefaultOutput",
+                  {"--aovs", "normal"},
+                  2,
+                  "--aovs",
+                  "needs an .exr output, got 'cornell.png'"},
+        ErrorCase{"ExrHalfWithPfm", {"--exr-half", "-o", "x.pfm"}, 2, "--exr-half", kNeedsExr},
+        ErrorCase{"ExposureOnTheLabIntegrator",
+                  {"--exposure", "1", "-o", "x.png"},
+                  2,
+                  "--exposure",
+                  "applies to path images; the lab integrator keeps the lab's clamp without "
+                  "gamma"},
+        ErrorCase{
+            "ExposureOnTheLabIntegratorOfCornellArea",
+            {"--scene", "cornell-area", "--integrator", "lab", "--exposure", "0", "-o", "x.ppm"},
+            2,
+            "--exposure",
+            "applies to path images"},
+        ErrorCase{"ExposureWithExr",
+                  {"--scene", "cornell-area", "--exposure", "1", "-o", "x.exr"},
+                  2,
+                  "--exposure",
+                  "applies to 8-bit outputs (.png, .ppm)"},
+        ErrorCase{"ExposureWithPfm",
+                  {"--scene", "cornell-area", "--exposure", "1", "-o", "x.pfm"},
+                  2,
+                  "--exposure",
+                  "applies to 8-bit outputs"},
+        ErrorCase{"ExposureInfinite", {"--exposure", "inf"}, 2, "--exposure", kFinite},
+        ErrorCase{"ExposureNaN", {"--exposure", "nan"}, 2, "--exposure", kFinite},
+        ErrorCase{"ExposureBeyondFloat", {"--exposure", "1e39"}, 2, "--exposure", kFinite},
+        ErrorCase{"ExposureNotANumber", {"--exposure", "bright"}, 2, "--exposure", kFinite},
         // Runtime errors.
         ErrorCase{
             "OutputFolderMissing", {"-o", "nodir/x.png"}, 1, "nodir/x.png", "does not exist"}),
@@ -1055,6 +1111,208 @@ TEST_F(CliTest, SlowRenderWithoutATerminalPrintsNoProgress) {
 
 // Without --kernel, brute force renders with the watertight kernel: the same bytes as asking for
 // it.
+// ---- EXR, AOVs and exposure -----------------------------------------------------------------
+
+using tritrace::testing::ExrContents;
+using tritrace::testing::read_exr_channels;
+
+struct PfmImage {
+  int width = 0;
+  int height = 0;
+  std::vector<float> rgb;  // interleaved, row 0 (top) first
+};
+
+// Parses the PFM header this renderer writes ("PF\nW H\n-1.0\n") and flips the rows to top first.
+PfmImage ReadPfm(const fs::path& path) {
+  const std::string bytes = ReadFile(path);
+  std::istringstream in(bytes);
+  std::string magic, scale;
+  PfmImage pfm;
+  in >> magic >> pfm.width >> pfm.height >> scale;
+  EXPECT_EQ(magic, "PF");
+  EXPECT_EQ(scale, "-1.0");
+  const size_t header = static_cast<size_t>(in.tellg()) + 1;  // one newline after the scale
+  const size_t row = static_cast<size_t>(pfm.width) * 3;
+  EXPECT_EQ(bytes.size(), header + row * pfm.height * sizeof(float));
+  pfm.rgb.resize(row * pfm.height);
+  if (bytes.size() != header + pfm.rgb.size() * sizeof(float)) return pfm;
+  for (int y = 0; y < pfm.height; ++y) {
+    const size_t from = header + (static_cast<size_t>(pfm.height - 1 - y) * row) * sizeof(float);
+    std::memcpy(pfm.rgb.data() + y * row, bytes.data() + from, row * sizeof(float));
+  }
+  return pfm;
+}
+
+float Channel(const ExrContents& exr, const std::string& name, int x, int y) {
+  return exr.channels.at(name).values.at(static_cast<size_t>(y) * exr.width + x);
+}
+
+std::set<std::string> ChannelNames(const ExrContents& exr) {
+  std::set<std::string> names;
+  for (const auto& entry : exr.channels) names.insert(entry.first);
+  return names;
+}
+
+// The EXR's R, G, B are the PFM's floats bit for bit (both are the same render, unclamped).
+void ExpectExrRgbEqualsPfm(const ExrContents& exr, const PfmImage& pfm) {
+  ASSERT_EQ(exr.width, pfm.width);
+  ASSERT_EQ(exr.height, pfm.height);
+  size_t mismatches = 0;
+  for (int y = 0; y < exr.height; ++y) {
+    for (int x = 0; x < exr.width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const float want = pfm.rgb[(static_cast<size_t>(y) * pfm.width + x) * 3 + c];
+        const float got = Channel(exr, std::string(1, "RGB"[c]), x, y);
+        if (std::memcmp(&want, &got, sizeof(float)) != 0 && ++mismatches <= 5) {
+          ADD_FAILURE() << "pixel " << x << "," << y << " channel " << c << ": exr " << got
+                        << ", pfm " << want;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(mismatches, 0u);
+}
+
+TEST_F(CliTest, LabImageAsExrEqualsTheLabPfm) {
+  const std::vector<std::string> size = {"--width", "40", "--height", "30"};
+  RenderQuietly(size, "lab.pfm");
+  RenderQuietly(size, "lab.exr");
+  const ExrContents exr = read_exr_channels((work_ / "lab.exr").string());
+  EXPECT_EQ(ChannelNames(exr), (std::set<std::string>{"R", "G", "B"}));
+  for (const auto& [name, data] : exr.channels) EXPECT_EQ(data.stored, Imf::FLOAT) << name;
+  ExpectExrRgbEqualsPfm(exr, ReadPfm(work_ / "lab.pfm"));
+  ExpectOnlyFiles(work_, {"lab.exr", "lab.pfm"});
+}
+
+// The lab's one ray through pixel (16, 12)'s corner of a 32 x 32 image leaves the camera at
+// (0, 0, -3) along (16 - 16, 12 - 16, 32) = (0, -4, 32): above both blocks (the tall one's top
+// is at y = -0.189, and the ray is at y < -0.38 over its footprint) it meets the white back wall
+// z = 1 at (0, -0.5, 1), at distance sqrt(0.5^2 + 4^2) = sqrt(16.25) from the camera.
+TEST_F(CliTest, LabAovsAtAHandTracedPixel) {
+  RenderQuietly({"--width", "32", "--height", "32", "--aovs", "depth,normal,albedo"}, "lab.exr");
+  const ExrContents exr = read_exr_channels((work_ / "lab.exr").string());
+  EXPECT_EQ(ChannelNames(exr),
+            (std::set<std::string>{"R", "G", "B", "albedo.R", "albedo.G", "albedo.B", "normal.X",
+                                   "normal.Y", "normal.Z", "Z"}));
+  EXPECT_NEAR(Channel(exr, "Z", 16, 12), std::sqrt(16.25f), 1e-5f);
+  EXPECT_EQ(Channel(exr, "normal.X", 16, 12), 0.0f);
+  EXPECT_EQ(Channel(exr, "normal.Y", 16, 12), 0.0f);
+  EXPECT_EQ(Channel(exr, "normal.Z", 16, 12), -1.0f);  // the wall's normal, facing the camera
+  for (const std::string c : {"albedo.R", "albedo.G", "albedo.B"}) {
+    EXPECT_EQ(Channel(exr, c, 16, 12), 0.75f) << c;  // the back wall is white, 0.75
+  }
+  // --aovs changes nothing in the radiance.
+  RenderQuietly({"--width", "32", "--height", "32"}, "lab.pfm");
+  ExpectExrRgbEqualsPfm(exr, ReadPfm(work_ / "lab.pfm"));
+}
+
+TEST_F(CliTest, CornellAreaExrHasTheAovLayersAndTheSameRadianceAsThePfm) {
+  const std::vector<std::string> args = {"--scene", "cornell-area", "--spp",    "4",
+                                         "--width", "32",           "--height", "32"};
+  std::vector<std::string> with_aovs = args;
+  with_aovs.insert(with_aovs.end(), {"--aovs", "albedo,normal,depth"});
+  RenderQuietly(with_aovs, "x.exr");
+  RenderQuietly(args, "x.pfm");
+  ExpectOnlyFiles(work_, {"x.exr", "x.pfm"});
+  const ExrContents exr = read_exr_channels((work_ / "x.exr").string());
+  ASSERT_EQ(exr.width, 32);
+  ASSERT_EQ(exr.height, 32);
+  EXPECT_EQ(ChannelNames(exr),
+            (std::set<std::string>{"R", "G", "B", "albedo.R", "albedo.G", "albedo.B", "normal.X",
+                                   "normal.Y", "normal.Z", "Z"}));
+  for (const auto& [name, data] : exr.channels) EXPECT_EQ(data.stored, Imf::FLOAT) << name;
+  ExpectExrRgbEqualsPfm(exr, ReadPfm(work_ / "x.pfm"));
+
+  // Pixel (16, 12)'s four samples look along (u, v - 4, 32) with u, v in [0, 1) and all meet the
+  // back wall z = 1 (see LabAovsAtAHandTracedPixel), at distances 4 sqrt(1 + (u^2 + (v-4)^2)/32^2)
+  // in (4 sqrt(1 + 9/1024), 4 sqrt(1 + 17/1024)).
+  EXPECT_GT(Channel(exr, "Z", 16, 12), 4.0f * std::sqrt(1.0f + 9.0f / 1024.0f));
+  EXPECT_LT(Channel(exr, "Z", 16, 12), 4.0f * std::sqrt(1.0f + 17.0f / 1024.0f));
+  EXPECT_EQ(Channel(exr, "normal.Z", 16, 12), -1.0f);
+  EXPECT_EQ(Channel(exr, "albedo.G", 16, 12), 0.75f);
+  // Every pixel sees some surface of the closed-looking box: unit-or-shorter normals (means of
+  // unit normals), albedos within [0, 1], positive depths, finite non-negative radiance.
+  for (int y = 0; y < 32; ++y) {
+    for (int x = 0; x < 32; ++x) {
+      const float nx = Channel(exr, "normal.X", x, y), ny = Channel(exr, "normal.Y", x, y),
+                  nz = Channel(exr, "normal.Z", x, y);
+      EXPECT_LE(nx * nx + ny * ny + nz * nz, 1.0f + 1e-5f) << x << "," << y;
+      EXPECT_GT(Channel(exr, "Z", x, y), 0.0f) << x << "," << y;
+      for (const std::string c : {"albedo.R", "albedo.G", "albedo.B"}) {
+        EXPECT_GE(Channel(exr, c, x, y), 0.0f);
+        EXPECT_LE(Channel(exr, c, x, y), 1.0f);
+      }
+      for (const std::string c : {"R", "G", "B"}) {
+        EXPECT_TRUE(std::isfinite(Channel(exr, c, x, y)) && Channel(exr, c, x, y) >= 0.0f);
+      }
+    }
+  }
+}
+
+TEST_F(CliTest, ExrHalfStoresHalfColourAndFloatDepth) {
+  const std::vector<std::string> args = {"--scene", "cornell-area", "--spp",    "2",
+                                         "--width", "24",           "--height", "24",
+                                         "--aovs",  "normal,depth"};
+  RenderQuietly(args, "f.exr");
+  std::vector<std::string> half = args;
+  half.push_back("--exr-half");
+  RenderQuietly(half, "h.exr");
+  const ExrContents f = read_exr_channels((work_ / "f.exr").string());
+  const ExrContents h = read_exr_channels((work_ / "h.exr").string());
+  EXPECT_EQ(ChannelNames(h),
+            (std::set<std::string>{"R", "G", "B", "normal.X", "normal.Y", "normal.Z", "Z"}));
+  for (const auto& [name, data] : h.channels) {
+    EXPECT_EQ(data.stored, name == "Z" ? Imf::FLOAT : Imf::HALF) << name;
+    for (size_t i = 0; i < data.values.size(); ++i) {
+      const float want = f.channels.at(name).values[i];
+      if (name == "Z") {
+        EXPECT_EQ(data.values[i], want);
+      } else {
+        // Half rounds to 11 significant bits; below 2^-14 its steps are 2^-24.
+        EXPECT_LE(std::fabs(data.values[i] - want), std::max(std::fabs(want) * 0x1p-11f, 0x1p-25f))
+            << name << " " << i;
+      }
+    }
+  }
+  EXPECT_LT(fs::file_size(work_ / "h.exr"), fs::file_size(work_ / "f.exr"));
+}
+
+// 255 (1.055 c^(1/2.4) - 0.055), or 255 * 12.92 c at or below 0.0031308, in double precision:
+// the IEC 61966-2-1 curve computed apart from the renderer's float one.
+double SrgbTimes255(double c) {
+  if (!(c > 0.0)) return 0.0;
+  if (c >= 1.0) return 255.0;
+  return 255.0 * (c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055);
+}
+
+TEST_F(CliTest, ExposureScalesPathImagesBeforeTheSrgbCurve) {
+  const std::vector<std::string> args = {"--scene", "cornell-area", "--spp",    "2",
+                                         "--width", "24",           "--height", "24"};
+  RenderQuietly(args, "linear.pfm");
+  const std::string plain = RenderQuietly(args, "plain.ppm");
+  std::vector<std::string> zero = args;
+  zero.insert(zero.end(), {"--exposure", "0"});
+  EXPECT_EQ(RenderQuietly(zero, "zero.ppm"), plain);
+  std::vector<std::string> plus = args;
+  plus.insert(plus.end(), {"--exposure", "1.5"});
+  RenderQuietly(plus, "plus.ppm");
+
+  const PfmImage linear = ReadPfm(work_ / "linear.pfm");
+  const tritrace::Rgb8Image bright = tritrace::read_image_rgb8((work_ / "plus.ppm").string());
+  ASSERT_EQ(bright.rgb.size(), linear.rgb.size());
+  size_t exact = 0, brighter = 0;
+  const std::string plain_rgb = plain.substr(plain.size() - linear.rgb.size());
+  for (size_t i = 0; i < linear.rgb.size(); ++i) {
+    const double expected = SrgbTimes255(std::exp2(1.5) * linear.rgb[i]);
+    // Float and double arithmetic may round a value lying within a hair of .5 differently.
+    EXPECT_NEAR(bright.rgb[i], expected, 0.5 + 1e-3) << "byte " << i;
+    exact += bright.rgb[i] == std::lround(expected);
+    brighter += bright.rgb[i] > static_cast<uint8_t>(plain_rgb[i]);
+  }
+  EXPECT_GE(exact, linear.rgb.size() - 2);
+  EXPECT_GT(brighter, linear.rgb.size() / 2);
+}
+
 TEST_F(CliTest, BruteForceDefaultsToTheWatertightKernel) {
   const std::vector<std::string> size = {"--width", "96", "--height", "96", "--accel", "brute"};
   auto with = [&](std::vector<std::string> extra, const std::string& out) {

@@ -70,6 +70,7 @@ std::optional<ImageFormat> image_format_for(const std::string& path) {
   if (ext == ".png") return ImageFormat::kPng;
   if (ext == ".ppm") return ImageFormat::kPpm;
   if (ext == ".pfm") return ImageFormat::kPfm;
+  if (ext == ".exr") return ImageFormat::kExr;
   return std::nullopt;
 }
 
@@ -82,14 +83,33 @@ std::vector<uint8_t> encode_image(const Image& image, ImageFormat format,
       return encode_ppm(image, encoding);
     case ImageFormat::kPfm:
       return encode_pfm(image);
+    case ImageFormat::kExr:
+      return encode_exr(image);
   }
   return {};
 }
 
 void write_image(const Image& image, const std::string& path, const ImageEncoding& encoding) {
   const std::optional<ImageFormat> format = image_format_for(path);
-  if (!format) throw Error(path, "unknown image extension (use .png, .ppm or .pfm)");
+  if (!format) {
+    throw Error(path, "unknown image extension (use " + std::string(kImageExtensions) + ")");
+  }
+  if (*format == ImageFormat::kExr) {
+    write_exr(image, path);
+    return;
+  }
   write_file_atomic(path, encode_image(image, *format, encoding));
+}
+
+void write_exr(const Image& image, const std::string& path, const AovImages& aovs,
+               ExrPixelType type) {
+  std::vector<uint8_t> bytes;
+  try {
+    bytes = encode_exr(image, aovs, type);
+  } catch (const Error& e) {
+    throw Error(path, e.reason(), e.exit_code());
+  }
+  write_file_atomic(path, bytes);
 }
 
 Rgb8Image read_image_rgb8(const std::string& path) {

@@ -1,20 +1,30 @@
-// Image files: PNG (8-bit, through stb_image_write), binary PPM (P6) and PFM (32-bit float), chosen
-// by the file's extension; every write is atomic.
+// Image files: PNG (8-bit, through stb_image_write), binary PPM (P6), PFM (32-bit float) and
+// OpenEXR (float or half, with AOV layers), chosen by the file's extension; every write is atomic.
 #pragma once
 
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "tritrace/image/exr.h"
 #include "tritrace/image/image.h"
 
 namespace tritrace {
 
-enum class ImageFormat { kPng, kPpm, kPfm };
+enum class ImageFormat { kPng, kPpm, kPfm, kExr };
 
-// From the extension, case-insensitively: .png, .ppm, .pfm. nullopt for anything else.
+// From the extension, case-insensitively: .png, .ppm, .pfm, .exr. nullopt for anything else.
 std::optional<ImageFormat> image_format_for(const std::string& path);
+
+// The extensions image_format_for knows, as error messages list them.
+inline constexpr std::string_view kImageExtensions = ".png, .ppm, .pfm or .exr";
+
+// True for the formats that store linear floats (PFM, EXR) rather than 8-bit encoded values.
+inline bool is_float_format(ImageFormat format) {
+  return format == ImageFormat::kPfm || format == ImageFormat::kExr;
+}
 
 // How 8-bit formats turn linear values into bytes: the lab's clamp without gamma (the lab
 // integrator's images), or the sRGB curve after an exposure of 2^stops (physically based images).
@@ -28,13 +38,17 @@ struct ImageEncoding {
 };
 
 // Encoded file contents. PNG and PPM use `encoding`; PFM stores the floats (rows bottom-up, as the
-// format requires, little-endian).
+// format requires, little-endian) and EXR stores them as 32-bit float RGB (encode_exr).
 std::vector<uint8_t> encode_image(const Image& image, ImageFormat format,
                                   const ImageEncoding& encoding = ImageEncoding::lab());
 
 // Encodes by extension and writes atomically. Throws Error(path, reason).
 void write_image(const Image& image, const std::string& path,
                  const ImageEncoding& encoding = ImageEncoding::lab());
+
+// encode_exr, written atomically to `path` whatever its extension. Throws Error(path, reason).
+void write_exr(const Image& image, const std::string& path, const AovImages& aovs = {},
+               ExrPixelType type = ExrPixelType::kFloat);
 
 struct Rgb8Image {
   int width = 0;

@@ -210,7 +210,7 @@ TEST(SceneFileErrors, EachRuleHasItsMessage) {
             "/meshes/0/file: 'other.json' is a scene file; a scene cannot include another "
             "scene, only mesh files");
   EXPECT_EQ(error_of(R"({"output": {"file": "x.jpg"}, )" + tri + "}"),
-            "/output/file: 'x.jpg' has an unknown extension (use .png, .ppm or .pfm)");
+            "/output/file: 'x.jpg' has an unknown extension (use .png, .ppm, .pfm or .exr)");
 }
 
 TEST(SceneFileErrors, MissingMeshFileNamesTheFileAndTheScene) {

@@ -500,8 +500,8 @@ class Parser {
     if (j.contains("file")) {
       const std::string file = string(j["file"], "/output/file");
       if (!image_format_for(file)) {
-        fail("/output/file",
-             "'" + shown(file) + "' has an unknown extension (use .png, .ppm or .pfm)");
+        fail("/output/file", "'" + shown(file) + "' has an unknown extension (use " +
+                                 std::string(kImageExtensions) + ")");
       }
       out_.output = file;
     }

@@ -1,0 +1,128 @@
+// encode_exr through OpenEXR's C++ API, into memory, so that the file itself is written atomically
+// by write_file_atomic like every other format.
+#include "tritrace/image/exr.h"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfOutputFile.h>
+#include <half.h>
+
+#include <algorithm>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <utility>
+
+#include "tritrace/error.h"
+
+namespace tritrace {
+namespace {
+
+static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "slices step over packed float RGB pixels");
+
+// An Imf::OStream over a growing byte vector. OpenEXR seeks back to fill in the table of scanline
+// offsets once the pixels are written, so writes may land inside what is already there.
+class MemoryStream final : public Imf::OStream {
+ public:
+  MemoryStream() : Imf::OStream("(in memory)") {}
+
+  void write(const char c[], int n) override {
+    const size_t end = pos_ + static_cast<size_t>(n);
+    if (end > bytes_.size()) bytes_.resize(end);
+    std::memcpy(bytes_.data() + pos_, c, static_cast<size_t>(n));
+    pos_ = end;
+  }
+  uint64_t tellp() override { return pos_; }
+  void seekp(uint64_t pos) override { pos_ = static_cast<size_t>(pos); }
+
+  std::vector<uint8_t> take() { return std::move(bytes_); }
+
+ private:
+  std::vector<uint8_t> bytes_;
+  size_t pos_ = 0;
+};
+
+struct Channel {
+  std::string name;
+  const Image* image;
+  int component;  // 0, 1, 2: the float of each pixel's vec3 this channel reads
+  Imf::PixelType type;
+};
+
+std::vector<Channel> channels_of(const Image& image, const AovImages& aovs, ExrPixelType type) {
+  const Imf::PixelType colour = type == ExrPixelType::kHalf ? Imf::HALF : Imf::FLOAT;
+  std::vector<Channel> channels = {
+      {"R", &image, 0, colour}, {"G", &image, 1, colour}, {"B", &image, 2, colour}};
+  auto add_layer = [&](const Image& aov, const char* layer, const char* names) {
+    if (aov.width() == 0 && aov.height() == 0) return;
+    if (aov.width() != image.width() || aov.height() != image.height()) {
+      throw Error("exr", std::string("the ") + layer + " AOV's size differs from the image's");
+    }
+    for (int c = 0; c < 3; ++c) {
+      channels.push_back({std::string(layer) + "." + names[c], &aov, c, colour});
+    }
+  };
+  add_layer(aovs.albedo, "albedo", "RGB");
+  add_layer(aovs.normal, "normal", "XYZ");
+  if (aovs.depth.width() != 0 || aovs.depth.height() != 0) {
+    if (aovs.depth.width() != image.width() || aovs.depth.height() != image.height()) {
+      throw Error("exr", "the depth AOV's size differs from the image's");
+    }
+    channels.push_back({"Z", &aovs.depth, 0, Imf::FLOAT});
+  }
+  return channels;
+}
+
+// OpenEXR's messages may span lines; errors print as one.
+std::string one_line(std::string text) {
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  return text;
+}
+
+}  // namespace
+
+std::vector<uint8_t> encode_exr(const Image& image, const AovImages& aovs, ExrPixelType type) {
+  if (image.width() <= 0 || image.height() <= 0) throw Error("exr", "the image is empty");
+  const std::vector<Channel> channels = channels_of(image, aovs, type);
+
+  Imf::Header header(image.width(), image.height());
+  header.compression() = Imf::ZIP_COMPRESSION;
+  header.lineOrder() = Imf::INCREASING_Y;  // row 0 at the top, as Image and EXR both count
+  Imf::FrameBuffer frame;
+  const size_t width = static_cast<size_t>(image.width());
+  const size_t pixels = width * static_cast<size_t>(image.height());
+  // OpenEXR converts pixel types when reading but not when writing, so half channels get their
+  // own buffers (Imath's float-to-half conversion rounds to nearest even).
+  std::vector<std::vector<half>> halves;
+  halves.reserve(channels.size());
+  for (const Channel& c : channels) {
+    header.channels().insert(c.name, Imf::Channel(c.type));
+    const float* floats = &c.image->at(0, 0)[c.component];
+    if (c.type == Imf::HALF) {
+      std::vector<half>& h = halves.emplace_back(pixels);
+      for (size_t i = 0; i < pixels; ++i) h[i] = half(floats[3 * i]);
+      frame.insert(c.name, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(h.data()), sizeof(half),
+                                      sizeof(half) * width));
+    } else {
+      // Slices take char* but writing only reads through it.
+      frame.insert(c.name,
+                   Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(floats)),
+                              sizeof(glm::vec3), sizeof(glm::vec3) * width));
+    }
+  }
+
+  MemoryStream stream;
+  try {
+    // The OutputFile writes the offset table when it is destroyed, so it lives only in this scope.
+    Imf::OutputFile file(stream, header);
+    file.setFrameBuffer(frame);
+    file.writePixels(image.height());
+  } catch (const std::exception& e) {
+    throw Error("exr", "OpenEXR: " + one_line(e.what()));
+  }
+  return stream.take();
+}
+
+}  // namespace tritrace

@@ -1,0 +1,34 @@
+// OpenEXR encoding: linear float RGB plus optional AOV layers (albedo, normal, depth), the inputs
+// denoisers such as Open Image Denoise take, in one single-part scanline file.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "tritrace/image/image.h"
+
+namespace tritrace {
+
+// How an EXR stores radiance, albedo and normal: 32-bit floats, or 16-bit half floats (half the
+// size; 11 significant bits, largest finite value 65504, larger values become infinity). Depth is
+// always 32-bit: half would round distances beyond 2048 to whole units and lose the far plane.
+enum class ExrPixelType { kFloat, kHalf };
+
+// The first hit's AOVs to store beside the radiance; an empty (0 x 0) image is left out. Each must
+// have the radiance image's size. Channel names follow the OpenEXR layer convention
+// (layer.channel) that Nuke, Blender, oiiotool and OpenImageIO read:
+//   radiance R, G, B; albedo albedo.R, albedo.G, albedo.B; normal normal.X, normal.Y, normal.Z;
+//   depth Z, OpenEXR's standard depth channel (the red channel of `depth`).
+struct AovImages {
+  Image albedo;
+  Image normal;
+  Image depth;
+};
+
+// The file's bytes: scanlines top row first, ZIP compression (lossless), values stored as they
+// are (no clamp, no curve, NaN and infinity kept). Throws Error("exr", reason) when the AOVs'
+// sizes differ from the image's or OpenEXR fails.
+std::vector<uint8_t> encode_exr(const Image& image, const AovImages& aovs = {},
+                                ExrPixelType type = ExrPixelType::kFloat);
+
+}  // namespace tritrace
