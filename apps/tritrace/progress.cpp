@@ -46,13 +46,18 @@ void ProgressBar::draw(int done, int total, int64_t now) noexcept {
   char bar[kBarWidth + 1];
   for (int i = 0; i < kBarWidth; ++i) bar[i] = i < filled ? '#' : '.';
   bar[kBarWidth] = '\0';
+  char paths[64] = "";
+  if (spp_ > 0 && elapsed > 0.0) {
+    std::snprintf(paths, sizeof paths, "  %u spp, %.3g Mpaths/s", spp_,
+                  fraction * static_cast<double>(total_paths_) / elapsed * 1e-6);
+  }
   if (done < total && fraction > 0.0) {
     const double eta = elapsed * (1.0 - fraction) / fraction;
-    std::fprintf(out_, "\r[%s] %3d%%  %.1f s elapsed, ETA %.1f s ", bar,
-                 static_cast<int>(fraction * 100.0), elapsed, eta);
+    std::fprintf(out_, "\r[%s] %3d%%  %.1f s elapsed, ETA %.1f s%s ", bar,
+                 static_cast<int>(fraction * 100.0), elapsed, eta, paths);
   } else {
-    std::fprintf(out_, "\r[%s] %3d%%  %.1f s elapsed             ", bar,
-                 static_cast<int>(fraction * 100.0), elapsed);
+    std::fprintf(out_, "\r[%s] %3d%%  %.1f s elapsed%s             ", bar,
+                 static_cast<int>(fraction * 100.0), elapsed, paths);
   }
   std::fflush(out_);
 }

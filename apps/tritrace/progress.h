@@ -16,6 +16,11 @@ class ProgressBar final : public RenderProgress {
   explicit ProgressBar(std::FILE* out);
 
   void tiles_done(int done, int total) noexcept override;
+  // For sampled renders: the bar also shows the samples per pixel and the paths per second.
+  void show_paths(uint64_t total_paths, uint32_t spp) noexcept {
+    total_paths_ = total_paths;
+    spp_ = spp;
+  }
   // Draws the bar at 100% and ends its line, if it was ever drawn.
   void finish() noexcept;
 
@@ -28,6 +33,8 @@ class ProgressBar final : public RenderProgress {
   std::atomic<bool> drawing_{false};
   std::atomic<bool> shown_{false};
   std::atomic<int> total_{0};
+  uint64_t total_paths_ = 0;  // set before the render starts
+  uint32_t spp_ = 0;
 };
 
 }  // namespace tritrace::cli

@@ -173,6 +173,10 @@ int run_render(const RenderArgs& args) {
   const std::unique_ptr<Integrator> integrator = make_integrator(spec, scene);
   ProgressBar bar(stderr);
   if (!args.quiet && ::isatty(STDERR_FILENO)) render_options.progress = &bar;
+  if (path) {
+    bar.show_paths(static_cast<uint64_t>(scene.camera.width()) * scene.camera.height() * spec.spp,
+                   spec.spp);
+  }
   RenderStats stats;
   std::string aov_error;
   const AovSet aovs = args.aovs.empty() ? AovSet{} : *parse_aovs(args.aovs, &aov_error);
