@@ -39,7 +39,17 @@ int run_info(const InfoArgs& args) {
   for (const PointLight& l : s.lights) {
     std::printf("  light at %s, power %s\n", vec(l.position).c_str(), vec(l.power).c_str());
   }
+  size_t emissive = 0;
+  for (size_t i = 0; i < s.mesh.size(); ++i) emissive += s.materials[s.mesh.material()[i]].emits();
+  std::printf("emissive triangles: %zu\n", emissive);
   std::printf("ambient: %s\n", vec(s.ambient).c_str());
+  const IntegratorSpec& spec = loaded.integrator;
+  if (spec.kind == IntegratorSpec::Kind::kLab) {
+    std::printf("integrator: lab\n");
+  } else {
+    std::printf("integrator: path, %u spp, max depth %d, seed %llu\n", spec.spp, spec.max_depth,
+                static_cast<unsigned long long>(spec.seed));
+  }
   std::printf("camera: %dx%d at %s, focal length %g px\n", s.camera.width(), s.camera.height(),
               vec(s.camera.position()).c_str(), s.camera.focal_px());
   std::printf("dropped: %zu degenerate, %zu non-finite triangles\n",

@@ -811,7 +811,8 @@ TEST_F(CliTest, InfoPrintsWhatWasLoaded) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   for (const std::string line :
        {"triangles: 30\n", "meshes: 7\n", "materials: 7\n", "bounds: (-1, -1, -1) to (1, 1, 1)\n",
-        "lights: 1\n", "dropped: 0 degenerate, 0 non-finite triangles\n"}) {
+        "lights: 1\n", "dropped: 0 degenerate, 0 non-finite triangles\n", "emissive triangles: 0\n",
+        "integrator: lab\n"}) {
     EXPECT_NE(r.out.find(line), std::string::npos) << line << " not in:\n" << r.out;
   }
   ExpectOnlyFiles(work_, {});
