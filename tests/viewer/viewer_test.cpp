@@ -528,10 +528,11 @@ TEST_F(ViewerTest, PathTracerAccumulatesWhileRestingAndAKeyRestarts) {
   const int before = TitleSpp()->first;
   EXPECT_GT(before, *first + 2) << Title();
 
-  // Left held briefly turns the view: the film restarts at one sample, and half a second later
-  // holds about a quarter of the two seconds' samples. The smallest count seen right after the key
-  // is far below the count before it.
-  Hold("Left", 100ms);
+  // Left held turns the view: the film restarts at one sample, and half a second after the key is
+  // released holds about a quarter of the two seconds' samples. The smallest count seen right
+  // after the key is far below the count before it. (Held for longer than a frame: the viewer
+  // reads which keys are down once a frame.)
+  Hold("Left", 300ms);
   int least = before;
   for (const Clock::time_point end = Clock::now() + 500ms; Clock::now() < end;) {
     if (const std::optional<std::pair<int, int>> spp = TitleSpp())
@@ -549,7 +550,8 @@ TEST_F(ViewerTest, PathTracerAccumulatesWhileRestingAndAKeyRestarts) {
 TEST_F(ViewerTest, PathScreenshotsAreTheCliImageAtTheirSamples) {
   ASSERT_NO_FATAL_FAILURE(
       StartViewer({"--scene", "cornell-area", "--width", "64", "--height", "48", "--spp", "300",
-                   "--seed", "7", "--filter", "gaussian", "-q"}));
+                   "--seed", "7", "--filter", "gaussian", "-q", "--print-state"}));
+  ASSERT_FALSE(WaitForLines("view: ", 1).empty());
   ASSERT_TRUE(WaitForSpp([](int spp) { return spp >= 1; }).has_value());
   // Whatever the count is at this moment (mid-accumulation on most machines).
   const Shot early = Screenshot(1);
@@ -578,9 +580,10 @@ TEST_F(ViewerTest, PathScreenshotsAreTheCliImageAtTheirSamples) {
   EXPECT_EQ(done.image.rgb[light + 1], 255);
   EXPECT_EQ(done.image.rgb[light + 2], 255);
 
-  // A turned view converges to its own image, again the CLI's.
-  Hold("Left", 100ms);
-  ASSERT_TRUE(WaitForSpp([](int spp) { return spp < 300; }).has_value());
+  // A turned view converges to its own image, again the CLI's. Once the turned view has come to
+  // rest (its "view: " line, printed after its first frame), the title counts its samples.
+  Hold("Left", 300ms);
+  ASSERT_FALSE(WaitForLines("view: ", 2).empty());
   ASSERT_TRUE(WaitForSpp([](int spp) { return spp == 300; }).has_value());
   const Shot turned = Screenshot(3);
   EXPECT_NE(Value(turned, "--yaw"), "0");
