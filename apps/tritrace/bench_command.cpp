@@ -1,6 +1,7 @@
 // The bench subcommand: for each scene, build every accel with each kernel asked for (timed),
 // render one warm-up frame, then `reps` timed frames; report medians and the ratios to the fastest
-// non-robust Embree mode and to Embree's robust mode of the same scene.
+// non-robust Embree mode and to Embree's robust mode of the same scene. The integrator comes from
+// make_integrator, as in render and the viewer.
 #include "bench_command.h"
 
 #include <sys/resource.h>
@@ -14,7 +15,7 @@
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
-#include "tritrace/render/lab_integrator.h"
+#include "tritrace/render/make_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/io/loaded_scene.h"
 #include "tritrace/scene/procedural.h"
@@ -25,6 +26,13 @@ namespace {
 // brute is skipped where a frame would take longer than this (estimated from its cost per test).
 constexpr double kBruteBudgetSeconds = 3.0;
 constexpr double kBruteNsPerTest = 4.0;  // Möller–Trumbore, measured in docs/PERFORMANCE.md
+// Rays a path traces on average, for that estimate: camera ray, bounces and shadow rays. Measured
+// on cornell-area at 16 spp (RenderStats rays over samples): 4.8.
+constexpr double kPathRaysPerSample = 5.0;
+
+// The path tracer's samples per pixel when --spp is not given: enough that bounces dominate the
+// frame, few enough that every accel of a run takes seconds.
+constexpr int kDefaultBenchSpp = 16;
 
 struct Record {
   std::string scene;
@@ -37,6 +45,9 @@ struct Record {
   double copy_bytes_per_tri = 0.0;
   double frame_ms_median = 0.0, frame_ms_min = 0.0, frame_ms_max = 0.0;
   double mrays_per_s = 0.0;
+  std::string integrator;  // "lab" or "path"
+  uint32_t spp = 1;
+  double mpaths_per_s = 0.0;                     // camera samples (paths) per second, in millions
   std::optional<double> ratio_to_embree;         // the fastest non-robust Embree mode
   std::optional<double> ratio_to_embree_robust;  // embree-robust
   int threads = 0;
@@ -68,6 +79,9 @@ nlohmann::json to_json(const Record& r) {
                       {"frame_ms_min", r.frame_ms_min},
                       {"frame_ms_max", r.frame_ms_max},
                       {"mrays_per_s", r.mrays_per_s},
+                      {"integrator", r.integrator},
+                      {"spp", r.spp},
+                      {"mpaths_per_s", r.mpaths_per_s},
                       {"threads", r.threads},
                       {"width", r.width},
                       {"height", r.height}};
@@ -92,22 +106,35 @@ std::string ratio_text(std::optional<double> ratio) {
 CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
   CLI::App* sub = app.add_subcommand(
       "bench",
-      "Measure every acceleration structure on the lab workload, beside Embree, in one run");
+      "Measure every acceleration structure on the lab workload or the path tracer's, beside "
+      "Embree, in one run");
   sub->add_option("--scene", args.scenes,
-                  "Scene to measure, repeatable (default: cornell, terrain:1m, terrain:10m)")
+                  "Scene to measure, repeatable (default: cornell, terrain:1m, terrain:10m; with "
+                  "--integrator path, cornell-area)")
       ->type_name("NAME")
       ->check(checked(check_builtin_scene));
+  sub->add_option("--integrator", args.integrator,
+                  "lab (one primary and one shadow ray per pixel) or path (the path tracer: "
+                  "paths/s and Mrays/s over camera, bounce and shadow rays)")
+      ->type_name("NAME")
+      ->capture_default_str()
+      ->check(checked([](std::string& s) {
+        return s == "lab" || s == "path" ? std::string()
+                                         : "unknown integrator '" + s + "' (use lab or path)";
+      }));
+  sub->add_option("--spp", args.spp,
+                  "Samples per pixel of each path-traced frame (default 16; lab: always 1)")
+      ->type_name("N")
+      ->check(checked([](std::string& s) { return check_integer_in(s, 1, kMaxSpp); }));
   sub->add_option("--accel", args.accels, "Acceleration structure, repeatable (default: all)")
       ->type_name("NAME")
       ->check(checked(check_accel));
   auto side = checked([](std::string& s) { return check_integer_in(s, 1, kMaxImageSide); });
-  sub->add_option("--width", args.width, "Frame width")
+  sub->add_option("--width", args.width, "Frame width (default 1920; path: 256)")
       ->type_name("W")
-      ->capture_default_str()
       ->check(side);
-  sub->add_option("--height", args.height, "Frame height")
+  sub->add_option("--height", args.height, "Frame height (default 1080; path: 256)")
       ->type_name("H")
-      ->capture_default_str()
       ->check(side);
   sub->add_option("--reps", args.reps, "Timed frames per scene and accel, after one warm-up")
       ->type_name("N")
@@ -129,14 +156,26 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
 
 int run_bench(const BenchArgs& args) {
   if (!args.json.empty()) check_writable_path(args.json);
-  const std::vector<std::string> scenes =
-      args.scenes.empty() ? std::vector<std::string>{"cornell", "terrain:1m", "terrain:10m"}
-                          : args.scenes;
+  const bool path = args.integrator == "path";
+  IntegratorSpec spec;
+  spec.kind = path ? IntegratorSpec::Kind::kPath : IntegratorSpec::Kind::kLab;
+  spec.spp =
+      path ? static_cast<uint32_t>(args.spp.empty() ? kDefaultBenchSpp : *parse_integer(args.spp))
+           : 1;
+  std::vector<std::string> scenes = args.scenes;
+  if (scenes.empty()) {
+    scenes = path ? std::vector<std::string>{"cornell-area"}
+                  : std::vector<std::string>{"cornell", "terrain:1m", "terrain:10m"};
+  }
   std::vector<AccelKind> accels;
   for (const std::string& name : args.accels) accels.push_back(*parse_accel(name));
   if (accels.empty()) accels = available_accels();
-  const int width = static_cast<int>(*parse_integer(args.width));
-  const int height = static_cast<int>(*parse_integer(args.height));
+  const auto side = [path](const std::string& given, int lab_default) {
+    if (!given.empty()) return static_cast<int>(*parse_integer(given));
+    return path ? 256 : lab_default;  // the Cornell box size for path
+  };
+  const int width = side(args.width, 1920);
+  const int height = side(args.height, 1080);
   const int reps = static_cast<int>(*parse_integer(args.reps));
   const int threads = args.threads.empty() ? default_thread_count()
                                            : static_cast<int>(*parse_integer(args.threads));
@@ -149,9 +188,16 @@ int run_bench(const BenchArgs& args) {
     }
   }
 
-  std::printf("%-13s %10s %-13s %-15s %10s %8s %8s %26s %9s %8s %8s\n", "scene", "triangles",
-              "accel", "kernel", "build ms", "B/tri", "+tri B", "frame ms median (min-max)",
-              "Mrays/s", "/embree", "/robust");
+  // The lab's table keeps its columns; path adds spp and paths per second.
+  if (path) {
+    std::printf("%-13s %10s %-13s %-15s %10s %8s %8s %26s %6s %9s %9s %8s %8s\n", "scene",
+                "triangles", "accel", "kernel", "build ms", "B/tri", "+tri B",
+                "frame ms median (min-max)", "spp", "Mpaths/s", "Mrays/s", "/embree", "/robust");
+  } else {
+    std::printf("%-13s %10s %-13s %-15s %10s %8s %8s %26s %9s %8s %8s\n", "scene", "triangles",
+                "accel", "kernel", "build ms", "B/tri", "+tri B", "frame ms median (min-max)",
+                "Mrays/s", "/embree", "/robust");
+  }
   std::fflush(stdout);
 
   std::vector<Record> records;
@@ -179,9 +225,13 @@ int run_bench(const BenchArgs& args) {
         r.threads = threads;
         r.width = width;
         r.height = height;
+        r.integrator = std::string(integrator_name(spec.kind));
+        r.spp = spec.spp;
         if (kind == AccelKind::kBrute) {
-          const double estimate = 2.0 * width * height * static_cast<double>(scene.mesh.size()) *
-                                  kBruteNsPerTest * 1e-9 / threads;
+          const double rays_per_pixel = path ? kPathRaysPerSample * spec.spp : 2.0;
+          const double estimate = rays_per_pixel * width * height *
+                                  static_cast<double>(scene.mesh.size()) * kBruteNsPerTest * 1e-9 /
+                                  threads;
           if (estimate > kBruteBudgetSeconds) {
             char line[160];
             std::snprintf(
@@ -200,51 +250,71 @@ int run_bench(const BenchArgs& args) {
             static_cast<double>(info.structure_bytes) / std::max<size_t>(1, r.triangles);
         r.copy_bytes_per_tri =
             static_cast<double>(info.triangle_copy_bytes) / std::max<size_t>(1, r.triangles);
-        const LabIntegrator integrator;
+        const std::unique_ptr<Integrator> integrator = make_integrator(spec, scene);
         std::vector<double> ms;
-        uint64_t rays = 0;
+        uint64_t rays = 0, samples = 0;
         for (int i = 0; i <= reps; ++i) {  // frame 0 warms caches and threads up, untimed
           RenderStats stats;
-          render(scene, *accel, integrator, {.threads = threads}, &stats);
+          render(scene, *accel, *integrator,
+                 {.threads = threads, .spp = spec.spp, .seed = spec.seed}, &stats);
           if (i == 0) continue;
           ms.push_back(stats.milliseconds);
           rays += stats.rays;
+          samples += stats.samples;
         }
         r.frame_ms_median = median(ms);
         r.frame_ms_min = *std::min_element(ms.begin(), ms.end());
         r.frame_ms_max = *std::max_element(ms.begin(), ms.end());
         // Rays per frame are the same every frame; the rate uses the median frame.
         r.mrays_per_s = static_cast<double>(rays) / reps / (r.frame_ms_median * 1e3);
+        r.mpaths_per_s = static_cast<double>(samples) / reps / (r.frame_ms_median * 1e3);
         records.push_back(r);
       }
     }
     // Ratios against the fastest non-robust Embree mode of this scene (Embree at its fastest), and
-    // against its robust mode (like for like with a watertight kernel).
+    // against its robust mode (like for like with a watertight kernel). For the path tracer the
+    // measure is paths per second: every accel renders the same paths, and their rays (how many
+    // bounces survive) differ slightly where Embree's rounding sends a path elsewhere.
+    const auto speed = [path](const Record& r) { return path ? r.mpaths_per_s : r.mrays_per_s; };
     double embree_best = 0.0, embree_robust = 0.0;
     for (size_t i = first; i < records.size(); ++i) {
       if (records[i].robust) {
-        embree_robust = records[i].mrays_per_s;
+        embree_robust = speed(records[i]);
       } else if (records[i].kernel == "embree") {
-        embree_best = std::max(embree_best, records[i].mrays_per_s);
+        embree_best = std::max(embree_best, speed(records[i]));
       }
     }
     for (size_t i = first; i < records.size(); ++i) {
       Record& r = records[i];
-      if (embree_best > 0.0) r.ratio_to_embree = r.mrays_per_s / embree_best;
-      if (embree_robust > 0.0) r.ratio_to_embree_robust = r.mrays_per_s / embree_robust;
+      if (embree_best > 0.0) r.ratio_to_embree = speed(r) / embree_best;
+      if (embree_robust > 0.0) r.ratio_to_embree_robust = speed(r) / embree_robust;
       char frame[64];
       std::snprintf(frame, sizeof(frame), "%.1f (%.1f-%.1f)", r.frame_ms_median, r.frame_ms_min,
                     r.frame_ms_max);
-      std::printf("%-13s %10zu %-13s %-15s %10.1f %8.1f %8.1f %26s %9.1f %8s %8s\n",
-                  r.scene.c_str(), r.triangles, r.accel.c_str(), r.kernel.c_str(), r.build_ms,
-                  r.bytes_per_tri, r.copy_bytes_per_tri, frame, r.mrays_per_s,
-                  ratio_text(r.ratio_to_embree).c_str(),
-                  ratio_text(r.ratio_to_embree_robust).c_str());
+      if (path) {
+        std::printf("%-13s %10zu %-13s %-15s %10.1f %8.1f %8.1f %26s %6u %9.3g %9.1f %8s %8s\n",
+                    r.scene.c_str(), r.triangles, r.accel.c_str(), r.kernel.c_str(), r.build_ms,
+                    r.bytes_per_tri, r.copy_bytes_per_tri, frame, r.spp, r.mpaths_per_s,
+                    r.mrays_per_s, ratio_text(r.ratio_to_embree).c_str(),
+                    ratio_text(r.ratio_to_embree_robust).c_str());
+      } else {
+        std::printf("%-13s %10zu %-13s %-15s %10.1f %8.1f %8.1f %26s %9.1f %8s %8s\n",
+                    r.scene.c_str(), r.triangles, r.accel.c_str(), r.kernel.c_str(), r.build_ms,
+                    r.bytes_per_tri, r.copy_bytes_per_tri, frame, r.mrays_per_s,
+                    ratio_text(r.ratio_to_embree).c_str(),
+                    ratio_text(r.ratio_to_embree_robust).c_str());
+      }
     }
     for (const std::string& line : skipped) std::printf("%s\n", line.c_str());
     std::fflush(stdout);
   }
-  if (!args.quiet) {
+  if (!args.quiet && path) {
+    std::printf(
+        "/embree: Mpaths/s over the fastest non-robust Embree mode's (embree, embree8, "
+        "embree-single); /robust: over embree-robust's (RTC_SCENE_FLAG_ROBUST)\n");
+    std::printf("integrator path, %u spp, max depth %d, seed %llu, box filter\n", spec.spp,
+                spec.max_depth, static_cast<unsigned long long>(spec.seed));
+  } else if (!args.quiet) {
     std::printf(
         "/embree: Mrays/s over the fastest non-robust Embree mode's (embree, embree8, "
         "embree-single); /robust: over embree-robust's (RTC_SCENE_FLAG_ROBUST)\n");

@@ -1,7 +1,8 @@
-// `tritrace bench`: the lab workload (one primary and one shadow ray per pixel, all threads) on
-// several scenes, every acceleration structure and the kernels asked for, side by side in one run,
-// with the ratio of each to Embree's best non-robust mode and to Embree's robust mode. Prints a
-// table; --json writes the same records for scripts.
+// `tritrace bench`: the lab workload (one primary and one shadow ray per pixel, all threads), or
+// with --integrator path the path tracer's (coherent camera rays, incoherent bounces and shadow
+// rays), on several scenes, every acceleration structure and the kernels asked for, side by side
+// in one run, with the ratio of each to Embree's best non-robust mode and to Embree's robust mode.
+// Prints a table; --json writes the same records for scripts.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -11,10 +12,12 @@
 namespace tritrace::cli {
 
 struct BenchArgs {
-  std::vector<std::string> scenes;  // empty: cornell, terrain:1m, terrain:10m
+  std::vector<std::string> scenes;  // empty: cornell, terrain:1m, terrain:10m (path: cornell-area)
   std::vector<std::string> accels;  // empty: every accel this build has
-  std::string width = "1920";
-  std::string height = "1080";
+  std::string integrator = "lab";
+  std::string width;   // empty: 1920 (path: 256)
+  std::string height;  // empty: 1080 (path: 256)
+  std::string spp;     // path only; empty: 16
   std::string reps = "5";
   std::string threads;               // empty: all cores
   std::vector<std::string> kernels;  // empty: each accel's default kernel

@@ -15,6 +15,14 @@ std::string window_title(double frame_ms, int width, int height) {
   return text;
 }
 
+std::string window_title(double frame_ms, int width, int height, uint32_t spp,
+                         uint32_t target_spp) {
+  char text[160];
+  std::snprintf(text, sizeof text, "tritrace \u2014 %.1f ms/frame, %u/%u spp, %dx%d", frame_ms, spp,
+                target_spp, width, height);
+  return text;
+}
+
 double RenderTimeReport::seconds_until_due(double now) const {
   if (!printed_) return 0.0;
   return std::max(0.0, last_print_ + 1.0 - now);

@@ -1,15 +1,19 @@
-// What the viewer tells about its speed: the window title, the lab's "Render time" line at most
-// once a second, and medians for --benchmark-frames. Clock values come in as arguments, so the
-// once-a-second rule is unit-tested without waiting.
+// What the viewer tells about its speed: the window title (with the samples so far for the path
+// tracer), the lab's "Render time" line at most once a second, and medians for --benchmark-frames.
+// Clock values come in as arguments, so the once-a-second rule is unit-tested without waiting.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
 namespace tritrace::view {
 
-// "tritrace — 3.1 ms/frame (320 fps), 500x500"
+// "tritrace — 3.1 ms/frame (320 fps), 500x500": the lab integrator's frames.
 std::string window_title(double frame_ms, int width, int height);
+// "tritrace — 52.3 ms/frame, 37/64 spp, 500x500": the path tracer's, with the samples per pixel
+// the window shows the mean of and the scene's target, where accumulation stops.
+std::string window_title(double frame_ms, int width, int height, uint32_t spp, uint32_t target_spp);
 
 // Collects frame times and says when the next "Render time: N ms" line is due: at once for the
 // first frame, then at most once a second, giving the mean of the frames since the last line.

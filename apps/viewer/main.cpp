@@ -23,7 +23,8 @@ std::string usage_message(const CLI::ParseError& e) {
 // NOLINTNEXTLINE(bugprone-exception-escape)
 int main(int argc, char** argv) {
   CLI::App app(
-      "tritrace-view: the lab's Cornell box (or any scene tritrace renders) in a window.\n"
+      "tritrace-view: the lab's Cornell box (or any scene tritrace renders) in a window. With the "
+      "path tracer the image refines while the view rests, up to the scene's --spp.\n"
       "Keys: Left/Right orbit the camera, Up/Down move it forward/back, W/S A/D Q/E move the "
       "light along +z/-z, -x/+x, up/down, R resets, P saves a screenshot, H shows help and "
       "statistics, Esc quits.",
@@ -32,7 +33,8 @@ int main(int argc, char** argv) {
   tritrace::cli::add_scene_flags(app, options.scene);
   app.add_flag("-q,--quiet", options.quiet, "Do not print the 'Render time' lines");
   app.add_flag("--print-state", options.print_state,
-               "Print the view as a 'tritrace render' command each time it comes to rest");
+               "Print the view as a 'tritrace render' command each time it comes to rest (for "
+               "path, at the scene's spp, the image the window converges to)");
   std::string frames;
   app.add_option("--benchmark-frames", frames,
                  "Render N frames turning the camera as if Left were held, print the median "

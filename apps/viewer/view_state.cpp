@@ -73,7 +73,7 @@ std::string shell_quote(const std::string& text) {
 }
 
 std::string render_command_line(const cli::SceneFlags& flags, const ViewState& state, int width,
-                                int height) {
+                                int height, const IntegratorSpec& rendered) {
   std::string line = "tritrace render";
   if (!flags.file.empty()) line += " " + shell_quote(flags.file);
   if (!flags.scene.empty()) line += " --scene " + shell_quote(flags.scene);
@@ -83,6 +83,17 @@ std::string render_command_line(const cli::SceneFlags& flags, const ViewState& s
   line += " --distance " + cli::format_float(state.distance);
   if (state.light) line += " --light " + cli::format_vec3(*state.light);
   line += " --width " + std::to_string(width) + " --height " + std::to_string(height);
+  if (rendered.kind == IntegratorSpec::Kind::kLab) {
+    if (flags.integrator == "lab") line += " --integrator lab";
+    return line;
+  }
+  // Everything the path tracer's pixels depend on besides the scene and the view. The seed is
+  // printed even when it is the scene's own, so that the command says which image it is.
+  line += " --integrator path --spp " + std::to_string(rendered.spp);
+  line += " --seed " + std::to_string(rendered.seed);
+  if (!flags.max_depth.empty()) line += " --max-depth " + std::to_string(rendered.max_depth);
+  const FilterKind filter = cli::filter_choice(flags);
+  if (filter != FilterKind::kBox) line += " --filter " + std::string(filter_name(filter));
   return line;
 }
 

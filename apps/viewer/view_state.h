@@ -63,11 +63,17 @@ SceneOverrides view_overrides(const ViewState& state, int width, int height);
 // flags' overrides).
 ViewState initial_view(const cli::SceneFlags& flags, const LoadedScene& loaded);
 
+// The lab integrator, as the scene or the flags chose it.
+inline constexpr IntegratorSpec kLabSpec{.kind = IntegratorSpec::Kind::kLab};
+
 // `tritrace render ...` reproducing `state` at `width` x `height`: the scene's source and the
 // accel and kernel when not the defaults, and every view value in a form the CLI reads back
-// exactly, so that its image is the viewer's bit for bit.
+// exactly, so that its image is the viewer's bit for bit. `rendered` is how the image was made:
+// for the path tracer, `--integrator path`, its spp (the samples the image holds) and seed, and
+// --max-depth and --filter when the flags gave them; for the lab integrator, `--integrator lab`
+// only when the flags asked for it.
 std::string render_command_line(const cli::SceneFlags& flags, const ViewState& state, int width,
-                                int height);
+                                int height, const IntegratorSpec& rendered = kLabSpec);
 
 // `text` quoted for a POSIX shell when it holds anything but safe characters.
 std::string shell_quote(const std::string& text);

@@ -1,7 +1,7 @@
 // The SDL2 side of the viewer: the display check, the window, the event loop that sleeps in
-// SDL_WaitEvent while nothing changes, the per-frame render -> texture -> present, screenshots and
-// the title and stdout reports. Everything that can be computed without SDL lives in the other
-// files of this folder.
+// SDL_WaitEvent while nothing changes (and, for the path tracer, once the film has its samples),
+// the per-frame render -> texture -> present, screenshots and the title and stdout reports.
+// Everything that can be computed without SDL lives in the other files of this folder.
 #include "viewer.h"
 
 #include <SDL.h>
@@ -9,6 +9,7 @@
 #include <X11/Xproto.h>
 
 #include <chrono>
+#include <clocale>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -23,11 +24,13 @@
 #include "frame_report.h"
 #include "overlay.h"
 #include "pixels.h"
+#include "sample_schedule.h"
 #include "screenshot.h"
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/error.h"
 #include "tritrace/image/image_io.h"
-#include "tritrace/render/lab_integrator.h"
+#include "tritrace/render/film.h"
+#include "tritrace/render/make_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/io/scene_loader.h"
 #include "view_state.h"
@@ -40,6 +43,10 @@ namespace tritrace::view {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// The render time a resting frame of the path tracer aims at: samples arrive several times a
+// second, and a key pressed meanwhile waits no longer than this for the frame to end.
+constexpr double kFrameBudgetMs = 60.0;
 
 double seconds_since(Clock::time_point start, Clock::time_point end) {
   return std::chrono::duration<double>(end - start).count();
@@ -93,6 +100,11 @@ class SdlVideo {
     // 1280 x 720 frame, 0.84 vs 2.97 ms to present it), where OpenGL is Mesa's CPU rasteriser.
     // SDL_RENDER_DRIVER=opengl (the environment wins over this default) picks OpenGL.
     SDL_SetHint(SDL_HINT_RENDER_DRIVER, "software");
+    // SDL hands the window title (UTF-8) to Xlib, which converts text by LC_CTYPE; in the "C"
+    // locale every program starts in, a title with anything beyond ASCII (the title's dash) fails
+    // that conversion and the window keeps its first title. Text conversion is all LC_CTYPE
+    // decides here (numbers are LC_NUMERIC's, untouched); UTF-8 is the encoding SDL gives.
+    if (std::setlocale(LC_CTYPE, "C.UTF-8") == nullptr) std::setlocale(LC_CTYPE, "");
     // Before SDL_Init: SDL keeps the handler it finds and puts it back before it closes its X
     // connections, which is when the error arrives.
     if (env_set("DISPLAY")) {
@@ -178,6 +190,12 @@ class Viewer {
     accel_ = make_accel(cli::accel_kind(options_.scene), loaded_.scene.mesh,
                         cli::kernel_choice(options_.scene));
     render_options_.threads = cli::thread_count(options_.scene);
+    // The integrator `tritrace render` would use with the same flags.
+    spec_ = cli::integrator_spec(options_.scene, loaded_);
+    path_ = spec_.kind == IntegratorSpec::Kind::kPath;
+    render_options_.seed = spec_.seed;
+    render_options_.filter = cli::filter_choice(options_.scene);
+    schedule_.emplace(spec_.spp, kFrameBudgetMs);
 
     window_.reset(SDL_CreateWindow("tritrace", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED,
                                    width_, height_, SDL_WINDOW_RESIZABLE));
@@ -239,9 +257,9 @@ class Viewer {
       FrameTimes times;
       times.events = ms_since(woke);
       if (need_render) {
-        render_frame(times);
-        need_render = false;
-        need_present = true;
+        if (render_frame(times)) need_present = true;
+        // The path tracer goes on adding samples while the view rests, up to the scene's spp.
+        need_render = path_ && !schedule_->done();
       }
       if (need_present) {
         present(times);
@@ -253,7 +271,7 @@ class Viewer {
         screenshot = false;
       }
       if (options_.print_state && !motion_from(held_keys()).any() && printed_view_ != image_view_) {
-        print_line("view: " + command_for_image());
+        print_line("view: " + command_for_view());
         printed_view_ = image_view_;
       }
       if (!options_.quiet && report_.pending() &&
@@ -286,7 +304,9 @@ class Viewer {
     while (SDL_PollEvent(&e) != 0) events.push_back(e);
   }
 
-  void render_frame(FrameTimes& times) {
+  // Renders the next frame into image_ and the texture; false when there was nothing to add (the
+  // path tracer's film already holds its samples for this view).
+  bool render_frame(FrameTimes& times) {
     const Clock::time_point start = Clock::now();
     try {
       apply_overrides(loaded_, view_overrides(view_, width_, height_));
@@ -296,17 +316,49 @@ class Viewer {
       view_ = image_view_;
       apply_overrides(loaded_, view_overrides(view_, width_, height_));
     }
+    const Scene& scene = loaded_.scene;
+    // The path tracer builds its light sampler from the scene's lights when it is made, so it is
+    // made again when the light moves: always the integrator `tritrace render` makes for the scene
+    // with that light.
+    if (!integrator_ || integrator_light_ != view_.light) {
+      integrator_ = make_integrator(spec_, scene);
+      integrator_light_ = view_.light;
+    }
     times.events += ms_since(start);
 
     RenderStats stats;
-    const LabIntegrator integrator;
-    image_ = render(loaded_.scene, *accel_, integrator, render_options_, &stats);
+    if (path_) {
+      // Any change of the view or size starts the film over; otherwise this frame adds the
+      // next whole sample indices [taken, taken + k) of every pixel, so the film after N samples
+      // holds exactly the sums `tritrace render --spp N` makes, added in the same order.
+      const int w = scene.camera.width(), h = scene.camera.height();
+      const bool restart = film_.width() != w || film_.height() != h || film_view_ != view_;
+      const uint32_t spp = schedule_->next_frame(restart);
+      if (spp == 0) return false;
+      if (restart) {
+        film_ = Film(w, h);
+        film_view_ = view_;
+      }
+      RenderOptions options = render_options_;
+      options.first_sample = schedule_->samples_taken();
+      options.spp = spp;
+      render_to_film(scene, *accel_, *integrator_, film_, options, &stats);
+      schedule_->frame_rendered(spp, stats.milliseconds);
+      image_spp_ = schedule_->samples_taken();
+    } else {
+      image_ = render(scene, *accel_, *integrator_, render_options_, &stats);
+    }
     image_view_ = view_;
     times.render = stats.milliseconds;
     threads_ = stats.threads;
     mrays_ = stats.mrays_per_second();
 
     const Clock::time_point upload = Clock::now();
+    if (path_) {
+      const Clock::time_point resolve = Clock::now();
+      image_ = film_.resolve();
+      times.convert = ms_since(resolve);
+    }
     if (!texture_ || texture_width_ != image_.width() || texture_height_ != image_.height()) {
       texture_.reset(SDL_CreateTexture(renderer_.get(), SDL_PIXELFORMAT_ARGB8888,
                                        SDL_TEXTUREACCESS_STREAMING, image_.width(),
@@ -321,11 +373,23 @@ class Viewer {
     int pitch = 0;
     if (SDL_LockTexture(texture_.get(), nullptr, &pixels, &pitch) == 0) {
       const Clock::time_point convert = Clock::now();
-      pack_argb8888(image_, static_cast<uint8_t*>(pixels), pitch);
-      times.convert = ms_since(convert);
+      pack_argb8888(image_, static_cast<uint8_t*>(pixels), pitch, encoding());
+      times.convert += ms_since(convert);
       SDL_UnlockTexture(texture_.get());
     }
     times.upload = ms_since(upload) - times.convert;
+    return true;
+  }
+
+  // How image_ becomes bytes, in the window as in files: as `tritrace render` writes it.
+  ImageEncoding encoding() const { return path_ ? ImageEncoding::srgb() : ImageEncoding::lab(); }
+
+  // How image_ was rendered, for its reproducing command: the path tracer with the samples the
+  // image holds.
+  IntegratorSpec rendered_spec() const {
+    IntegratorSpec rendered = spec_;
+    if (path_) rendered.spp = image_spp_;
+    return rendered;
   }
 
   void present(FrameTimes& times) {
@@ -346,14 +410,22 @@ class Viewer {
 
   void frame_done(const FrameTimes& times) {
     last_times_ = times;
-    SDL_SetWindowTitle(window_.get(),
-                       window_title(times.total(), image_.width(), image_.height()).c_str());
+    const std::string title =
+        path_ ? window_title(times.total(), image_.width(), image_.height(), image_spp_, spec_.spp)
+              : window_title(times.total(), image_.width(), image_.height());
+    SDL_SetWindowTitle(window_.get(), title.c_str());
     if (!options_.quiet && !benchmarking()) report_.add_frame(times.total());
     if (benchmarking()) benchmark_.push_back(times);
   }
 
   std::string command_for_image() const {
-    return render_command_line(options_.scene, image_view_, image_.width(), image_.height());
+    return render_command_line(options_.scene, image_view_, image_.width(), image_.height(),
+                               rendered_spec());
+  }
+
+  // The view at rest as the image it converges to: for the path tracer, at the scene's spp.
+  std::string command_for_view() const {
+    return render_command_line(options_.scene, image_view_, image_.width(), image_.height(), spec_);
   }
 
   void save_screenshot() {
@@ -361,7 +433,7 @@ class Viewer {
     const std::filesystem::path folder = std::filesystem::current_path(ec);
     const std::filesystem::path path = next_screenshot_path(ec ? "." : folder);
     try {
-      write_image(image_, path.string());
+      write_image(image_, path.string(), encoding());
       print_line("saved " + path.string() + ": " + command_for_image());
     } catch (const Error& e) {
       // A full disk or a read-only folder must not end the session: say so and go on.
@@ -385,10 +457,18 @@ class Viewer {
     std::string view = "yaw " + cli::format_double(image_view_.yaw) + " rad, distance " +
                        cli::format_float(image_view_.distance);
     if (image_view_.light) view += ", light " + cli::format_vec3(*image_view_.light);
+    std::string shading = "integrator " + std::string(integrator_name(spec_.kind));
+    if (path_) {
+      shading += ": " + std::to_string(image_spp_) + " of " + std::to_string(spec_.spp) +
+                 " spp, seed " + std::to_string(spec_.seed) + ", max depth " +
+                 std::to_string(spec_.max_depth) + ", " +
+                 std::string(filter_name(render_options_.filter)) + " filter";
+    }
     return {"tritrace-view (H hides this)",
             stats,
             scene,
             view,
+            shading,
             "",
             "Left/Right    orbit the camera",
             "Up/Down       move the camera forward/back",
@@ -424,6 +504,14 @@ class Viewer {
   LoadedScene loaded_;
   std::unique_ptr<Accel> accel_;
   RenderOptions render_options_;
+  IntegratorSpec spec_;  // what `tritrace render` would use with the same flags
+  bool path_ = false;    // spec_ is the path tracer: accumulate samples while the view rests
+  std::unique_ptr<Integrator> integrator_;
+  std::optional<glm::vec3> integrator_light_;  // the light integrator_ was made with
+  Film film_;                                  // the path tracer's samples of film_view_
+  ViewState film_view_;
+  std::optional<SampleSchedule> schedule_;
+  uint32_t image_spp_ = 0;  // the samples per pixel image_ is the mean of (path)
   ViewState start_, view_;
   ViewState image_view_;                   // the view image_ shows
   std::optional<ViewState> printed_view_;  // the last view --print-state printed

@@ -581,6 +581,10 @@ TEST_F(CliTest, BenchWritesATableAndJsonRecords) {
   EXPECT_NE(r.out.find("cornell"), std::string::npos);
   EXPECT_NE(r.out.find("terrain:2k"), std::string::npos);
   EXPECT_NE(r.out.find("peak RSS"), std::string::npos);
+  // The lab's table keeps its columns (path adds spp and Mpaths/s).
+  EXPECT_EQ(r.out.substr(0, r.out.find('\n')),
+            "scene          triangles accel         kernel            build ms    B/tri   +tri B  "
+            "frame ms median (min-max)   Mrays/s  /embree  /robust");
   ExpectOnlyFiles(work_, {"b.json"});
   const nlohmann::json records = nlohmann::json::parse(ReadFile(work_ / "b.json"));
   ASSERT_TRUE(records.is_array());
@@ -596,6 +600,8 @@ TEST_F(CliTest, BenchWritesATableAndJsonRecords) {
     accels.insert(accel);
     EXPECT_EQ(rec["width"], 64);
     EXPECT_EQ(rec["height"], 36);
+    EXPECT_EQ(rec["integrator"], "lab");
+    EXPECT_EQ(rec["spp"], 1);
     EXPECT_GT(rec["mrays_per_s"].get<double>(), 0.0);
     EXPECT_LE(rec["frame_ms_min"].get<double>(), rec["frame_ms_median"].get<double>());
     EXPECT_LE(rec["frame_ms_median"].get<double>(), rec["frame_ms_max"].get<double>());
@@ -679,6 +685,58 @@ TEST_F(CliTest, BenchRepeatedKernelGivesARowPerKernel) {
     }
   }
   EXPECT_EQ(bvh_rows, 2) << r.out;
+}
+
+// tritrace bench --integrator path: the path tracer's workload (cornell-area by default), with
+// paths per second beside rays per second for every accel, in the table and the records.
+TEST_F(CliTest, BenchWithThePathTracerReportsPathsPerSecond) {
+  const RunResult r = Run({"bench", "--integrator", "path", "--width", "32", "--height", "24",
+                           "--spp", "2", "--reps", "2", "--json", "p.json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  std::istringstream table(r.out);
+  std::string header;
+  std::getline(table, header);
+  EXPECT_NE(header.find(" spp "), std::string::npos) << header;
+  EXPECT_NE(header.find("Mpaths/s"), std::string::npos) << header;
+  EXPECT_NE(r.out.find("integrator path, 2 spp"), std::string::npos) << r.out;
+  const nlohmann::json records = nlohmann::json::parse(ReadFile(work_ / "p.json"));
+  ASSERT_TRUE(records.is_array());
+  std::set<std::string> accels;
+  for (const nlohmann::json& rec : records) {
+    accels.insert(rec["accel"].get<std::string>());
+    EXPECT_EQ(rec["scene"], "cornell-area");
+    EXPECT_EQ(rec["triangles"], 32);  // the lab's 30 and the ceiling light's two
+    EXPECT_EQ(rec["integrator"], "path");
+    EXPECT_EQ(rec["spp"], 2);
+    // Paths per frame are pixels x spp, whatever the accel: the rate is that over the median.
+    const double frame_ms = rec["frame_ms_median"].get<double>();
+    EXPECT_NEAR(rec["mpaths_per_s"].get<double>(), 32.0 * 24.0 * 2.0 / (frame_ms * 1e3),
+                1e-9 * rec["mpaths_per_s"].get<double>());
+    // Nearly every camera ray here sees a wall, floor or block (the box fills the view; only the
+    // small light ends a path at once), and each of those adds at least a bounce ray.
+    EXPECT_GT(rec["mrays_per_s"].get<double>(), 1.5 * rec["mpaths_per_s"].get<double>());
+  }
+  EXPECT_TRUE(accels.count("bvh"));
+  EXPECT_TRUE(accels.count("brute"));
+#if TRITRACE_HAVE_EMBREE
+  EXPECT_TRUE(accels.count("embree-single"));
+  // Ratios are of paths per second here: the fastest non-robust Embree mode's is 1.
+  double best = 0.0;
+  for (const nlohmann::json& rec : records) {
+    const std::string accel = rec["accel"].get<std::string>();
+    if (accel.starts_with("embree") && accel != "embree-robust") {
+      best = std::max(best, rec["ratio_to_embree"].get<double>());
+    }
+  }
+  EXPECT_DOUBLE_EQ(best, 1.0);
+#endif
+}
+
+TEST_F(CliTest, BenchRejectsAnUnknownIntegrator) {
+  const RunResult r = Run({"bench", "--integrator", "whitted"});
+  ExpectErrorLine(r, 2, "--integrator", "unknown integrator 'whitted'");
+  ExpectOnlyFiles(work_, {});
 }
 
 TEST_F(CliTest, BenchRejectsAnUnknownKernel) {

@@ -21,6 +21,12 @@ TEST(WindowTitle, MillisecondsFpsAndSize) {
   EXPECT_EQ(window_title(40.0, 1280, 720), "tritrace \u2014 40.0 ms/frame (25 fps), 1280x720");
 }
 
+TEST(WindowTitle, ThePathTracersSamplesSoFarAndTarget) {
+  EXPECT_EQ(window_title(52.34, 500, 500, 37, 64),
+            "tritrace \u2014 52.3 ms/frame, 37/64 spp, 500x500");
+  EXPECT_EQ(window_title(8.0, 64, 48, 1, 1), "tritrace \u2014 8.0 ms/frame, 1/1 spp, 64x48");
+}
+
 TEST(RenderTimeReport, FirstFrameAtOnceThenAtMostOncePerSecond) {
   RenderTimeReport r;
   EXPECT_FALSE(r.pending());
@@ -76,6 +82,25 @@ TEST(PackArgb8888, LabBytesAlphaOpaqueRowsAtThePitch) {
   EXPECT_EQ(word(1, 1), 0xffffffffu);
   EXPECT_EQ(bytes[8], 0xab);  // padding untouched
   EXPECT_EQ(bytes[20], 0xab);
+}
+
+// The path tracer's pixels go through the sRGB curve, as `tritrace render` writes them: values
+// here from the IEC 61966-2-1 formula by hand (12.92 c below 0.0031308, else
+// 1.055 c^(1/2.4) - 0.055, times 255, rounded).
+TEST(PackArgb8888, SrgbBytesForThePathTracer) {
+  Image image(2, 1);
+  image.at(0, 0) = glm::vec3(0.5f, 0.002f, 0.18f);  // 187.52 -> 188, 6.59 -> 7, 117.65 -> 118
+  image.at(1, 0) = glm::vec3(0.05f, 10.0f, -1.0f);  // 63.19 -> 63, clamped 255, 0
+  uint32_t words[2] = {0, 0};
+  pack_argb8888(image, reinterpret_cast<uint8_t*>(words), 8, ImageEncoding::srgb());
+  EXPECT_EQ(words[0], 0xffbc0776u);
+  EXPECT_EQ(words[1], 0xff3fff00u);
+  // One stop of exposure doubles the linear value first: 0.25 -> 0.5 -> 188.
+  Image quarter(1, 1);
+  quarter.at(0, 0) = glm::vec3(0.25f);
+  uint32_t word = 0;
+  pack_argb8888(quarter, reinterpret_cast<uint8_t*>(&word), 4, ImageEncoding::srgb(1.0f));
+  EXPECT_EQ(word, 0xffbcbcbcu);
 }
 
 }  // namespace

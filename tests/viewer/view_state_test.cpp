@@ -141,6 +141,37 @@ TEST(CommandLine, AddsTheSceneSourceAccelAndKernelWhenGiven) {
             "tritrace render --scene terrain:1m --yaw -0.5 --distance 2.25 --width 8 --height 8");
 }
 
+TEST(CommandLine, ThePathTracersSamplesSeedAndChoicesGiven) {
+  cli::SceneFlags flags;
+  flags.scene = "cornell-area";
+  ViewState s;
+  IntegratorSpec path;
+  path.kind = IntegratorSpec::Kind::kPath;
+  path.spp = 37;  // the samples the image holds, not the scene's target
+  path.seed = 5;
+  path.max_depth = 9;
+  EXPECT_EQ(render_command_line(flags, s, 64, 48, path),
+            "tritrace render --scene cornell-area --yaw 0 --distance 3 --width 64 --height 48 "
+            "--integrator path --spp 37 --seed 5");
+  // --max-depth and --filter when the flags gave them (the scene's own otherwise, which the
+  // command reads from the same scene).
+  flags.max_depth = "9";
+  flags.filter = "gaussian";
+  EXPECT_EQ(render_command_line(flags, s, 64, 48, path),
+            "tritrace render --scene cornell-area --yaw 0 --distance 3 --width 64 --height 48 "
+            "--integrator path --spp 37 --seed 5 --max-depth 9 --filter gaussian");
+}
+
+TEST(CommandLine, TheLabIntegratorOnlyWhenAskedFor) {
+  cli::SceneFlags flags;
+  flags.scene = "cornell-area";  // a path tracer's scene, shown with the lab's shading
+  flags.integrator = "lab";
+  ViewState s;
+  EXPECT_EQ(render_command_line(flags, s, 8, 8, kLabSpec),
+            "tritrace render --scene cornell-area --yaw 0 --distance 3 --width 8 --height 8 "
+            "--integrator lab");
+}
+
 TEST(CommandLine, ShellQuoting) {
   EXPECT_EQ(shell_quote("scenes/cornell.json"), "scenes/cornell.json");
   EXPECT_EQ(shell_quote("a b"), "'a b'");

@@ -364,6 +364,41 @@ class ViewerTest : public ::testing::Test {
     return "";
   }
 
+  // The window's title, as a window manager shows it (_NET_WM_NAME, UTF-8).
+  std::string Title() {
+    std::string title =
+        RunCommand({"xdotool", "getwindowname", window_}, env_, work_.path(), 10s).out;
+    while (!title.empty() && title.back() == '\n') title.pop_back();
+    return title;
+  }
+
+  // The path tracer's samples so far and target from the title's "N/T spp"; nullopt when the title
+  // shows none (yet).
+  std::optional<std::pair<int, int>> TitleSpp() {
+    const std::string title = Title();
+    const size_t spp = title.find(" spp");
+    if (spp == std::string::npos) return std::nullopt;
+    const size_t start = title.rfind(' ', spp - 1);
+    const size_t slash = title.find('/', start);
+    if (start == std::string::npos || slash == std::string::npos || slash > spp)
+      return std::nullopt;
+    return std::pair(std::stoi(title.substr(start + 1, slash - start - 1)),
+                     std::stoi(title.substr(slash + 1, spp - slash - 1)));
+  }
+
+  // Polls the title until the samples so far satisfy `ok` (nullopt after `timeout`).
+  template <typename Ok>
+  std::optional<int> WaitForSpp(Ok ok, std::chrono::milliseconds timeout = 30s) {
+    const Clock::time_point end = Clock::now() + timeout;
+    while (Clock::now() < end && !WaitExit(viewer_, 0ms).has_value()) {
+      const std::optional<std::pair<int, int>> spp = TitleSpp();
+      if (spp && ok(spp->first)) return spp->first;
+      std::this_thread::sleep_for(20ms);
+    }
+    ADD_FAILURE() << "title '" << Title() << "'; stderr: " << Err();
+    return std::nullopt;
+  }
+
   // utime + stime of the viewer, in seconds.
   double CpuSeconds() const {
     const std::string stat = ReadFile("/proc/" + std::to_string(viewer_) + "/stat");
@@ -477,6 +512,109 @@ TEST_F(ViewerTest, IdleViewerUsesAlmostNoCpu) {
   const double cpu = CpuSeconds() - cpu_before;
   const double wall = std::chrono::duration<double>(Clock::now() - wall_before).count();
   EXPECT_LT(cpu, 0.05 * wall) << "CPU seconds while idle for " << wall << " s";
+}
+
+// The path tracer in the window: while the view rests each frame adds samples to the film and the
+// title counts them; a key that moves the view starts the film over.
+TEST_F(ViewerTest, PathTracerAccumulatesWhileRestingAndAKeyRestarts) {
+  ASSERT_NO_FATAL_FAILURE(StartViewer(
+      {"--scene", "cornell-area", "--width", "160", "--height", "120", "--spp", "100000", "-q"}));
+  const std::optional<int> first = WaitForSpp([](int spp) { return spp >= 1; });
+  ASSERT_TRUE(first.has_value());
+  EXPECT_EQ(TitleSpp()->second, 100000) << Title();
+  // Two seconds of rest: the count grows (at any speed a machine has, by far more than one
+  // frame's).
+  std::this_thread::sleep_for(2s);
+  const int before = TitleSpp()->first;
+  EXPECT_GT(before, *first + 2) << Title();
+
+  // Left held turns the view: the film restarts at one sample, and half a second after the key is
+  // released holds about a quarter of the two seconds' samples. The smallest count seen right
+  // after the key is far below the count before it. (Held for longer than a frame: the viewer
+  // reads which keys are down once a frame.)
+  Hold("Left", 300ms);
+  int least = before;
+  for (const Clock::time_point end = Clock::now() + 500ms; Clock::now() < end;) {
+    if (const std::optional<std::pair<int, int>> spp = TitleSpp())
+      least = std::min(least, spp->first);
+  }
+  EXPECT_LT(least, before / 2) << "before the key: " << before;
+  // And it accumulates again.
+  EXPECT_TRUE(WaitForSpp([&](int spp) { return spp > least; }).has_value());
+}
+
+// Screenshots of the path tracer are the running mean through the sRGB curve, and the printed
+// command renders the same file byte for byte at the samples it names: the film of samples
+// [0, N) added frame by frame is the film `tritrace render --spp N` makes. Seed and filter given
+// here travel into the command.
+TEST_F(ViewerTest, PathScreenshotsAreTheCliImageAtTheirSamples) {
+  ASSERT_NO_FATAL_FAILURE(
+      StartViewer({"--scene", "cornell-area", "--width", "64", "--height", "48", "--spp", "300",
+                   "--seed", "7", "--filter", "gaussian", "-q", "--print-state"}));
+  ASSERT_FALSE(WaitForLines("view: ", 1).empty());
+  ASSERT_TRUE(WaitForSpp([](int spp) { return spp >= 1; }).has_value());
+  // Whatever the count is at this moment (mid-accumulation on most machines).
+  const Shot early = Screenshot(1);
+  ASSERT_FALSE(early.command.empty());
+  EXPECT_EQ(Value(early, "--integrator"), "path");
+  EXPECT_EQ(Value(early, "--seed"), "7");
+  EXPECT_EQ(Value(early, "--filter"), "gaussian");
+  const int early_spp = std::stoi(Value(early, "--spp"));
+  EXPECT_GE(early_spp, 1);
+  EXPECT_LE(early_spp, 300);
+  RenderWithCli(early.command, "cli1.png");
+  EXPECT_EQ(ReadFile(early.path), ReadFile(work_.path() / "cli1.png")) << "at " << early_spp;
+
+  // Converged: the first frame took one sample, so the film was added up over several frames.
+  ASSERT_TRUE(WaitForSpp([](int spp) { return spp == 300; }).has_value());
+  const Shot done = Screenshot(2);
+  EXPECT_EQ(Value(done, "--spp"), "300");
+  const tritrace::Rgb8Image cli = RenderWithCli(done.command, "cli2.png");
+  EXPECT_EQ(ReadFile(done.path), ReadFile(work_.path() / "cli2.png"));
+  EXPECT_TRUE(SameImage(done.image, cli));
+  // The ceiling light, seen from below, is radiance 10: white through the sRGB curve.
+  // It spans rows 7 to 9 at the middle of this image (the ceiling y = -1 at depth z in
+  // [-0.18, 0.2] from the camera at z = -3 with focal length 48 seen at rows 24 - 48 / (z + 3)).
+  const size_t light = 3 * (8 * 64 + 32);
+  EXPECT_EQ(done.image.rgb[light], 255);
+  EXPECT_EQ(done.image.rgb[light + 1], 255);
+  EXPECT_EQ(done.image.rgb[light + 2], 255);
+
+  // A turned view converges to its own image, again the CLI's. Once the turned view has come to
+  // rest (its "view: " line, printed after its first frame), the title counts its samples.
+  Hold("Left", 300ms);
+  ASSERT_FALSE(WaitForLines("view: ", 2).empty());
+  ASSERT_TRUE(WaitForSpp([](int spp) { return spp == 300; }).has_value());
+  const Shot turned = Screenshot(3);
+  EXPECT_NE(Value(turned, "--yaw"), "0");
+  RenderWithCli(turned.command, "cli3.png");
+  EXPECT_EQ(ReadFile(turned.path), ReadFile(work_.path() / "cli3.png"));
+  EXPECT_NE(ReadFile(turned.path), ReadFile(done.path));
+}
+
+// Once the film has the scene's samples, the path tracer stops and the viewer sleeps like the
+// lab's.
+TEST_F(ViewerTest, IdlePathTracerUsesAlmostNoCpuOnceConverged) {
+  ASSERT_NO_FATAL_FAILURE(StartViewer(
+      {"--scene", "cornell-area", "--width", "100", "--height", "100", "--spp", "32", "-q"}));
+  ASSERT_TRUE(WaitForSpp([](int spp) { return spp == 32; }).has_value());
+  std::this_thread::sleep_for(300ms);
+  const double cpu_before = CpuSeconds();
+  const Clock::time_point wall_before = Clock::now();
+  std::this_thread::sleep_for(2s);
+  const double cpu = CpuSeconds() - cpu_before;
+  const double wall = std::chrono::duration<double>(Clock::now() - wall_before).count();
+  EXPECT_LT(cpu, 0.05 * wall) << "CPU seconds while idle for " << wall << " s";
+  EXPECT_EQ(TitleSpp()->first, 32);
+}
+
+// --benchmark-frames turns the view every frame, so the path tracer renders one sample a frame.
+TEST_F(ViewerTest, BenchmarkFramesWithThePathTracer) {
+  const RunResult r = RunCommand({TRITRACE_VIEW_PATH, "--scene", "cornell-area", "--width", "64",
+                                  "--height", "64", "--benchmark-frames", "5"},
+                                 env_, work_.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("benchmark: 5 frames at 64x64, medians: frame ", 0), 0u) << r.out;
 }
 
 TEST_F(ViewerTest, ClosingTheWindowQuitsWithExitZero) {

@@ -1,6 +1,6 @@
 // The Embree backend. Denormals are flushed to zero around every batch (Embree's recommendation
-// for speed), and packets are filled from consecutive rays of a batch, which are neighbouring
-// pixels of a tile.
+// for speed), packets are filled from consecutive rays of a batch, which are neighbouring pixels
+// of a tile, and incoherent batches (bounce and shadow rays of paths) go ray by ray.
 #include "tritrace/accel/embree_accel.h"
 
 #include <embree3/rtcore.h>
@@ -69,6 +69,34 @@ struct EmbreeAccel::Impl {
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
+  }
+
+  // One ray at a time. rtcInitIntersectContext sets RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT (zero)
+  // already; the flag is named so that the hint is stated where it matters.
+  void intersect_singles(std::span<const Ray> rays, std::span<Hit> hits,
+                         RTCIntersectContextFlags flags) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = flags;
+    for (size_t i = 0; i < rays.size(); ++i) {
+      RTCRayHit rh;
+      rh.ray = to_rtc(rays[i]);
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(scene, &context, &rh);
+      hits[i] = to_hit(rh.ray.tfar, rh.hit.u, rh.hit.v, rh.hit.geomID, rh.hit.primID);
+    }
+  }
+
+  void occluded_singles(std::span<const Ray> rays, std::span<uint8_t> out,
+                        RTCIntersectContextFlags flags) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = flags;
+    for (size_t i = 0; i < rays.size(); ++i) {
+      RTCRay ray = to_rtc(rays[i]);
+      rtcOccluded1(scene, &context, &ray);
+      out[i] = ray.tfar < 0.0f ? 1 : 0;
+    }
   }
 
   template <int N, typename RayHitN, typename IntersectN>
@@ -165,15 +193,7 @@ void EmbreeAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) cons
     case EmbreeMode::kSingle:
       break;
   }
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  for (size_t i = 0; i < rays.size(); ++i) {
-    RTCRayHit rh;
-    rh.ray = to_rtc(rays[i]);
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(impl_->scene, &context, &rh);
-    hits[i] = to_hit(rh.ray.tfar, rh.hit.u, rh.hit.v, rh.hit.geomID, rh.hit.primID);
-  }
+  impl_->intersect_singles(rays, hits, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
 }
 
 void EmbreeAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
@@ -186,13 +206,18 @@ void EmbreeAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occlude
     case EmbreeMode::kSingle:
       break;
   }
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  for (size_t i = 0; i < rays.size(); ++i) {
-    RTCRay ray = to_rtc(rays[i]);
-    rtcOccluded1(impl_->scene, &context, &ray);
-    occluded[i] = ray.tfar < 0.0f ? 1 : 0;
-  }
+  impl_->occluded_singles(rays, occluded, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
+}
+
+void EmbreeAccel::intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const {
+  const FlushDenormals ftz;
+  impl_->intersect_singles(rays, hits, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
+}
+
+void EmbreeAccel::occluded_incoherent(std::span<const Ray> rays,
+                                      std::span<uint8_t> occluded) const {
+  const FlushDenormals ftz;
+  impl_->occluded_singles(rays, occluded, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
 }
 
 }  // namespace tritrace

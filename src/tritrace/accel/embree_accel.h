@@ -30,6 +30,11 @@ class EmbreeAccel final : public Accel {
   using Accel::occluded;
   void intersect(std::span<const Ray> rays, std::span<Hit> hits) const override;
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
+  // Rays that share nothing (a path tracer's bounces and shadow rays) go one at a time
+  // (rtcIntersect1/rtcOccluded1) in every mode, with RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT, as
+  // embree-single would trace them: packets of unrelated rays only cost their masking.
+  void intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const override;
+  void occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
 
   EmbreeMode mode() const { return mode_; }
   bool robust() const { return robust_; }
