@@ -74,8 +74,7 @@ tbb::blocked_range<Index> chunk(const tbb::blocked_range<Index>& range, size_t k
 }  // namespace detail
 
 // tbb::task_group: run(f) hands f() to another thread (or runs it in wait()), wait() returns once
-// every f has run. Destroy the group before reusing what its tasks touched on the caller's stack
-// (see the note at the top).
+// every f has run.
 class TaskGroup {
  public:
   TaskGroup() = default;
@@ -133,8 +132,8 @@ void for_range(const tbb::blocked_range<Index>& range, const Body& body) {
 
 // The reduction of `range` in parallel: body(const blocked_range&, Value) returns the value
 // extended by a chunk, starting from `identity`; join(Value, const Value&) returns two combined.
-// Chunks are joined in order on the calling thread, so the result does not depend on the thread
-// count or timing even for a join that is not associative.
+// Chunks are joined in order on the calling thread, so the result never depends on timing (with a
+// join that is not associative it may depend on the arena's thread count, which sets the chunks).
 template <typename Index, typename Value, typename Body, typename Join>
 [[nodiscard]] Value reduce(const tbb::blocked_range<Index>& range, const Value& identity,
                            const Body& body, const Join& join) {
@@ -152,8 +151,9 @@ template <typename Index, typename Value, typename Body, typename Join>
     group.wait();
   }
   Value out = std::move(partial[0]);
-  for (size_t k = 1; k < chunks; ++k)
+  for (size_t k = 1; k < chunks; ++k) {
     out = join(std::move(out), static_cast<const Value&>(partial[k]));
+  }
   return out;
 }
 
