@@ -17,6 +17,7 @@
 
 #include "tritrace/accel/brute_force.h"
 #include "tritrace/accel/bvh/bvh_accel.h"
+#include "tritrace/scene/procedural.h"
 
 namespace tritrace {
 namespace {
@@ -282,6 +283,43 @@ TEST(BinnedSahBuilder, TrianglesWithOneCommonCentroidKeepTheBruteForceHits) {
     ASSERT_EQ(mesh.triangle_bounds(i).centre(), glm::vec3(0.0f));
   }
   EXPECT_GT(expect_same_as_brute(mesh, rays_at_triangles(mesh, 2000, 2.0f, 6)), 1000);
+}
+
+// Visits the subtrees of `a` and `b` at nodes i and j together: the same shape, boxes and leaf
+// ranges. Node numbers may differ (tasks take them in any order); the permutation may not.
+void expect_same_subtree(const BinaryBvh& a, uint32_t i, const BinaryBvh& b, uint32_t j,
+                         int& differences) {
+  const bvh::BinaryNode& x = a.nodes[i];
+  const bvh::BinaryNode& y = b.nodes[j];
+  const bool same = x.is_leaf() == y.is_leaf() && x.bounds.lo == y.bounds.lo &&
+                    x.bounds.hi == y.bounds.hi &&
+                    (!x.is_leaf() || (x.first == y.first && x.count == y.count));
+  if (!same) {
+    ++differences;
+    return;
+  }
+  if (!x.is_leaf()) {
+    expect_same_subtree(a, x.first, b, y.first, differences);
+    expect_same_subtree(a, x.right, b, y.right, differences);
+  }
+}
+
+// The parallel build (binning by parallel reduction, subtrees in tasks: here from 64 primitives
+// up, so tasks run everywhere) must make exactly the tree of the serial build: bins are merged
+// with min, max and integer sums, which give the same result in any order.
+TEST(BinnedSahBuilder, ParallelBuildMakesTheSerialTree) {
+  const TriangleMesh mesh = make_terrain_scene(60000).mesh;
+  std::vector<Bounds3> boxes(mesh.size());
+  for (size_t i = 0; i < mesh.size(); ++i) boxes[i] = mesh.triangle_bounds(i);
+  const BinaryBvh serial =
+      bvh::build_binned_sah(boxes, {.parallel_threshold = std::numeric_limits<uint32_t>::max()});
+  const BinaryBvh parallel = bvh::build_binned_sah(boxes, {.parallel_threshold = 64});
+  check_tree(parallel, boxes, bvh::kMaxLeafSize);
+  ASSERT_EQ(parallel.nodes.size(), serial.nodes.size());
+  EXPECT_TRUE(parallel.prim_index == serial.prim_index);
+  int differences = 0;
+  expect_same_subtree(parallel, 0, serial, 0, differences);
+  EXPECT_EQ(differences, 0);
 }
 
 // A random soup around the origin, where the rays go, plus `count` far triangles made by

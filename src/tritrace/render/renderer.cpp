@@ -1,10 +1,8 @@
 // Tiles over a TBB task arena of the requested thread count.
 #include "tritrace/render/renderer.h"
 
-#include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -15,75 +13,9 @@
 #include <optional>
 #include <vector>
 
-// ThreadSanitizer cannot see the synchronisation inside Debian's libtbb.so (it is not built with
-// TSan), so in a TSan build the hand-over of work that tbb::parallel_for guarantees is told to it
-// explicitly (TsanVisibleBody below): everything before a task is handed over happens before it
-// runs, and every task before the loop returns. Races between concurrently running tasks are
-// still found.
-#if defined(__SANITIZE_THREAD__)
-#define TRITRACE_TSAN 1
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
-#define TRITRACE_TSAN 1
-#endif
-#endif
-#ifdef TRITRACE_TSAN
-extern "C" void __tsan_acquire(void* addr);
-extern "C" void __tsan_release(void* addr);
-#endif
+#include "tritrace/parallel.h"
 
 namespace tritrace {
-namespace {
-
-[[maybe_unused]] void tsan_release(void* addr) {
-#ifdef TRITRACE_TSAN
-  __tsan_release(addr);
-#else
-  (void)addr;
-#endif
-}
-
-[[maybe_unused]] void tsan_acquire(void* addr) {
-#ifdef TRITRACE_TSAN
-  __tsan_acquire(addr);
-#else
-  (void)addr;
-#endif
-}
-
-// The loop body handed to TBB. TBB copies it into each task and hands the task to a worker inside
-// libtbb.so; the copy constructor releases and the call acquires, so that TSan sees the copy (and
-// everything its thread did before) happen before the worker uses it, as TBB guarantees. The end of
-// each call releases into a second address, which render() acquires after the loop: the join. The
-// addresses are fixed (not read from the body) so that the acquire reads nothing TSan has not been
-// told about yet.
-template <typename Fn>
-struct TsanVisibleBody {
-  static inline char fork_sync = 0, join_sync = 0;
-  Fn* fn;
-  explicit TsanVisibleBody(Fn* f) : fn(f) { tsan_release(&fork_sync); }
-  // A thread that copies a body (when TBB splits work) got the task holding it through TBB too:
-  // acquire before reading it.
-  TsanVisibleBody(const TsanVisibleBody& other) : fn(acquired(other.fn)) {
-    tsan_release(&fork_sync);
-  }
-  TsanVisibleBody& operator=(const TsanVisibleBody&) = delete;
-  static Fn* acquired(Fn* const& source) {
-    tsan_acquire(&fork_sync);
-    return source;
-  }
-  ~TsanVisibleBody() = default;
-  // Takes the range (unread: one call per thread, tiles come from a counter) rather than an index,
-  // so that TBB calls it directly instead of through a wrapper that reads its own fields first.
-  void operator()(const tbb::blocked_range<int>& /*threads*/) const {
-    tsan_acquire(&fork_sync);
-    (*fn)();
-    tsan_release(&join_sync);
-  }
-};
-
-}  // namespace
-
 namespace {
 
 // Visits a tile in 4 x 4 pixel blocks (smaller at the tile's edges), fn(bx, by, ex, ey) for the
@@ -206,7 +138,6 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
       slot_rendered[static_cast<size_t>(slot)].store(1, std::memory_order_relaxed);
     }
   };
-  using Body = TsanVisibleBody<decltype(run_tiles)>;
   // TBB gives all arenas together at most max_allowed_parallelism threads, by default the number of
   // cores; an arena asked for more prints "number of workers is currently limited" and gets fewer.
   // Raised for as long as the render runs, the limit lets the arena have every thread asked for.
@@ -219,10 +150,11 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
   }
   tbb::task_arena arena(threads);
   arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<int>(0, threads, 1), Body(&run_tiles),
-                      tbb::simple_partitioner());
+    parallel::TaskGroup group;
+    for (int t = 1; t < threads; ++t) group.run(run_tiles);
+    run_tiles();
+    group.wait();
   });
-  tsan_acquire(&Body::join_sync);
 
   const auto stop = std::chrono::steady_clock::now();
   if (stats) {

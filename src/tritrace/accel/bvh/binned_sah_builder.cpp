@@ -8,9 +8,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/concurrent_vector.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
-#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <array>
@@ -19,6 +16,8 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+
+#include "tritrace/parallel.h"
 
 namespace tritrace::bvh {
 namespace {
@@ -91,7 +90,7 @@ class Builder {
       : bounds_(prim_bounds), config_(config) {
     config_.bins = std::clamp(config_.bins, 2, kMaxBins);
     centroids_.resize(prim_bounds.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, prim_bounds.size()), [&](const auto& r) {
+    parallel::for_range(tbb::blocked_range<size_t>(0, prim_bounds.size()), [&](const auto& r) {
       for (size_t i = r.begin(); i != r.end(); ++i) centroids_[i] = centroid_of(prim_bounds[i]);
     });
   }
@@ -104,7 +103,7 @@ class Builder {
     std::iota(prims_.begin(), prims_.end(), 0u);
     nodes_.reserve(2 * (n / std::max(1u, config_.max_leaf_size / 2)) + 1);
     const uint32_t root = static_cast<uint32_t>(nodes_.grow_by(1) - nodes_.begin());
-    tbb::task_group group;
+    parallel::TaskGroup group;
     build_node(root, 0, n, 0, group);
     group.wait();
     out.nodes.assign(nodes_.begin(), nodes_.end());
@@ -132,12 +131,12 @@ class Builder {
     if (end - begin < config_.parallel_threshold) {
       return body(tbb::blocked_range<uint32_t>(begin, end), init);
     }
-    return tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, 4096), init, body,
-                                [](Pair a, const Pair& b) {
-                                  a.first.extend(b.first);
-                                  a.second.extend(b.second);
-                                  return a;
-                                });
+    return parallel::reduce(tbb::blocked_range<uint32_t>(begin, end, 4096), init, body,
+                            [](Pair a, const Pair& b) {
+                              a.first.extend(b.first);
+                              a.second.extend(b.second);
+                              return a;
+                            });
   }
 
   BinSet bin_range(uint32_t begin, uint32_t end, const std::array<AxisBins, 3>& axes) const {
@@ -155,20 +154,20 @@ class Builder {
     if (end - begin < config_.parallel_threshold) {
       return body(tbb::blocked_range<uint32_t>(begin, end), BinSet{});
     }
-    return tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, 4096), BinSet{}, body,
-                                [&](BinSet a, const BinSet& b) {
-                                  for (int ax = 0; ax < 3; ++ax) {
-                                    for (int i = 0; i < config_.bins; ++i) {
-                                      a.axis[ax][i].bounds.extend(b.axis[ax][i].bounds);
-                                      a.axis[ax][i].count += b.axis[ax][i].count;
-                                    }
-                                  }
-                                  return a;
-                                });
+    return parallel::reduce(tbb::blocked_range<uint32_t>(begin, end, 4096), BinSet{}, body,
+                            [&](BinSet a, const BinSet& b) {
+                              for (int ax = 0; ax < 3; ++ax) {
+                                for (int i = 0; i < config_.bins; ++i) {
+                                  a.axis[ax][i].bounds.extend(b.axis[ax][i].bounds);
+                                  a.axis[ax][i].count += b.axis[ax][i].count;
+                                }
+                              }
+                              return a;
+                            });
   }
 
   void build_node(uint32_t index, uint32_t begin, uint32_t end, uint32_t depth,
-                  tbb::task_group& group) {
+                  parallel::TaskGroup& group) {
     const uint32_t count = end - begin;
     // Not a structured binding: the lambda below captures `bounds`, which clang 14 refuses for one.
     const std::pair<Bounds3, Bounds3> ranges = range_bounds(begin, end);
