@@ -182,6 +182,12 @@ inline VF sqrt(VF a) {
 inline VF abs(VF a) {
   return {_mm512_abs_ps(a.v)};
 }
+// |a| with the sign bit of b.
+inline VF copysign(VF a, VF b) {
+  const __m512i sign = _mm512_set1_epi32(INT32_MIN);
+  return {_mm512_castsi512_ps(_mm512_or_si512(_mm512_andnot_si512(sign, _mm512_castps_si512(a.v)),
+                                              _mm512_and_si512(sign, _mm512_castps_si512(b.v))))};
+}
 // -a, sign bit flipped (so -(+0) is -0, unlike 0 - a).
 inline VF operator-(VF a) {
   return {_mm512_castsi512_ps(
@@ -366,6 +372,11 @@ inline VF sqrt(VF a) {
 }
 inline VF abs(VF a) {
   return {_mm256_andnot_ps(_mm256_set1_ps(-0.0f), a.v)};
+}
+// |a| with the sign bit of b.
+inline VF copysign(VF a, VF b) {
+  const __m256 sign = _mm256_set1_ps(-0.0f);
+  return {_mm256_or_ps(_mm256_andnot_ps(sign, a.v), _mm256_and_ps(sign, b.v))};
 }
 // -a, sign bit flipped (so -(+0) is -0, unlike 0 - a).
 inline VF operator-(VF a) {

@@ -7,6 +7,7 @@ namespace tritrace {
 
 void write_first_hit_aovs(const Scene& scene, std::span<const Ray> rays, std::span<const Hit> hits,
                           const SampleOutput& out) {
+  if (out.albedo.empty() && out.normal.empty() && out.depth.empty()) return;
   for (size_t i = 0; i < hits.size(); ++i) {
     const Hit& h = hits[i];
     if (!out.albedo.empty()) {

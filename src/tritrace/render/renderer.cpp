@@ -77,7 +77,6 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
     thread_local std::array<Sampler, kMaxBatch> samplers;
     std::array<glm::vec3, kMaxBatch> radiance, albedo, normal;
     std::array<float, kMaxBatch> depth, weight;
-    std::array<int, kMaxBatch> pixel_x, pixel_y;
     uint64_t traced = 0;
     bool rendered = false;
     for (int t = next_tile.fetch_add(1, std::memory_order_relaxed); t < tiles_total;
@@ -86,15 +85,15 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
       const int x1 = std::min(x0 + tile, width), y1 = std::min(y0 + tile, height);
       for (uint32_t s = first; s < first + spp; ++s) {
         size_t n = 0;
-        for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
-          if (corner) camera.primary_rays(bx, by, ex, ey, batch.data() + n);
-          for (int y = by; y < ey; ++y) {
-            for (int x = bx; x < ex; ++x) {
-              pixel_x[n] = x;
-              pixel_y[n] = y;
-              if (corner) {
-                weight[n] = 1.0f;
-              } else {
+        if (corner) {
+          for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
+            camera.primary_rays(bx, by, ex, ey, batch.data() + n);
+            n += static_cast<size_t>((ex - bx) * (ey - by));
+          });
+        } else {
+          for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
+            for (int y = by; y < ey; ++y) {
+              for (int x = bx; x < ex; ++x) {
                 Sampler& sampler = samplers[n];
                 if (sampler.seed() != options.seed) sampler = Sampler(options.seed);
                 sampler.start_pixel_sample(x, y, s);
@@ -103,11 +102,11 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
                 batch[n] =
                     camera.ray_through(static_cast<float>(x) + f.x, static_cast<float>(y) + f.y);
                 weight[n] = f.weight;
+                ++n;
               }
-              ++n;
             }
-          }
-        });
+          });
+        }
         const size_t count = n;
         const SampleBatch in{std::span<const Ray>(batch.data(), count),
                              corner ? std::span<Sampler>() : std::span(samplers).first(count)};
@@ -117,14 +116,20 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
             aovs.normal ? std::span(normal).first(count) : std::span<glm::vec3>(),
             aovs.depth ? std::span(depth).first(count) : std::span<float>()};
         traced += integrator.radiance(in, out, scene, accel);
-        for (size_t i = 0; i < count; ++i) {
-          FilmSample sample;
-          sample.radiance = radiance[i];
-          if (aovs.albedo) sample.albedo = albedo[i];
-          if (aovs.normal) sample.normal = normal[i];
-          if (aovs.depth) sample.depth = depth[i];
-          sink(pixel_x[i], pixel_y[i], sample, weight[i]);
-        }
+        // The same block order as the rays: sample i of the batch is pixel (x, y).
+        size_t i = 0;
+        for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
+          for (int y = by; y < ey; ++y) {
+            for (int x = bx; x < ex; ++x, ++i) {
+              FilmSample sample;
+              sample.radiance = radiance[i];
+              if (aovs.albedo) sample.albedo = albedo[i];
+              if (aovs.normal) sample.normal = normal[i];
+              if (aovs.depth) sample.depth = depth[i];
+              sink(x, y, sample, corner ? 1.0f : weight[i]);
+            }
+          }
+        });
       }
       rendered = true;
       if (options.progress) {

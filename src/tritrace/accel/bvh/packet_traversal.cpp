@@ -56,11 +56,26 @@ struct Packet {
   VF wt_o[3], wt_s[3];
   VM kz_is_1, kz_is_2;
   int kz_uniform = 2;
-  // The same set-up stored per lane, for the scalar kernel on single lanes.
-  alignas(64) float lane_o[3][W], lane_s[3][W], lane_tmin[W], lane_tmax[W];
-  alignas(64) int32_t lane_kz[W];
+  // The same set-up stored per lane, for the scalar kernel on single lanes: written the first
+  // time a lane needs it (few-ray leaves, exact fallbacks), which most camera packets of a small
+  // scene never do.
+  mutable bool lanes_stored = false;
+  alignas(64) mutable float lane_o[3][W], lane_s[3][W], lane_tmin[W], lane_tmax[W];
+  alignas(64) mutable int32_t lane_kz[W];
+
+  void store_lanes() const {
+    for (int a = 0; a < 3; ++a) {
+      store(lane_o[a], wt_o[a]);
+      store(lane_s[a], wt_s[a]);
+    }
+    store(lane_kz, select(kz_is_2, splat_i(2), select(kz_is_1, splat_i(1), splat_i(0))));
+    store(lane_tmin, tmin);
+    store(lane_tmax, tmax);
+    lanes_stored = true;
+  }
 
   WatertightRay lane_ray(int l) const {
+    if (!lanes_stored) store_lanes();
     WatertightRay r;
     r.kz = lane_kz[l];
     r.ox = lane_o[0][l], r.oy = lane_o[1][l], r.oz = lane_o[2][l];
@@ -106,27 +121,33 @@ Packet load_packet(std::span<const Ray> rays, bool with_frustum) {
     p.kz_is_2 = az > vmax(ax, ay);
     p.kz_is_1 = andnot(p.kz_is_2, y_over_x);
     const VM k1 = p.kz_is_1, k2 = p.kz_is_2;
+    // The axis the packet's rays share, if they do (camera rays almost always): then the
+    // permutation is a choice of registers, not a select per lane.
+    {
+      const uint32_t on = bits(ok), one = bits(k1) & on, two = bits(k2) & on;
+      p.kz_uniform = two == on ? 2 : one == on ? 1 : (one | two) == 0 ? 0 : -1;
+    }
     // kz = 0: (kx, ky) = (1, 2); kz = 1: (2, 0); kz = 2: (0, 1).
-    auto permute = [&](const VF v[3], VF out[3]) {
-      out[0] = select(k2, v[0], select(k1, v[2], v[1]));
-      out[1] = select(k2, v[1], select(k1, v[0], v[2]));
-      out[2] = select(k2, v[2], select(k1, v[1], v[0]));
-    };
     VF dp[3];
-    permute(o, p.wt_o);
-    permute(d, dp);
+    if (p.kz_uniform >= 0) {
+      const int kz = p.kz_uniform, kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
+      p.wt_o[0] = o[kx], p.wt_o[1] = o[ky], p.wt_o[2] = o[kz];
+      dp[0] = d[kx], dp[1] = d[ky], dp[2] = d[kz];
+    } else {
+      auto permute = [&](const VF v[3], VF out[3]) {
+        out[0] = select(k2, v[0], select(k1, v[2], v[1]));
+        out[1] = select(k2, v[1], select(k1, v[0], v[2]));
+        out[2] = select(k2, v[2], select(k1, v[1], v[0]));
+      };
+      permute(o, p.wt_o);
+      permute(d, dp);
+    }
     p.wt_s[2] = splat(1.0f) / dp[2];
     p.wt_s[0] = dp[0] * p.wt_s[2];
     p.wt_s[1] = dp[1] * p.wt_s[2];
+    // Lanes the set-up rejects leave the packet; the shared axis, if any, stays shared.
     ok = ok & finite(p.wt_s[0]) & finite(p.wt_s[1]) & finite(p.wt_s[2]) &
          not_equal(p.wt_s[2], splat(0.0f));
-    const uint32_t on = bits(ok), one = bits(k1) & on, two = bits(k2) & on;
-    p.kz_uniform = two == on ? 2 : one == on ? 1 : (one | two) == 0 ? 0 : -1;
-    for (int a = 0; a < 3; ++a) {
-      store(p.lane_o[a], p.wt_o[a]);
-      store(p.lane_s[a], p.wt_s[a]);
-    }
-    store(p.lane_kz, select(k2, splat_i(2), select(k1, splat_i(1), splat_i(0))));
   }
 
   p.active = bits(ok);
@@ -143,15 +164,13 @@ Packet load_packet(std::span<const Ray> rays, bool with_frustum) {
   }
   const VF pad = splat(kOriginPadding) * largest;
   for (int a = 0; a < 3; ++a) {
-    p.o_near[a] = select(p.negative[a], p.o[a] - pad, p.o[a] + pad);
-    p.o_far[a] = select(p.negative[a], p.o[a] + pad, p.o[a] - pad);
+    // The padding with the sign of the direction: forward for near planes, back for far ones.
+    const VF forward = copysign(pad, p.inv[a]);
+    p.o_near[a] = p.o[a] + forward;
+    p.o_far[a] = p.o[a] - forward;
   }
   p.tmin = select(ok, tmin, splat(kInf));
   p.tmax = select(ok, tmax, splat(-kInf));
-  if constexpr (K == Kernel::kWatertight) {
-    store(p.lane_tmin, p.tmin);
-    store(p.lane_tmax, p.tmax);
-  }
 
   Frustum& f = p.frustum;
   f.usable = with_frustum && p.active != 0;
@@ -233,7 +252,8 @@ struct TriangleHits {
 
 // Möller–Trumbore, lane for lane the scalar kernel's operations (intersect_moller_trumbore) in the
 // same order; the edges are the mesh's e1 and e2 bit for bit (TriangleBlock).
-inline TriangleHits moller_trumbore(const TriangleBlock& b, int l, const Packet& p) {
+[[gnu::always_inline]] inline TriangleHits moller_trumbore(const TriangleBlock& b, int l,
+                                                           const Packet& p) {
   const float v0[3] = {b.vertex[0][0][l], b.vertex[0][1][l], b.vertex[0][2][l]};
   const VF e1x = splat(b.vertex[1][0][l] - v0[0]), e1y = splat(b.vertex[1][1][l] - v0[1]),
            e1z = splat(b.vertex[1][2][l] - v0[2]);
@@ -262,7 +282,8 @@ inline TriangleHits moller_trumbore(const TriangleBlock& b, int l, const Packet&
 // lane's own set-up. Kz is the dominant axis shared by every lane, or -1 when lanes differ: then
 // each lane picks its permutation of the vertex coordinates with selects.
 template <int Kz>
-inline TriangleHits watertight(const TriangleBlock& b, int l, const Packet& p) {
+[[gnu::always_inline]] inline TriangleHits watertight(const TriangleBlock& b, int l,
+                                                      const Packet& p) {
   VF x[3], y[3], z[3];
   for (int c = 0; c < 3; ++c) {
     VF pk[3];  // the vertex in the lane's (kx, ky, kz) order
@@ -296,7 +317,8 @@ inline TriangleHits watertight(const TriangleBlock& b, int l, const Packet& p) {
 }
 
 template <Kernel K, int Kz>
-inline TriangleHits test_triangle(const TriangleBlock& b, int l, const Packet& p) {
+[[gnu::always_inline]] inline TriangleHits test_triangle(const TriangleBlock& b, int l,
+                                                         const Packet& p) {
   if constexpr (K == Kernel::kWatertight) {
     return watertight<Kz>(b, l, p);
   } else {
@@ -328,7 +350,7 @@ inline bool lane_block(const Packet& p, int lane, const Ray& ray, const Triangle
 // Calls fn.template operator()<Kz>() with the packet's shared dominant axis (watertight only), so
 // that a leaf's loop over its triangles is compiled once per axis.
 template <Kernel K, typename Fn>
-inline void with_axis(const Packet& p, Fn&& fn) {
+[[gnu::always_inline]] inline void with_axis(const Packet& p, Fn&& fn) {
   if constexpr (K == Kernel::kWatertight) {
     switch (p.kz_uniform) {
       case 0:
@@ -415,7 +437,7 @@ void intersect_packet_with(const WideBvh& tree, std::span<const Ray> rays, std::
   // at tmax makes the box test's far limit simply best_t.
   VF best_t = p.tmax, best_u = splat(0.0f), best_v = splat(0.0f);
   VI best_prim = splat_i(kNoPrim);
-  auto set_lane = [&](int l, const Hit& h) {
+  auto set_lane = [&](int l, const Hit& h) [[gnu::always_inline]] {
     const VM lane = single_lane(l);
     best_t = select(lane, splat(h.t), best_t);
     best_u = select(lane, splat(h.u), best_u);
@@ -446,7 +468,7 @@ void intersect_packet_with(const WideBvh& tree, std::span<const Ray> rays, std::
           farthest_best = hmax(best_t);
           goto pop;
         }
-        with_axis<K>(p, [&]<int Kz>() {
+        with_axis<K>(p, [&]<int Kz>() [[gnu::always_inline]] {
           for (int l = 0; l < kWidth; ++l) {
             if (b.prim[l] == kNoHit) continue;
             const TriangleHits h = test_triangle<K, Kz>(b, l, p);
@@ -520,7 +542,7 @@ void occluded_packet_with(const WideBvh& tree, std::span<const Ray> rays,
   uint32_t blocked = 0;
   float farthest_tmax = hmax(p.tmax);  // over the rays not yet blocked
   // Blocked rays are done: an empty interval takes them out of every later test.
-  auto block = [&](VM lanes) {
+  auto block = [&](VM lanes) [[gnu::always_inline]] {
     blocked |= bits(lanes);
     p.tmax = select(lanes, splat(-kInf), p.tmax);
   };
@@ -540,7 +562,7 @@ void occluded_packet_with(const WideBvh& tree, std::span<const Ray> rays,
             }
           }
         } else {
-          with_axis<K>(p, [&]<int Kz>() {
+          with_axis<K>(p, [&]<int Kz>() [[gnu::always_inline]] {
             for (int l = 0; l < kWidth; ++l) {
               if (b.prim[l] == kNoHit) continue;
               const TriangleHits h = test_triangle<K, Kz>(b, l, p);
