@@ -35,10 +35,9 @@ ASAN_EXCLUDE = CliTest.ModelThatCrashesTheImporterIsAnError
 # The multi-threaded tests: the renderer's (thread-count and tile-size invariance through brute
 # force, the BVH's packet path and Embree's three modes; the threads it runs; whole images), the
 # parallel SAH build (serial against parallel, with tasks from 64 primitives up) and the Embree
-# backend, whose build runs on TBB threads. (build_wide_bvh's own two TBB loops do not tell TSan
-# about their hand-overs yet, src/tritrace/parallel.h: tests that build a wide BVH in parallel,
-# such as BvhInvariants.*, join this set once they do.)
-TSAN_TESTS = Renderer.*:Placements/*:BinnedSahBuilder.ParallelBuildMakesTheSerialTree:Modes/EmbreeVsBrute.*:EmbreeAccel.*
+# backend, whose build runs on TBB threads; the wide BVH's build (BvhInvariants.*) and the path
+# tracer's multi-threaded renders (PathRender.*).
+TSAN_TESTS = Renderer.*:Placements/*:BinnedSahBuilder.ParallelBuildMakesTheSerialTree:Modes/EmbreeVsBrute.*:EmbreeAccel.*:BvhInvariants.*:PathRender.*
 
 # The portable build (TRITRACE_NATIVE=OFF: -march=x86-64-v3, AVX2) compiles the AVX2 code paths,
 # which a -march=native build on an AVX-512 machine does not; only the test binary is built, and

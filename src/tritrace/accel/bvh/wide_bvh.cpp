@@ -4,8 +4,6 @@
 #include "tritrace/accel/bvh/wide_bvh.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <glm/common.hpp>
@@ -14,6 +12,7 @@
 #include <limits>
 
 #include "tritrace/geometry/hit.h"
+#include "tritrace/parallel.h"
 
 namespace tritrace::bvh {
 namespace {
@@ -138,7 +137,7 @@ class Collapser {
 
 WideBvh build_wide_bvh(const TriangleMesh& mesh, const BuildConfig& config) {
   // The padding scales with the largest coordinate magnitude in the scene.
-  const float magnitude = tbb::parallel_reduce(
+  const float magnitude = parallel::reduce(
       tbb::blocked_range<size_t>(0, mesh.size()), 0.0f,
       [&](const auto& r, float m) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
@@ -153,7 +152,7 @@ WideBvh build_wide_bvh(const TriangleMesh& mesh, const BuildConfig& config) {
       [](float a, float b) { return std::max(a, b); });
   const float pad = magnitude * kBoxPadding;
   std::vector<Bounds3> bounds(mesh.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.size()), [&](const auto& r) {
+  parallel::for_range(tbb::blocked_range<size_t>(0, mesh.size()), [&](const auto& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) bounds[i] = widened_triangle_bounds(mesh, i, pad);
   });
   WideBvh out;
