@@ -81,6 +81,15 @@ void add_scene_flags(CLI::App& app, SceneFlags& flags) {
       ->check(checked([](std::string& s) {
         return check_integer_in(s, 0, std::numeric_limits<long long>::max());
       }));
+  app.add_option("--sampler", flags.sampler,
+                 "Random numbers for path: sobol (stratified: Owen-scrambled Sobol points, less "
+                 "noise at the same spp) or independent (plain Monte Carlo); default: the scene's, "
+                 "sobol")
+      ->type_name("NAME")
+      ->check(checked([](std::string& s) {
+        return parse_sampler(s) ? std::string()
+                                : "unknown sampler '" + s + "' (use sobol or independent)";
+      }));
   app.add_option("--max-depth", flags.max_depth,
                  "Most bounces of a path, 0 to 65536 (0: only emitters the camera sees, 1: direct "
                  "light only; default: the scene's, 1024, so that Russian roulette ends paths)")
@@ -106,6 +115,7 @@ IntegratorSpec integrator_spec(const SceneFlags& flags, const LoadedScene& loade
   }
   if (!flags.spp.empty()) spec.spp = static_cast<uint32_t>(*parse_integer(flags.spp));
   if (!flags.seed.empty()) spec.seed = static_cast<uint64_t>(*parse_integer(flags.seed));
+  if (!flags.sampler.empty()) spec.sampler = *parse_sampler(flags.sampler);
   if (!flags.max_depth.empty()) spec.max_depth = static_cast<int>(*parse_integer(flags.max_depth));
   return spec;
 }

@@ -29,6 +29,7 @@ struct SceneFlags {
   std::string integrator;
   std::string spp;
   std::string seed;
+  std::string sampler;
   std::string max_depth;
   std::string filter = "box";
 };

@@ -256,7 +256,8 @@ int run_bench(const BenchArgs& args) {
         for (int i = 0; i <= reps; ++i) {  // frame 0 warms caches and threads up, untimed
           RenderStats stats;
           render(scene, *accel, *integrator,
-                 {.threads = threads, .spp = spec.spp, .seed = spec.seed}, &stats);
+                 {.threads = threads, .spp = spec.spp, .seed = spec.seed, .sampler = spec.sampler},
+                 &stats);
           if (i == 0) continue;
           ms.push_back(stats.milliseconds);
           rays += stats.rays;
@@ -312,8 +313,9 @@ int run_bench(const BenchArgs& args) {
     std::printf(
         "/embree: Mpaths/s over the fastest non-robust Embree mode's (embree, embree8, "
         "embree-single); /robust: over embree-robust's (RTC_SCENE_FLAG_ROBUST)\n");
-    std::printf("integrator path, %u spp, max depth %d, seed %llu, box filter\n", spec.spp,
-                spec.max_depth, static_cast<unsigned long long>(spec.seed));
+    std::printf("integrator path, %u spp, max depth %d, %s sampler, seed %llu, box filter\n",
+                spec.spp, spec.max_depth, std::string(sampler_name(spec.sampler)).c_str(),
+                static_cast<unsigned long long>(spec.seed));
   } else if (!args.quiet) {
     std::printf(
         "/embree: Mrays/s over the fastest non-robust Embree mode's (embree, embree8, "

@@ -47,7 +47,8 @@ int run_info(const InfoArgs& args) {
   if (spec.kind == IntegratorSpec::Kind::kLab) {
     std::printf("integrator: lab\n");
   } else {
-    std::printf("integrator: path, %u spp, max depth %d, seed %llu\n", spec.spp, spec.max_depth,
+    std::printf("integrator: path, %u spp, max depth %d, %s sampler, seed %llu\n", spec.spp,
+                spec.max_depth, std::string(sampler_name(spec.sampler)).c_str(),
                 static_cast<unsigned long long>(spec.seed));
   }
   std::printf("camera: %dx%d at %s, focal length %g px\n", s.camera.width(), s.camera.height(),

@@ -168,6 +168,7 @@ int run_render(const RenderArgs& args) {
   }
   render_options.spp = spec.spp;
   render_options.seed = spec.seed;
+  render_options.sampler = spec.sampler;
   render_options.filter = filter_choice(args.scene);
   const std::unique_ptr<Accel> accel = make_accel(accel_kind, scene.mesh, kernel);
   const std::unique_ptr<Integrator> integrator = make_integrator(spec, scene);

@@ -91,6 +91,7 @@ std::string render_command_line(const cli::SceneFlags& flags, const ViewState& s
   // printed even when it is the scene's own, so that the command says which image it is.
   line += " --integrator path --spp " + std::to_string(rendered.spp);
   line += " --seed " + std::to_string(rendered.seed);
+  if (!flags.sampler.empty()) line += " --sampler " + flags.sampler;
   if (!flags.max_depth.empty()) line += " --max-depth " + std::to_string(rendered.max_depth);
   const FilterKind filter = cli::filter_choice(flags);
   if (filter != FilterKind::kBox) line += " --filter " + std::string(filter_name(filter));

@@ -194,6 +194,7 @@ class Viewer {
     spec_ = cli::integrator_spec(options_.scene, loaded_);
     path_ = spec_.kind == IntegratorSpec::Kind::kPath;
     render_options_.seed = spec_.seed;
+    render_options_.sampler = spec_.sampler;
     render_options_.filter = cli::filter_choice(options_.scene);
     schedule_.emplace(spec_.spp, kFrameBudgetMs);
 
@@ -459,10 +460,10 @@ class Viewer {
     if (image_view_.light) view += ", light " + cli::format_vec3(*image_view_.light);
     std::string shading = "integrator " + std::string(integrator_name(spec_.kind));
     if (path_) {
-      shading += ": " + std::to_string(image_spp_) + " of " + std::to_string(spec_.spp) +
-                 " spp, seed " + std::to_string(spec_.seed) + ", max depth " +
-                 std::to_string(spec_.max_depth) + ", " +
-                 std::string(filter_name(render_options_.filter)) + " filter";
+      shading += ": " + std::to_string(image_spp_) + " of " + std::to_string(spec_.spp) + " spp, " +
+                 std::string(sampler_name(spec_.sampler)) + " sampler, seed " +
+                 std::to_string(spec_.seed) + ", max depth " + std::to_string(spec_.max_depth) +
+                 ", " + std::string(filter_name(render_options_.filter)) + " filter";
     }
     return {"tritrace-view (H hides this)",
             stats,

@@ -940,7 +940,44 @@ TEST_F(CliTest, BadPathFlagsNameTheFlagAndExitTwo) {
   ExpectErrorLine(Run({"render", "--max-depth", "-1"}), 2, "--max-depth", "");
   ExpectErrorLine(Run({"render", "--seed", "x"}), 2, "--seed", "");
   ExpectErrorLine(Run({"render", "--filter", "mitchell"}), 2, "--filter", "unknown filter");
+  ExpectErrorLine(Run({"render", "--sampler", "halton"}), 2, "--sampler",
+                  "unknown sampler 'halton' (use sobol or independent)");
   ExpectOnlyFiles(work_, {});
+}
+
+// --sampler picks the numbers: sobol (the default) and independent give different images of the
+// same scene, and a scene file's integrator.sampler is the same choice as the flag, bit for bit.
+TEST_F(CliTest, SamplerFlagAndSceneKeyChooseTheNumbers) {
+  const std::vector<std::string> base = {"--scene",  "cornell-area", "--width", "24",
+                                         "--height", "24",           "--spp",   "4"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = base;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  };
+  const std::string sobol = RenderQuietly(base, "default.pfm");
+  const std::string named = RenderQuietly(with({"--sampler", "sobol"}), "sobol.pfm");
+  const std::string independent =
+      RenderQuietly(with({"--sampler", "independent"}), "independent.pfm");
+  EXPECT_TRUE(sobol == named);
+  EXPECT_FALSE(sobol == independent);
+
+  const std::string scene = R"({
+    "camera": {"width": 16, "height": 16},
+    "meshes": [{"generator": "cornell-area"}],
+    "integrator": {"type": "path", "spp": 2, "sampler": "independent"}
+  })";
+  WriteText(work_ / "box.json", scene);
+  const std::string from_file = RenderQuietly({"box.json"}, "file.pfm");
+  const std::string from_flag = RenderQuietly({"box.json", "--sampler", "independent"}, "flag.pfm");
+  const std::string overridden = RenderQuietly({"box.json", "--sampler", "sobol"}, "over.pfm");
+  EXPECT_TRUE(from_file == from_flag);
+  EXPECT_FALSE(from_file == overridden);
+
+  WriteText(work_ / "bad.json", R"({"meshes": [{"generator": "cornell"}],
+                                     "integrator": {"sampler": "stratified"}})");
+  ExpectErrorLine(Run({"render", "bad.json"}), 1, "bad.json",
+                  "/integrator/sampler: must be \"sobol\" or \"independent\", got 'stratified'");
 }
 
 TEST_F(CliTest, SceneFileIntegratorObjectIsReadAndChecked) {

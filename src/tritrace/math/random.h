@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
+#include <string_view>
 
 namespace tritrace {
 
@@ -79,5 +81,29 @@ class Pcg32 {
   uint64_t state_ = 0x853c49e6748fea9bull;
   uint64_t inc_ = 0xda3e39cb94b95bdbull;
 };
+
+// How the numbers of a pixel's samples relate to each other (render/sampler.h draws them; the
+// choice sits here, below the scene layer, because scene files name it).
+//  - kSobol (the default): stratified. Each get_1d or get_2d call of a sample is its own group of
+//    dimensions, drawn from the first one or two dimensions of the Sobol sequence, whose first 2^m
+//    points form a (0, m, 2)-net: every 1/2^m-area box of the square's dyadic grids holds exactly
+//    one point. Each group's points are Owen-scrambled by a hash of (seed, pixel, dimension), which
+//    keeps that structure and makes every number uniform, and the group's sample order is
+//    shuffled by a scramble of the sample index, which decorrelates groups (padded Sobol points;
+//    Burley, "Practical Hash-based Owen Scrambling", JCGT 2020; the shape of Cycles' Sobol-Burley
+//    and pbrt-v4's PaddedSobolSampler). So the N samples of a pixel cover its area, a light's
+//    area and the hemisphere evenly (exactly so for N a power of two), and error falls faster
+//    than 1/sqrt(N) where the integrand is smooth. Still unbiased: each sample, alone, is uniform.
+//  - kIndependent: every number independent (plain Monte Carlo), a PCG32 stream per sample.
+enum class SamplerKind : uint8_t { kSobol, kIndependent };
+
+constexpr std::string_view sampler_name(SamplerKind kind) {
+  return kind == SamplerKind::kSobol ? "sobol" : "independent";
+}
+constexpr std::optional<SamplerKind> parse_sampler(std::string_view name) {
+  if (name == "sobol") return SamplerKind::kSobol;
+  if (name == "independent") return SamplerKind::kIndependent;
+  return std::nullopt;
+}
 
 }  // namespace tritrace

@@ -86,11 +86,13 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       if (!hit.found()) continue;  // escaped: no environment light yet
       const uint16_t i = path[k];
       Sampler& sampler = batch.samplers[i];
-      // A fixed number of dimensions per vertex, whichever branches are taken.
-      const float u_light = sampler.get_1d();
+      // A fixed number of dimensions per vertex, whichever branches are taken, in three 2-D groups
+      // (each stratified over a pixel's samples by the Sobol sampler): the light's choice with the
+      // roulette's coin, the point on the light, the bounce direction.
+      const glm::vec2 u_choice = sampler.get_2d();
+      const float u_light = u_choice.x, u_roulette = u_choice.y;
       const glm::vec2 u_light_point = sampler.get_2d();
       const glm::vec2 u_bsdf = sampler.get_2d();
-      const float u_roulette = sampler.get_1d();
 
       const uint32_t prim = hit.prim;
       const Material& material = scene.materials[mesh.material()[prim]];

@@ -95,7 +95,9 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
             for (int y = by; y < ey; ++y) {
               for (int x = bx; x < ex; ++x) {
                 Sampler& sampler = samplers[n];
-                if (sampler.seed() != options.seed) sampler = Sampler(options.seed);
+                if (sampler.seed() != options.seed || sampler.kind() != options.sampler) {
+                  sampler = Sampler(options.seed, options.sampler);
+                }
                 sampler.start_pixel_sample(x, y, s);
                 const glm::vec2 u = sampler.get_pixel_2d();
                 const PixelFilter::Sample f = filter.sample(u.x, u.y);

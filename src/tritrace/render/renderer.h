@@ -30,8 +30,9 @@ struct RenderOptions {
   // through the pixel corner (the lab's) renders exactly one whatever these say.
   uint32_t spp = 1;
   uint32_t first_sample = 0;
-  uint64_t seed = 0;                     // the Sampler's seed
-  FilterKind filter = FilterKind::kBox;  // where in the pixel samples land, and their weights
+  uint64_t seed = 0;                          // the Sampler's seed
+  SamplerKind sampler = SamplerKind::kSobol;  // and its kind
+  FilterKind filter = FilterKind::kBox;       // where in the pixel samples land, and their weights
 };
 
 struct RenderStats {

@@ -6,24 +6,17 @@
 #include <glm/vec2.hpp>
 
 #include "tritrace/math/random.h"
+#include "tritrace/math/sobol.h"
 
 namespace tritrace {
 
-// Each (seed, x, y, sample index) owns a PCG32 stream: its initial state and its stream selector
-// are two hashes of the four values (mix64 avalanches every bit, so neighbouring pixels and indices
-// get unrelated streams), and dimension d of the sample is the stream's d-th number. Starting a
-// sample costs three 64-bit mixes and two LCG steps; a number costs one LCG step and its output
-// permutation. Sample i is reproduced exactly without drawing samples 0..i-1, which lets sample
-// ranges be rendered apart and merged. pbrt-v4's StartPixelSample(pPixel, sampleIndex) is
-// start_pixel_sample here; its IndependentSampler keeps one stream per pixel and jumps ahead 65536
-// numbers per sample index, which caps a sample's dimensions, while a hashed stream per sample has
-// no cap.
-//
-// Independent numbers converge at the plain Monte Carlo rate; a stratified or low-discrepancy
-// sampler (Owen-scrambled Sobol) can later keep this interface.
+// Each (seed, pixel, sample index) is a key; sample i is reproduced exactly without drawing samples
+// 0..i-1, which lets sample ranges be rendered apart and merged. pbrt-v4's
+// StartPixelSample(pPixel, sampleIndex) is start_pixel_sample here.
 class Sampler {
  public:
-  explicit Sampler(uint64_t seed = 0) : seed_(seed), seed_hash_(hash_words(seed)) {
+  explicit Sampler(uint64_t seed = 0, SamplerKind kind = SamplerKind::kSobol)
+      : seed_(seed), seed_hash_(hash_words(seed)), kind_(kind) {
     start_pixel_sample(0, 0, 0);
   }
 
@@ -33,28 +26,58 @@ class Sampler {
 
   // The next dimension, in [0, 1) (a multiple of 2^-24, at most 1 - 2^-24).
   float get_1d() {
-    ++dimension_;
-    return rng_.next_float();
+    if (kind_ == SamplerKind::kIndependent) {
+      ++dimension_;
+      return rng_.next_float();
+    }
+    const uint64_t h = group_hash();
+    dimension_ += 1;
+    return unit_float(reverse_bits(laine_karras_permutation(shuffled_index(h), high_half(h))));
   }
-  // The next two dimensions.
+  // The next two dimensions, stratified together (one group) by the Sobol sampler.
   glm::vec2 get_2d() {
-    const float u = get_1d();
-    return {u, get_1d()};
+    if (kind_ == SamplerKind::kIndependent) {
+      const float u = get_1d();
+      return {u, get_1d()};
+    }
+    const uint64_t h = group_hash();
+    dimension_ += 2;
+    const uint32_t index = shuffled_index(h);
+    // Owen scrambling a fraction is reverse(permutation(reverse(fraction))); dimension 0 is the
+    // reversed index, dimension 1 is computed mirrored, so neither needs the inner reverse.
+    const uint32_t x = reverse_bits(laine_karras_permutation(index, high_half(h)));
+    const uint32_t y = reverse_bits(laine_karras_permutation(sobol_dimension1_mirrored(index),
+                                                             static_cast<uint32_t>(mix64(h))));
+    return {unit_float(x), unit_float(y)};
   }
   // The position inside the pixel: by convention the first two dimensions of a sample (the
-  // integrator calls it right after start_pixel_sample), so that a later stratified sampler can
-  // give those dimensions its best distribution.
+  // renderer calls it right after start_pixel_sample), one 2-D group.
   glm::vec2 get_pixel_2d() { return get_2d(); }
 
   uint64_t seed() const { return seed_; }
+  SamplerKind kind() const { return kind_; }
   // How many dimensions the current sample has used.
   uint32_t dimension() const { return dimension_; }
 
  private:
-  Pcg32 rng_;
+  // The key of the group starting at the current dimension: its low half scrambles the sample
+  // order, its high half (and, for a 2-D group, a further mix of it) the values.
+  uint64_t group_hash() const { return hash_combine(pixel_hash_, dimension_); }
+  static uint32_t high_half(uint64_t h) { return static_cast<uint32_t>(h >> 32); }
+  // The sample index Owen-scrambled as a fraction (its top bit the leading digit): the first 2^m
+  // indices of a pixel become, in a scrambled order, one aligned block of 2^m Sobol indices, whose
+  // points are a net as the first 2^m are.
+  uint32_t shuffled_index(uint64_t h) const {
+    return reverse_bits(laine_karras_permutation(mirrored_index_, static_cast<uint32_t>(h)));
+  }
+
+  Pcg32 rng_;  // kIndependent's stream
   uint64_t seed_;
-  uint64_t seed_hash_;  // hash_words(seed_), the first link of every key
+  uint64_t seed_hash_;           // hash_words(seed_), the first link of every key
+  uint64_t pixel_hash_;          // the key of (seed, pixel)
+  uint32_t mirrored_index_ = 0;  // reverse_bits(sample index): owen_scramble's first step, once
   uint32_t dimension_ = 0;
+  SamplerKind kind_;
 };
 
 }  // namespace tritrace

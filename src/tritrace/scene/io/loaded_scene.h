@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "tritrace/math/random.h"
 #include "tritrace/scene/scene.h"
 
 namespace tritrace {
@@ -59,6 +60,7 @@ struct IntegratorSpec {
   uint32_t spp = kDefaultSpp;
   int max_depth = kDefaultMaxDepth;
   uint64_t seed = 0;
+  SamplerKind sampler = SamplerKind::kSobol;
 };
 
 struct LoadedScene {

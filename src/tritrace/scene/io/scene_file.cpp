@@ -509,7 +509,7 @@ class Parser {
 
   void parse_integrator(const Json& j) {
     object(j, "/integrator");
-    check_keys(j, "/integrator", {"type", "spp", "max_depth", "seed"});
+    check_keys(j, "/integrator", {"type", "spp", "max_depth", "seed", "sampler"});
     IntegratorSpec& spec = out_.integrator;
     if (j.contains("type")) {
       const std::string type = string(j["type"], "/integrator/type");
@@ -531,6 +531,15 @@ class Parser {
     if (j.contains("seed")) {
       spec.seed = static_cast<uint64_t>(
           integer_in(j["seed"], "/integrator/seed", 0, std::numeric_limits<long long>::max()));
+    }
+    if (j.contains("sampler")) {
+      const std::string name = string(j["sampler"], "/integrator/sampler");
+      const std::optional<SamplerKind> kind = parse_sampler(name);
+      if (!kind) {
+        fail("/integrator/sampler",
+             "must be \"sobol\" or \"independent\", got '" + shown(name) + "'");
+      }
+      spec.sampler = *kind;
     }
   }
 

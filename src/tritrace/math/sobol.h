@@ -1,0 +1,65 @@
+// The first two dimensions of the Sobol sequence and Owen scrambling by hashing: the pieces of the
+// stratified sampler (render/sampler.h). Header-only: a few dozen integer operations per number,
+// which must inline into the path tracer's loops.
+#pragma once
+
+#include <cstdint>
+
+namespace tritrace {
+
+// The 32 bits of x in reverse order (bit 0 becomes bit 31): a byte swap, then the bits of each
+// byte reversed by swapping nibbles, pairs and neighbours.
+constexpr uint32_t reverse_bits(uint32_t x) {
+  x = (x << 24) | ((x & 0xff00u) << 8) | ((x >> 8) & 0xff00u) | (x >> 24);
+  x = ((x & 0x0f0f0f0fu) << 4) | ((x >> 4) & 0x0f0f0f0fu);
+  x = ((x & 0x33333333u) << 2) | ((x >> 2) & 0x33333333u);
+  x = ((x & 0x55555555u) << 1) | ((x >> 1) & 0x55555555u);
+  return x;
+}
+
+// Dimension 0 of the Sobol sequence is van der Corput's radical inverse in base 2: the index's bits
+// mirrored behind the binary point. As a 32-bit fraction (the value times 2^32).
+constexpr uint32_t sobol_dimension0(uint32_t index) {
+  return reverse_bits(index);
+}
+
+// Dimension 1, whose generator matrix is Pascal's triangle mod 2 (primitive polynomial x + 1,
+// direction numbers m_k = 1): digit j + 1 of the fraction (j = 0 the 1/2 place) is the parity of
+// the index bits k with binomial(k, j) odd, which by Lucas' theorem are the k whose bits contain
+// j's bits. That superset parity is computed for all 32 digits at once by five butterfly steps
+// (the binary zeta transform), in the mirrored order: bit j of the result is digit j + 1.
+constexpr uint32_t sobol_dimension1_mirrored(uint32_t index) {
+  uint32_t z = index;
+  z ^= (z >> 1) & 0x55555555u;
+  z ^= (z >> 2) & 0x33333333u;
+  z ^= (z >> 4) & 0x0f0f0f0fu;
+  z ^= (z >> 8) & 0x00ff00ffu;
+  z ^= (z >> 16) & 0x0000ffffu;
+  return z;
+}
+constexpr uint32_t sobol_dimension1(uint32_t index) {
+  return reverse_bits(sobol_dimension1_mirrored(index));
+}
+
+// Laine and Karras's hash-based stand-in for an Owen scramble ("Stratified Sampling for Stochastic
+// Transparency", 2011), with the constants of Burley's improved version ("Practical Hash-based Owen
+// Scrambling", JCGT 2020). It acts on the mirrored fraction (bit 0 = the 1/2 digit): adding the
+// seed and each x ^= x * even changes bit j only as a function of bits 0..j, so every digit is
+// flipped by a hash of the digits before it, which is what Owen scrambling does; each step is a
+// bijection.
+constexpr uint32_t laine_karras_permutation(uint32_t mirrored, uint32_t seed) {
+  uint32_t x = mirrored + seed;
+  x ^= x * 0x6c50b47cu;
+  x ^= x * 0xb82f1e52u;
+  x ^= x * 0xc7afe638u;
+  x ^= x * 0x8d22f6e6u;
+  return x;
+}
+
+// A nested uniform (Owen) scramble of a 32-bit fraction, by `seed`: a point set that is a (0, m,
+// 2)-net stays one, and a scrambled point is uniform over [0, 1) for a random seed.
+constexpr uint32_t owen_scramble(uint32_t fraction, uint32_t seed) {
+  return reverse_bits(laine_karras_permutation(reverse_bits(fraction), seed));
+}
+
+}  // namespace tritrace
