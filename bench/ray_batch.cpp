@@ -1,8 +1,9 @@
-// tritrace_ray_batch: the C++ side of bench/python_rays.py. Traces a file of rays through a built-in
-// scene's accel the way a C++ program using the library would (rays already in the library's Ray
-// layout, batches of 256 through Accel::intersect or intersect_incoherent, one task per core taking
-// batches from a shared counter, as the renderer takes tiles) and prints the median time as JSON,
-// so that the Python module's intersect can be measured against the same work without Python.
+// tritrace_ray_batch: the C++ side of bench/python_rays.py. Traces a file of rays through a
+// built-in scene's accel the way a C++ program using the library would (rays already in the
+// library's Ray layout, batches of 256 through Accel::intersect or intersect_incoherent, one task
+// per core taking batches from a shared counter, as the renderer takes tiles) and prints the median
+// time as JSON, so that the Python module's intersect can be measured against the same work without
+// Python.
 //
 //   tritrace_ray_batch SCENE ACCEL RAYS_FILE REPS coherent|incoherent
 //
@@ -30,7 +31,8 @@ std::vector<Ray> read_rays(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::vector<float> values;
   float row[6];
-  while (in.read(reinterpret_cast<char*>(row), sizeof row)) values.insert(values.end(), row, row + 6);
+  while (in.read(reinterpret_cast<char*>(row), sizeof row))
+    values.insert(values.end(), row, row + 6);
   std::vector<Ray> rays(values.size() / 6);
   for (size_t i = 0; i < rays.size(); ++i) {
     const float* r = &values[6 * i];

@@ -20,7 +20,9 @@ bool is_bool(const py::handle& value) {
 // An int or NumPy integer (anything with __index__ but a bool) as its decimal digits.
 std::optional<std::string> integer_text(const py::handle& value) {
   if (is_bool(value) || !PyIndex_Check(value.ptr())) return std::nullopt;
-  return py::str(py::reinterpret_steal<py::object>(PyNumber_Index(value.ptr())));
+  const py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(value.ptr()));
+  if (!index) throw py::error_already_set();
+  return py::str(index).cast<std::string>();
 }
 
 // An int, float or NumPy real scalar as the text the CLI's number parsers read back exactly.
@@ -56,8 +58,8 @@ std::string vec3_text(const char* name, const py::object& value) {
 py::array numeric_array(const char* name, const py::object& value, bool integers_only) {
   const py::array array = py::module_::import("numpy").attr("asarray")(value);
   const char kind = array.dtype().kind();
-  const bool ok = integers_only ? (kind == 'i' || kind == 'u')
-                                : (kind == 'f' || kind == 'i' || kind == 'u');
+  const bool ok =
+      integers_only ? (kind == 'i' || kind == 'u') : (kind == 'f' || kind == 'i' || kind == 'u');
   if (!ok) {
     raise_type_error(std::string(name) + ": must be an array of " +
                      (integers_only ? "integers" : "numbers") + ", got dtype " +

@@ -41,7 +41,7 @@ using namespace pybind11::literals;
 // The OSError subclass for a file that failed to load, from the state of the file the error names
 // (a scene file's mesh, or the scene file itself); the message stays the CLI's.
 PyObject* os_error_type(const std::string& path) {
-  struct stat st{};
+  struct stat st {};
   if (::stat(path.c_str(), &st) != 0) {
     if (errno == ENOENT || errno == ENOTDIR) return PyExc_FileNotFoundError;
     if (errno == EACCES) return PyExc_PermissionError;
@@ -132,26 +132,23 @@ std::shared_ptr<SceneData> from_arrays(const py::object& vertices_object,
   if (triangles.ndim() != 2 || triangles.shape(1) != 3) {
     throw py::value_error("triangles: must have shape (M, 3), got " + shape_text(triangles));
   }
-  py::array_t<float> albedo;
+  py::array_t<float> albedo(0);  // empty: no materials given
   if (!materials_object.is_none()) {
     albedo = float32_array("materials", materials_object);
     const bool one = albedo.ndim() == 1 && albedo.shape(0) == 3;
-    const bool each = albedo.ndim() == 2 && albedo.shape(0) == triangles.shape(0) &&
-                      albedo.shape(1) == 3;
+    const bool each =
+        albedo.ndim() == 2 && albedo.shape(0) == triangles.shape(0) && albedo.shape(1) == 3;
     if (!one && !each) {
       throw py::value_error("materials: must be one albedo of shape (3,) or one per triangle, (" +
-                            std::to_string(triangles.shape(0)) + ", 3), got " +
-                            shape_text(albedo));
+                            std::to_string(triangles.shape(0)) + ", 3), got " + shape_text(albedo));
     }
   }
   std::shared_ptr<SceneData> data;
   try {
     py::gil_scoped_release nogil;
-    data = scene_from_arrays(
-        std::span(vertices.data(), static_cast<size_t>(vertices.size())),
-        std::span(triangles.data(), static_cast<size_t>(triangles.size())),
-        albedo ? std::span(albedo.data(), static_cast<size_t>(albedo.size()))
-               : std::span<const float>());
+    data = scene_from_arrays(std::span(vertices.data(), static_cast<size_t>(vertices.size())),
+                             std::span(triangles.data(), static_cast<size_t>(triangles.size())),
+                             std::span(albedo.data(), static_cast<size_t>(albedo.size())));
   } catch (const Error& e) {
     raise_value_error(e);
   }
@@ -177,9 +174,8 @@ py::dict camera_dict(const SceneData& data) {
 }
 
 // The camera keyword arguments beyond the CLI's flags.
-CameraPose camera_pose(const py::object& position, const py::object& look_at,
-                       const py::object& up, const py::object& vertical_fov,
-                       const py::object& focal_length) {
+CameraPose camera_pose(const py::object& position, const py::object& look_at, const py::object& up,
+                       const py::object& vertical_fov, const py::object& focal_length) {
   CameraPose pose;
   pose.position = optional_vec3("position", position);
   pose.look_at = optional_vec3("look_at", look_at);
@@ -216,8 +212,8 @@ py::tuple camera_rays(const std::shared_ptr<SceneData>& data, const py::object& 
                             cli::scene_overrides(flags));
   const Camera& camera = view.camera;
   const int w = camera.width(), h = camera.height();
-  py::array_t<float> directions({static_cast<py::ssize_t>(h), static_cast<py::ssize_t>(w),
-                                 py::ssize_t{3}});
+  py::array_t<float> directions(
+      {static_cast<py::ssize_t>(h), static_cast<py::ssize_t>(w), py::ssize_t{3}});
   float* out = directions.mutable_data();
   {
     py::gil_scoped_release nogil;
@@ -301,10 +297,25 @@ py::array_t<float> hit_normals(Hits& hits) {
 
 // The checked inputs of a ray query, kept alive while it runs.
 struct RayInput {
-  py::array_t<float> origins, directions, tmin_array, tmax_array;
+  py::array_t<float> origins, directions;
+  std::optional<py::array_t<float>> tmin_array, tmax_array;  // none: one number for all rays
   float tmin = 0.0f, tmax = std::numeric_limits<float>::infinity();
   std::vector<py::ssize_t> shape;  // the rays' shape: the arrays' leading dimensions
-  RayArrays arrays;
+
+  // Pointers into the members: taken where the RayInput stays, not where it was made.
+  RayArrays arrays() const {
+    RayArrays a;
+    a.count = element_count(shape);
+    a.origins = origins.data();
+    a.origin_stride = origins.ndim() == 1 ? 0 : 3;
+    a.directions = directions.data();
+    a.direction_stride = directions.ndim() == 1 ? 0 : 3;
+    a.tmin = tmin_array ? tmin_array->data() : &tmin;
+    a.tmin_stride = tmin_array ? 1 : 0;
+    a.tmax = tmax_array ? tmax_array->data() : &tmax;
+    a.tmax_stride = tmax_array ? 1 : 0;
+    return a;
+  }
 };
 
 py::array_t<float> ray_vectors(const char* name, const py::object& value) {
@@ -318,18 +329,16 @@ py::array_t<float> ray_vectors(const char* name, const py::object& value) {
 // tmin or tmax: a number for every ray, or an array of the rays' shape (whose values the ray
 // loop checks).
 void ray_interval(const char* name, const py::object& value, const std::vector<py::ssize_t>& shape,
-                  bool is_tmin, float& scalar, py::array_t<float>& array) {
+                  bool is_tmin, float& scalar, std::optional<py::array_t<float>>& per_ray) {
   const bool sequence = py::isinstance<py::array>(value) || py::isinstance<py::list>(value) ||
                         py::isinstance<py::tuple>(value);
   std::optional<double> one;
+  py::array_t<float> array;
   if (!sequence) {
     one = number_arg(name, value);
   } else {
     array = float32_array(name, value);
-    if (array.ndim() == 0) {
-      one = array.at();
-      array = py::array_t<float>();
-    }
+    if (array.ndim() == 0) one = array.at();
   }
   if (one) {
     if (is_tmin && !(*one >= 0.0)) {
@@ -348,17 +357,17 @@ void ray_interval(const char* name, const py::object& value, const std::vector<p
     throw py::value_error(std::string(name) + ": must be a number or an array of the rays' shape " +
                           want + ", got " + shape_text(array));
   }
+  per_ray = array;
 }
 
-RayInput ray_input(const py::object& origins, const py::object& directions,
-                   const py::object& tmin, const py::object& tmax) {
+RayInput ray_input(const py::object& origins, const py::object& directions, const py::object& tmin,
+                   const py::object& tmax) {
   RayInput in;
   in.origins = ray_vectors("origins", origins);
   in.directions = ray_vectors("directions", directions);
   const bool one_origin = in.origins.ndim() == 1;
   const bool one_direction = in.directions.ndim() == 1;
-  if (!one_origin && !one_direction &&
-      leading_shape(in.origins) != leading_shape(in.directions)) {
+  if (!one_origin && !one_direction && leading_shape(in.origins) != leading_shape(in.directions)) {
     throw py::value_error("origins and directions: shapes " + shape_text(in.origins) + " and " +
                           shape_text(in.directions) +
                           " do not match (give both as (..., 3), or either as (3,) for all rays)");
@@ -366,16 +375,6 @@ RayInput ray_input(const py::object& origins, const py::object& directions,
   in.shape = one_origin ? leading_shape(in.directions) : leading_shape(in.origins);
   ray_interval("tmin", tmin, in.shape, true, in.tmin, in.tmin_array);
   ray_interval("tmax", tmax, in.shape, false, in.tmax, in.tmax_array);
-  RayArrays& a = in.arrays;
-  a.count = element_count(in.shape);
-  a.origins = in.origins.data();
-  a.origin_stride = one_origin ? 0 : 3;
-  a.directions = in.directions.data();
-  a.direction_stride = one_direction ? 0 : 3;
-  a.tmin = in.tmin_array ? in.tmin_array.data() : &in.tmin;
-  a.tmin_stride = in.tmin_array ? 1 : 0;
-  a.tmax = in.tmax_array ? in.tmax_array.data() : &in.tmax;
-  a.tmax_stride = in.tmax_array ? 1 : 0;
   return in;
 }
 
@@ -392,14 +391,19 @@ Hits intersect(const PyAccel& self, const py::object& origins, const py::object&
                const py::object& tmin, const py::object& tmax, const py::object& coherent) {
   const Coherence c = coherence_arg(coherent);
   RayInput in = ray_input(origins, directions, tmin, tmax);
-  Hits hits{py::array_t<float>(in.shape), py::array_t<float>(in.shape),
-            py::array_t<float>(in.shape), py::array_t<int32_t>(in.shape), self.scene, py::none()};
+  Hits hits{py::array_t<float>(in.shape),
+            py::array_t<float>(in.shape),
+            py::array_t<float>(in.shape),
+            py::array_t<int32_t>(in.shape),
+            self.scene,
+            py::none()};
   const HitArrays out{hits.t.mutable_data(), hits.prim.mutable_data(), hits.u.mutable_data(),
                       hits.v.mutable_data()};
   std::optional<RayProblem> problem;
   {
     py::gil_scoped_release nogil;
-    problem = trace_closest(*self.accel, in.arrays, out, c, self.scene->caller_index);
+    problem = trace_closest(*self.accel, in.arrays(), out, c, self.scene->caller_index,
+                            self.scene->caller_order_swapped);
   }
   if (problem) throw py::value_error(problem->reason);
   return hits;
@@ -416,7 +420,7 @@ py::array_t<bool> occluded(const PyAccel& self, const py::object& origins,
   std::optional<RayProblem> problem;
   {
     py::gil_scoped_release nogil;
-    problem = trace_occluded(*self.accel, in.arrays, bytes, c);
+    problem = trace_occluded(*self.accel, in.arrays(), bytes, c);
   }
   if (problem) throw py::value_error(problem->reason);
   return out;
@@ -475,9 +479,9 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
                    const py::object& seed, const py::object& sampler, const py::object& max_depth,
                    const py::object& filter, const py::object& aovs, const py::object& accel,
                    const py::object& kernel, const py::object& threads, const py::object& position,
-                   const py::object& look_at, const py::object& up,
-                   const py::object& vertical_fov, const py::object& focal_length,
-                   const py::object& yaw, const py::object& distance, const py::object& light) {
+                   const py::object& look_at, const py::object& up, const py::object& vertical_fov,
+                   const py::object& focal_length, const py::object& yaw,
+                   const py::object& distance, const py::object& light) {
   // The CLI's flags, parsed and checked by the CLI's own code.
   FlagTexts texts;
   texts.add_string("--integrator", integrator);
@@ -527,8 +531,8 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   {
     py::gil_scoped_release nogil;
     std::unique_ptr<Accel> own;
-    if (!prebuilt) own = make_accel(cli::accel_kind(flags), data->loaded.scene.mesh,
-                                    cli::kernel_choice(flags));
+    if (!prebuilt)
+      own = make_accel(cli::accel_kind(flags), data->loaded.scene.mesh, cli::kernel_choice(flags));
     const Accel& tracer = prebuilt ? *prebuilt->accel : *own;
     ViewLock lock(*data, view);
     const std::unique_ptr<Integrator> shading = make_integrator(spec, lock.scene());
@@ -589,7 +593,9 @@ PYBIND11_MODULE(tritrace, m) {
     m.attr("kernels") = names(kernels);
   }
 
-  py::class_<SceneData, std::shared_ptr<SceneData>>(m, "Scene", R"(A triangle scene: geometry, materials, lights and a camera. Read-only once made.
+  py::class_<SceneData, std::shared_ptr<SceneData>>(
+      m, "Scene",
+      R"(A triangle scene: geometry, materials, lights and a camera. Read-only once made.
 
 Make one with tritrace.load(path), Scene.builtin(name) or Scene.from_arrays(...).)")
       .def_static("builtin", &builtin, "name"_a,
@@ -627,9 +633,7 @@ RuntimeWarning); hits still report indices into `triangles`.)")
           "(lo, hi): the corners of the scene's bounding box, float32 arrays of shape (3,).")
       .def_property_readonly(
           "integrator",
-          [](const SceneData& s) {
-            return std::string(integrator_name(s.loaded.integrator.kind));
-          },
+          [](const SceneData& s) { return std::string(integrator_name(s.loaded.integrator.kind)); },
           "The integrator the scene asks for when render() is given none: 'lab' or 'path'.")
       .def_property_readonly("camera", &camera_dict,
                              "The scene's own camera: width, height, position, look_at, up, "
@@ -640,8 +644,8 @@ RuntimeWarning); hits still report indices into `triangles`.)")
           [](const SceneData& s) {
             py::list out;
             for (const PointLight& l : s.lights) {
-              out.append(py::dict("position"_a = vec3_tuple(l.position),
-                                  "power"_a = vec3_tuple(l.power)));
+              out.append(
+                  py::dict("position"_a = vec3_tuple(l.position), "power"_a = vec3_tuple(l.power)));
             }
             return out;
           },
@@ -666,10 +670,12 @@ IsADirectoryError, PermissionError where they apply) with the CLI's message.)");
 
 t: float32 distance along each ray in units of its direction's length (inf where it missed);
 prim: int32 triangle index (-1 where it missed); u, v: float32 barycentric weights of the
-triangle's second and third vertices (0 where it missed); normal: float32 (..., 3) unit
-geometric normal of the hit triangle, normalize(cross(v2 - v0, v1 - v0)) (the lab's
-convention, not turned toward the ray; 0 where it missed), computed when first read;
-hit: bool, prim >= 0.)")
+triangle's second and third vertices (0 where it missed; for Scene.from_arrays those of
+triangles[prim, 1] and triangles[prim, 2]); normal: float32 (..., 3) unit geometric normal of
+the hit triangle, not turned toward the ray (0 where it missed), computed when first read: the
+counter-clockwise normalize(cross(b - a, c - a)) of each triangle (a, b, c) of Scene.from_arrays
+and of mesh files, the lab's normalize(cross(v2 - v0, v1 - v0)) in built-in scenes and scene
+files' inline meshes; hit: bool, prim >= 0.)")
       .def_readonly("t", &Hits::t)
       .def_readonly("prim", &Hits::prim)
       .def_readonly("u", &Hits::u)

@@ -3,6 +3,7 @@
 // their hits scattered to the output arrays, kMaxBatch rays at a time.
 #include "ray_queries.h"
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -138,7 +139,7 @@ void parallel_chunks(size_t count, size_t chunk,
 
 std::optional<RayProblem> trace_closest(const Accel& accel, const RayArrays& rays,
                                         const HitArrays& out, Coherence coherence,
-                                        std::span<const uint32_t> triangle_ids) {
+                                        std::span<const uint32_t> triangle_ids, bool swap_uv) {
   return for_each_batch(rays, [&](std::span<const Ray> batch, size_t first) {
     std::array<Hit, kChunk> hits;
     const std::span<Hit> h(hits.data(), batch.size());
@@ -154,8 +155,9 @@ std::optional<RayProblem> trace_closest(const Accel& accel, const RayArrays& ray
       const uint32_t id = !found ? 0u : triangle_ids.empty() ? hit.prim : triangle_ids[hit.prim];
       out.t[first + i] = found ? hit.t : kInf;
       out.prim[first + i] = found ? static_cast<int32_t>(id) : -1;
-      out.u[first + i] = found ? hit.u : 0.0f;
-      out.v[first + i] = found ? hit.v : 0.0f;
+      const float u = swap_uv ? hit.v : hit.u, v = swap_uv ? hit.u : hit.v;
+      out.u[first + i] = found ? u : 0.0f;
+      out.v[first + i] = found ? v : 0.0f;
     }
   });
 }

@@ -37,7 +37,7 @@ enum class Coherence { kAuto, kCoherent, kIncoherent };
 
 // The closest hit of each ray: t (+inf on a miss), the triangle (-1 on a miss, else
 // `triangle_ids[prim]` when triangle_ids is not empty, else prim) and the barycentrics u, v (0 on
-// a miss).
+// a miss; each other's when swap_uv is set).
 struct HitArrays {
   float* t = nullptr;
   int32_t* prim = nullptr;
@@ -56,7 +56,7 @@ struct RayProblem {
 // problem (the lowest index) and leaves the outputs unspecified when there is one.
 std::optional<RayProblem> trace_closest(const Accel& accel, const RayArrays& rays,
                                         const HitArrays& out, Coherence coherence,
-                                        std::span<const uint32_t> triangle_ids);
+                                        std::span<const uint32_t> triangle_ids, bool swap_uv);
 // out[i] = 1 where ray i hits any triangle within its interval, else 0 (NumPy's bool layout).
 std::optional<RayProblem> trace_occluded(const Accel& accel, const RayArrays& rays, uint8_t* out,
                                          Coherence coherence);

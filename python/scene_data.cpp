@@ -52,9 +52,9 @@ void add_materials(std::span<const float> albedo, std::span<const uint32_t> kept
     const glm::vec3 a = row(albedo, i);
     for (int k = 0; k < 3; ++k) {
       if (!(a[k] >= 0.0f && a[k] <= 1.0f)) {
-        fail("materials", (one ? std::string("the albedo")
-                               : "the albedo of triangle " + std::to_string(i)) +
-                              " must be in [0, 1], got " + text(a));
+        fail("materials",
+             (one ? std::string("the albedo") : "the albedo of triangle " + std::to_string(i)) +
+                 " must be in [0, 1], got " + text(a));
       }
     }
   }
@@ -110,7 +110,8 @@ std::shared_ptr<SceneData> scene_from_arrays(std::span<const float> vertices,
     switch (check_triangle(corner[0], corner[1], corner[2])) {
       case TriangleCheck::kOk:
         kept.push_back(static_cast<uint32_t>(t));
-        mesh.corners.insert(mesh.corners.end(), corner, corner + 3);
+        // The order mesh_import.cpp stores model files' triangles in (see SceneData).
+        mesh.corners.insert(mesh.corners.end(), {corner[0], corner[2], corner[1]});
         break;
       case TriangleCheck::kDegenerate:
         ++stats.dropped_degenerate;
@@ -136,6 +137,7 @@ std::shared_ptr<SceneData> scene_from_arrays(std::span<const float> vertices,
   loaded.stats.dropped_non_finite = stats.dropped_non_finite;
   auto data = wrap(std::move(loaded), "arrays");
   data->caller_triangles = count;
+  data->caller_order_swapped = true;
   if (kept.size() < count) {
     data->caller_index = std::move(kept);
     data->scene_index.assign(count, -1);
@@ -179,7 +181,9 @@ View make_view(const SceneData& data, const CameraPose& pose, const SceneOverrid
     c.vertical_fov_degrees.reset();
   }
   if (pose.any() && !Camera::is_valid_look_at(c.position, c.look_at, c.up)) {
-    fail(pose.position ? "position" : pose.look_at ? "look_at" : "up",
+    fail(pose.position  ? "position"
+         : pose.look_at ? "look_at"
+                        : "up",
          "position and look_at must differ, and up must not be parallel to the viewing "
          "direction");
   }

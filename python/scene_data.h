@@ -1,6 +1,6 @@
-// What a tritrace.Scene holds, and the scene work of the Python module that needs no Python: loading
-// through the CLI's loaders, building a scene from arrays as a mesh file would be, and the views
-// (camera and light) that renders and camera rays ask for.
+// What a tritrace.Scene holds, and the scene work of the Python module that needs no Python:
+// loading through the CLI's loaders, building a scene from arrays as a mesh file would be, and the
+// views (camera and light) that renders and camera rays ask for.
 #pragma once
 
 #include <cstdint>
@@ -29,6 +29,10 @@ struct SceneData {
   std::vector<uint32_t> caller_index;
   std::vector<int32_t> scene_index;
   size_t caller_triangles = 0;  // the indices hits report run over [0, caller_triangles)
+  // Scene.from_arrays stores each triangle (a, b, c) as (a, c, b), as mesh files are stored, so
+  // that the normal is the counter-clockwise one; hits then report u and v swapped back, as the
+  // weights of the caller's b and c.
+  bool caller_order_swapped = false;
   std::mutex view_mutex;
 };
 
@@ -40,8 +44,9 @@ std::shared_ptr<SceneData> load_builtin(const std::string& name);
 // A scene of `triangles` (3 vertex indices each) over `vertices` (3 floats each), with one albedo
 // per triangle (3 floats each), one for all (3 floats), or none (the neutral grey of mesh files),
 // set up as a mesh file is: camera framed on its bounds, a point light near the camera, the lab's
-// ambient term, the path tracer. Degenerate and non-finite triangles are dropped, as the loaders
-// drop them, and counted in loaded.stats. Throws Error(argument name, reason, kUsage).
+// ambient term, the path tracer; each triangle (a, b, c) is stored as (a, c, b), as model files'
+// counter-clockwise triangles are. Degenerate and non-finite triangles are dropped, as the
+// loaders drop them, and counted in loaded.stats. Throws Error(argument name, reason, kUsage).
 std::shared_ptr<SceneData> scene_from_arrays(std::span<const float> vertices,
                                              std::span<const int64_t> triangles,
                                              std::span<const float> albedo);
@@ -52,9 +57,7 @@ struct CameraPose {
   std::optional<glm::vec3> position, look_at, up;
   std::optional<double> vertical_fov_degrees;
   std::optional<float> focal_length_px;
-  bool any() const {
-    return position || look_at || up || vertical_fov_degrees || focal_length_px;
-  }
+  bool any() const { return position || look_at || up || vertical_fov_degrees || focal_length_px; }
 };
 
 // The camera and lights of `data` with `pose` and then the CLI's `overrides` applied, exactly as

@@ -111,9 +111,12 @@ class Hits:
 
     t: distance along each ray in units of its direction's length (inf where it missed); prim:
     triangle index (-1 where it missed); u, v: barycentric weights of the triangle's second and
-    third vertices (0 where it missed); normal: (..., 3) unit geometric normal of the hit
-    triangle, normalize(cross(v2 - v0, v1 - v0)) (the lab's convention, not turned toward the
-    ray; 0 where it missed), computed when first read; hit: prim >= 0.
+    third vertices (0 where it missed; for Scene.from_arrays those of triangles[prim, 1] and
+    triangles[prim, 2]); normal: (..., 3) unit geometric normal of the hit triangle, not turned
+    toward the ray (0 where it missed), computed when first read: the counter-clockwise
+    normalize(cross(b - a, c - a)) of each triangle (a, b, c) of Scene.from_arrays and of mesh
+    files, the lab's normalize(cross(v2 - v0, v1 - v0)) in built-in scenes and scene files'
+    inline meshes; hit: prim >= 0.
     """
 
     @property

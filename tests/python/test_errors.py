@@ -85,8 +85,9 @@ def test_from_arrays_checks_shapes_types_and_indices():
         tritrace.Scene.from_arrays(v, f, materials=[1.5, 0, 0])
     with pytest.raises(ValueError, match="materials: must be one albedo"):
         tritrace.Scene.from_arrays(v, f, materials=[[1, 0, 0], [0, 1, 0]])
-    with pytest.raises(ValueError, match="materials: the albedo of triangle 0"):
-        tritrace.Scene.from_arrays(v, f, materials=[[np.nan, 0, 0]])
+    with pytest.raises(ValueError, match=r"materials: the albedo of triangle 1 must be in \[0, 1\], "
+                                         r"got \(nan, 0, 0\)"):
+        tritrace.Scene.from_arrays(v, [[0, 1, 2], [0, 2, 1]], materials=[[0, 0, 0], [np.nan, 0, 0]])
 
 
 def test_from_arrays_drops_degenerate_and_non_finite_triangles_but_keeps_indices():
@@ -97,9 +98,12 @@ def test_from_arrays_drops_degenerate_and_non_finite_triangles_but_keeps_indices
         scene = tritrace.Scene.from_arrays(v, f)
     assert scene.triangle_count == 1
     assert (scene.dropped_degenerate, scene.dropped_non_finite) == (1, 1)
-    hits = tritrace.Accel(scene).intersect([0.25, 0.25, -1], [0, 0, 1])
+    hits = tritrace.Accel(scene).intersect([0.25, 0.5, -1], [0, 0, 1])
     assert hits.prim == 2 and hits.t == 1.0
-    np.testing.assert_allclose(hits.normal, [0, 0, -1])  # cross(e2, e1) of triangle 2
+    # The weights of triangle 2's second and third vertices, (1,0,0) and (0,1,0), and its
+    # counter-clockwise normal cross(v1 - v0, v2 - v0).
+    assert (hits.u, hits.v) == (0.25, 0.5)
+    np.testing.assert_array_equal(hits.normal, [0, 0, 1])
     with pytest.raises(ValueError, match="no geometry: every triangle was degenerate"):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

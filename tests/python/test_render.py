@@ -124,7 +124,9 @@ def test_from_arrays_is_the_scene_a_mesh_file_gives(tmp_path):
     # binary PLY so that the file holds exactly the same floats.
     xs, zs = np.meshgrid(np.linspace(-1, 1, 5), np.linspace(-1, 1, 4))
     heights = 0.3 * np.sin(3 * xs) * np.cos(2 * zs)
-    vertices = np.stack([xs, heights, zs], axis=-1).reshape(-1, 3).astype(np.float32)
+    # + 0 turns the grid's -0.0 heights into +0.0, which is what assimp reads them as (and a hit
+    # point's zero's sign steers the ray offsets' ULP steps).
+    vertices = np.stack([xs, heights, zs], axis=-1).reshape(-1, 3).astype(np.float32) + 0.0
     triangles = []
     for r in range(3):
         for c in range(4):
@@ -133,12 +135,21 @@ def test_from_arrays_is_the_scene_a_mesh_file_gives(tmp_path):
     triangles = np.array(triangles, np.int32)
     ply = tmp_path / "grid.ply"
     write_binary_ply(ply, vertices, triangles)
-    scene = tritrace.Scene.from_arrays(vertices, triangles)
+    # assimp gives a file without materials its default material, white.
+    scene = tritrace.Scene.from_arrays(vertices, triangles, materials=(1, 1, 1))
     assert scene.triangle_count == 24 and scene.integrator == "path"
     assert scene.camera == tritrace.load(ply).camera
     frame = tritrace.render(scene, width=40, height=30, spp=2)
     assert_same_bits(frame.image, cli_image(tmp_path, ply, "--width", 40, "--height", 30,
                                             "--spp", 2))
+    # The same triangles, hit alike: from_arrays reports u and v in the order given.
+    origin, directions = scene.camera_rays(width=40, height=30)
+    ours = tritrace.Accel(scene).intersect(origin, directions)
+    loaded = tritrace.Accel(tritrace.load(ply)).intersect(origin, directions)
+    np.testing.assert_array_equal(ours.prim, loaded.prim)
+    np.testing.assert_array_equal(ours.t, loaded.t)
+    np.testing.assert_array_equal(ours.normal, loaded.normal)
+    np.testing.assert_array_equal(ours.u, loaded.v)  # the file's triangles are stored (a, c, b)
 
 
 def test_a_prebuilt_accel_renders_the_same_image(cornell):

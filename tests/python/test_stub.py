@@ -52,6 +52,8 @@ def runtime_parameters(function):
             params.append(("*", None))
             continue
         name = part.split(":")[0].strip()
+        if name == "self":
+            continue
         default = part.split("=", 1)[1].strip() if "=" in part else None
         params.append((name, default))
     return params

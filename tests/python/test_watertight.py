@@ -158,11 +158,11 @@ def test_bundles_of_rays_at_one_edge_go_through_packets_without_leaking(name):
     assert leaks(accel, origins, targets - origins, inside, coherent=True) == 0
 
 
-def test_moller_trumbore_leaks_on_the_same_rays():
-    total = 0
-    for name, (vertices, faces) in MESHES.items():
-        scene = tritrace.Scene.from_arrays(vertices, faces)
-        origins, directions, inside = aimed_rays(vertices, faces, 10000, seed=len(name))
-        total += leaks(tritrace.Accel(scene, "brute", "moller-trumbore"), origins, directions,
-                       inside)
-    assert total > 20
+@pytest.mark.parametrize("name", list(MESHES))
+def test_moller_trumbore_leaks_on_the_same_rays(name):
+    # About 1-15% of these rays (measured: hundreds to thousands of 20000).
+    vertices, faces = MESHES[name]
+    scene = tritrace.Scene.from_arrays(vertices, faces)
+    origins, directions, inside = aimed_rays(vertices, faces, 10000, seed=len(name))
+    assert leaks(tritrace.Accel(scene, "brute", "moller-trumbore"), origins, directions,
+                 inside) > 50
