@@ -48,7 +48,7 @@ TSAN_TESTS = Renderer.*:Placements/*:BinnedSahBuilder.ParallelBuildMakesTheSeria
 # leak counts, the lab integrator and the renderer.
 PORTABLE_FLAGS = -DCMAKE_BUILD_TYPE=Release -DTRITRACE_NATIVE=OFF -DTRITRACE_BUILD_BENCH=OFF \
   -DTRITRACE_VIEWER=OFF $(WERROR)
-PORTABLE_TESTS = *Bvh*:*BinnedSah*:*BruteForce*:*Kernel*:*Leak*:ClosedMeshes.*:*Lab*:*Renderer*:Placements/*:BlockKernels.*:*FarCamera*:TranslatedScene.*:RaysFromTriangles.*:Default*:*DefaultLab*:Path*:*WhiteFurnace*
+PORTABLE_TESTS = *Bvh*:*BinnedSah*:*BruteForce*:*Kernel*:*Leak*:ClosedMeshes.*:*Lab*:*Renderer*:Placements/*:BlockKernels.*:*FarCamera*:TranslatedScene.*:RaysFromTriangles.*:Default*:*DefaultLab*:Path*:*WhiteFurnace*:*Sampler*:Sobol*:OffsetRayOrigin.*
 
 .PHONY: all deps configure build run test test-asan test-tsan test-portable leaks bench format \
   lint install clean

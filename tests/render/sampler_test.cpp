@@ -91,6 +91,37 @@ TEST_P(SamplerKinds, SampleIndexDoesNotDependOnEarlierIndices) {
   }
 }
 
+// get_2d_groups<N> (SIMD lanes where the build has AVX2) draws exactly what N calls of get_2d
+// draw, from any dimension, for many pixels and indices.
+template <size_t N>
+void expect_groups_match_single_draws(SamplerKind kind) {
+  Sampler grouped(13, kind), single(13, kind);
+  for (int y = 0; y < 8; ++y) {
+    for (int x = 0; x < 8; ++x) {
+      for (uint32_t i : {0u, 1u, 2u, 77u, 1023u, 0xfffffffeu}) {
+        grouped.start_pixel_sample(x * 1000, y, i);
+        single.start_pixel_sample(x * 1000, y, i);
+        for (int round = 0; round < 5; ++round) {
+          (void)grouped.get_1d();  // groups start at odd and even dimensions
+          (void)single.get_1d();
+          const std::array<glm::vec2, N> u = grouped.get_2d_groups<N>();
+          for (size_t g = 0; g < N; ++g) {
+            ASSERT_EQ(u[g], single.get_2d()) << "group " << g << " of " << N << ", index " << i;
+          }
+          ASSERT_EQ(grouped.dimension(), single.dimension());
+        }
+      }
+    }
+  }
+}
+
+TEST_P(SamplerKinds, GroupsOfTwoDimensionalDrawsEqualSingleDraws) {
+  expect_groups_match_single_draws<1>(GetParam());
+  expect_groups_match_single_draws<2>(GetParam());
+  expect_groups_match_single_draws<3>(GetParam());
+  expect_groups_match_single_draws<4>(GetParam());
+}
+
 TEST_P(SamplerKinds, CountsDimensionsAndPixel2dIsTheFirstTwo) {
   Sampler s(1, GetParam());
   s.start_pixel_sample(2, 3, 4);

@@ -78,7 +78,7 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kern
     case AccelKind::kBvh:
     case AccelKind::kBvhSingle: {
       auto bvh = std::make_unique<BvhAccel>(
-          mesh, kernel, bvh::BuildConfig{},
+          mesh, kernel, bvh::default_build_config(mesh.size()),
           kind == AccelKind::kBvh ? BvhTraversal::kAuto : BvhTraversal::kSingle);
       local.structure_bytes = bvh->tree().node_bytes();
       local.triangle_copy_bytes = bvh->tree().block_bytes();

@@ -10,6 +10,10 @@
 #include <glm/common.hpp>
 #include <glm/vec3.hpp>
 
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
+
 namespace tritrace {
 
 // After Wächter and Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing
@@ -33,9 +37,10 @@ struct RayOffsetParams {
   float float_scale = 1.0f / 65536.0f;  // times extent, per unit of normal component
 };
 
-// p moved to the side of its surface that the unit normal `n` points to.
-inline glm::vec3 offset_ray_origin(glm::vec3 p, glm::vec3 n, float extent,
-                                   const RayOffsetParams& k = {}) {
+// p moved to the side of its surface that the unit normal `n` points to, one coordinate at a time
+// (the reference; offset_ray_origin is this, bit for bit, in SIMD where the build has AVX2).
+inline glm::vec3 offset_ray_origin_scalar(glm::vec3 p, glm::vec3 n, float extent,
+                                          const RayOffsetParams& k = {}) {
   auto shift = [&](float pc, float nc) {
     // A positive float's bits grow with its value, a negative float's with its magnitude: moving
     // towards +n means adding ULPs to a positive coordinate and removing them from a negative one.
@@ -50,6 +55,30 @@ inline glm::vec3 offset_ray_origin(glm::vec3 p, glm::vec3 n, float extent,
     return nc > 0.0f ? std::max(by_extent, by_ulps) : std::min(by_extent, by_ulps);
   };
   return {shift(p.x, n.x), shift(p.y, n.y), shift(p.z, n.z)};
+}
+
+// p moved to the side of its surface that the unit normal `n` points to.
+inline glm::vec3 offset_ray_origin(glm::vec3 p, glm::vec3 n, float extent,
+                                   const RayOffsetParams& k = {}) {
+#if defined(__AVX2__)
+  // offset_ray_origin_scalar, three lanes at once (the path tracer offsets three points per
+  // vertex; measured 3% of its instructions): the same IEEE operations, and max/min with
+  // std::max/std::min's operand order and NaN rule (_mm_max_ps(b, a) is b > a ? b : a, which is
+  // std::max(a, b)).
+  const __m128 pv = _mm_setr_ps(p.x, p.y, p.z, 0.0f), nv = _mm_setr_ps(n.x, n.y, n.z, 0.0f);
+  const __m128i ulps = _mm_cvttps_epi32(_mm_mul_ps(_mm_set1_ps(k.int_scale), nv));
+  const __m128i signed_ulps = _mm_blendv_epi8(ulps, _mm_sub_epi32(_mm_setzero_si128(), ulps),
+                                              _mm_castps_si128(_mm_cmplt_ps(pv, _mm_setzero_ps())));
+  const __m128 by_ulps = _mm_castsi128_ps(_mm_add_epi32(_mm_castps_si128(pv), signed_ulps));
+  const __m128 by_extent = _mm_add_ps(pv, _mm_mul_ps(_mm_set1_ps(k.float_scale * extent), nv));
+  const __m128 r = _mm_blendv_ps(_mm_min_ps(by_ulps, by_extent), _mm_max_ps(by_ulps, by_extent),
+                                 _mm_cmpgt_ps(nv, _mm_setzero_ps()));
+  alignas(16) float out[4];
+  _mm_store_ps(out, r);
+  return {out[0], out[1], out[2]};
+#else
+  return offset_ray_origin_scalar(p, n, extent, k);
+#endif
 }
 
 // The extent offset_ray_origin wants for a triangle with edges e1, e2: its largest edge component.

@@ -4,6 +4,11 @@
 #pragma once
 
 #include <cstdint>
+#include <initializer_list>
+
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
 
 namespace tritrace {
 
@@ -61,5 +66,49 @@ constexpr uint32_t laine_karras_permutation(uint32_t mirrored, uint32_t seed) {
 constexpr uint32_t owen_scramble(uint32_t fraction, uint32_t seed) {
   return reverse_bits(laine_karras_permutation(reverse_bits(fraction), seed));
 }
+
+#if defined(__AVX2__)
+// Eight lanes of the functions above, each lane bit for bit the scalar result (integer operations
+// only), for samplers that draw several groups at once.
+inline __m256i reverse_bits_x8(__m256i x) {
+  // The bytes of each lane reversed by one shuffle, then each byte's bits by looking its two
+  // nibbles up in a table of 4-bit reversals: the low nibble's reversal becomes the high one.
+  const __m256i bytes = _mm256_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12, 3, 2,
+                                         1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12);
+  const __m256i rev_to_high =
+      _mm256_setr_epi8(0x00, 0x80, 0x40, 0xc0, 0x20, 0xa0, 0x60, 0xe0, 0x10, 0x90, 0x50, 0xd0, 0x30,
+                       0xb0, 0x70, 0xf0, 0x00, 0x80, 0x40, 0xc0, 0x20, 0xa0, 0x60, 0xe0, 0x10, 0x90,
+                       0x50, 0xd0, 0x30, 0xb0, 0x70, 0xf0);
+  const __m256i rev_to_low = _mm256_setr_epi8(0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15,
+                                              0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15);
+  const __m256i nibble = _mm256_set1_epi8(0x0f);
+  x = _mm256_shuffle_epi8(x, bytes);
+  const __m256i low = _mm256_and_si256(x, nibble);
+  const __m256i high = _mm256_and_si256(_mm256_srli_epi16(x, 4), nibble);
+  return _mm256_or_si256(_mm256_shuffle_epi8(rev_to_high, low),
+                         _mm256_shuffle_epi8(rev_to_low, high));
+}
+
+inline __m256i laine_karras_permutation_x8(__m256i x, __m256i seed) {
+  x = _mm256_add_epi32(x, seed);
+  for (const int c : {0x6c50b47c, static_cast<int>(0xb82f1e52u), static_cast<int>(0xc7afe638u),
+                      static_cast<int>(0x8d22f6e6u)}) {
+    x = _mm256_xor_si256(x, _mm256_mullo_epi32(x, _mm256_set1_epi32(c)));
+  }
+  return x;
+}
+
+inline __m256i sobol_dimension1_mirrored_x8(__m256i z) {
+  const auto step = [&z](int shift, int mask) {
+    z = _mm256_xor_si256(z, _mm256_and_si256(_mm256_srli_epi32(z, shift), _mm256_set1_epi32(mask)));
+  };
+  step(1, 0x55555555);
+  step(2, 0x33333333);
+  step(4, 0x0f0f0f0f);
+  step(8, 0x00ff00ff);
+  step(16, 0x0000ffff);
+  return z;
+}
+#endif
 
 }  // namespace tritrace

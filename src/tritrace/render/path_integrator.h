@@ -17,7 +17,8 @@ struct PathSettings {
   // light reaching the first hit directly). High by default, so that Russian roulette, not
   // truncation, ends paths: the energy a depth of 1024 drops is below albedo^1024.
   int max_depth = 1024;
-  // Bounces before Russian roulette may end a path.
+  // Bounces before Russian roulette may end a path; after them a path continues with probability
+  // min(1, sqrt(max component of its throughput)) and is reweighted by its inverse.
   int roulette_depth = 3;
   // Which strategies find emissive triangles: both, combined by MIS (the default), or one alone
   // (for tests: each alone is unbiased too).
