@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "buffer_cache.h"
 #include "convert.h"
 #include "flags/flag_values.h"
 #include "ray_queries.h"
@@ -236,13 +237,36 @@ py::tuple camera_rays(const std::shared_ptr<SceneData>& data, const py::object& 
 // ---------------------------------------------------------------------------------------------
 // Accels and ray queries
 
+// Released result memory an accel keeps for its next queries (BufferCache): enough for the
+// results of 16M rays.
+constexpr size_t kCachedOutputBytes = size_t{256} << 20;
+
 struct PyAccel {
   std::shared_ptr<SceneData> scene;
   AccelKind kind = AccelKind::kBvh;
   Kernel kernel = kDefaultKernel;
   AccelInfo info;
   std::unique_ptr<Accel> accel;
+  std::shared_ptr<BufferCache> outputs = std::make_shared<BufferCache>(kCachedOutputBytes);
 };
+
+// A buffer from `cache` owned by a capsule, the base object of the result arrays made over it:
+// when the last of them is freed, the buffer goes back to the cache.
+py::capsule cached_buffer(const std::shared_ptr<BufferCache>& cache, size_t bytes, void** data) {
+  struct Owner {
+    std::shared_ptr<BufferCache> cache;
+    BufferCache::Buffer buffer;
+  };
+  auto owner = std::make_unique<Owner>(Owner{cache, cache->take(bytes)});
+  *data = owner->buffer.data;
+  py::capsule capsule(owner.get(), [](void* p) {
+    auto* o = static_cast<Owner*>(p);
+    o->cache->give(o->buffer);
+    delete o;
+  });
+  owner.release();  // the capsule owns it now
+  return capsule;
+}
 
 std::shared_ptr<PyAccel> make_py_accel(const std::shared_ptr<SceneData>& scene,
                                        const py::object& kind, const py::object& kernel) {
@@ -391,14 +415,21 @@ Hits intersect(const PyAccel& self, const py::object& origins, const py::object&
                const py::object& tmin, const py::object& tmax, const py::object& coherent) {
   const Coherence c = coherence_arg(coherent);
   RayInput in = ray_input(origins, directions, tmin, tmax);
-  Hits hits{py::array_t<float>(in.shape),
-            py::array_t<float>(in.shape),
-            py::array_t<float>(in.shape),
-            py::array_t<int32_t>(in.shape),
+  // The four result arrays share one buffer: t, prim, u, v one after another.
+  const size_t n = element_count(in.shape);
+  void* data = nullptr;
+  const py::capsule base = cached_buffer(self.outputs, 16 * n, &data);
+  float* t = static_cast<float*>(data);
+  auto* prim = reinterpret_cast<int32_t*>(t + n);
+  float* u = t + 2 * n;
+  float* v = t + 3 * n;
+  Hits hits{py::array_t<float>(in.shape, t, base),
+            py::array_t<float>(in.shape, u, base),
+            py::array_t<float>(in.shape, v, base),
+            py::array_t<int32_t>(in.shape, prim, base),
             self.scene,
             py::none()};
-  const HitArrays out{hits.t.mutable_data(), hits.prim.mutable_data(), hits.u.mutable_data(),
-                      hits.v.mutable_data()};
+  const HitArrays out{t, prim, u, v};
   std::optional<RayProblem> problem;
   {
     py::gil_scoped_release nogil;
@@ -414,9 +445,11 @@ py::array_t<bool> occluded(const PyAccel& self, const py::object& origins,
                            const py::object& tmax, const py::object& coherent) {
   const Coherence c = coherence_arg(coherent);
   RayInput in = ray_input(origins, directions, tmin, tmax);
-  py::array_t<bool> out(in.shape);
   static_assert(sizeof(bool) == 1);
-  uint8_t* bytes = reinterpret_cast<uint8_t*>(out.mutable_data());
+  void* data = nullptr;
+  const py::capsule base = cached_buffer(self.outputs, element_count(in.shape), &data);
+  auto* bytes = static_cast<uint8_t*>(data);
+  py::array_t<bool> out(in.shape, reinterpret_cast<bool*>(bytes), base);
   std::optional<RayProblem> problem;
   {
     py::gil_scoped_release nogil;
