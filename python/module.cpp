@@ -415,21 +415,24 @@ Hits intersect(const PyAccel& self, const py::object& origins, const py::object&
                const py::object& tmin, const py::object& tmax, const py::object& coherent) {
   const Coherence c = coherence_arg(coherent);
   RayInput in = ray_input(origins, directions, tmin, tmax);
-  // The four result arrays share one buffer: t, prim, u, v one after another.
+  // The four result arrays share one buffer: t, prim, u, v one after another, each starting on
+  // a cache line.
   const size_t n = element_count(in.shape);
+  const size_t stride = (n + 15) / 16 * 16;  // floats
   void* data = nullptr;
-  const py::capsule base = cached_buffer(self.outputs, 16 * n, &data);
+  const py::capsule base = cached_buffer(self.outputs, 16 * stride, &data);
   float* t = static_cast<float*>(data);
-  auto* prim = reinterpret_cast<int32_t*>(t + n);
-  float* u = t + 2 * n;
-  float* v = t + 3 * n;
+  auto* prim = reinterpret_cast<int32_t*>(t + stride);
+  float* u = t + 2 * stride;
+  float* v = t + 3 * stride;
   Hits hits{py::array_t<float>(in.shape, t, base),
             py::array_t<float>(in.shape, u, base),
             py::array_t<float>(in.shape, v, base),
             py::array_t<int32_t>(in.shape, prim, base),
             self.scene,
             py::none()};
-  const HitArrays out{t, prim, u, v};
+  // Results beyond what the caches hold (4 MiB) are streamed to memory.
+  const HitArrays out{t, prim, u, v, 16 * n > (size_t{4} << 20)};
   std::optional<RayProblem> problem;
   {
     py::gil_scoped_release nogil;

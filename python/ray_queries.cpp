@@ -67,21 +67,43 @@ bool load_batch_fast(const RayArrays& in, size_t first, size_t n, Ray* batch) {
   const float* d = in.directions + first * kDirectionStride;
   const float tmin = *in.tmin;
   const float tmax = std::min(*in.tmax, kRayTMax);  // NaN stays NaN
+  // The shared origin or direction, and the interval, are checked once.
+  unsigned bad = static_cast<unsigned>(!(tmin >= 0.0f)) | static_cast<unsigned>(tmax != tmax);
+  if (kOriginStride == 0) bad |= any_non_finite(o, 3);
+  if (kDirectionStride == 0) bad |= any_non_finite(d, 3) | any_zero(d, 1);
   size_t i = 0;
 #if defined(__SSE4_1__)
   static_assert(sizeof(Ray) == 32, "a Ray is (origin, dir.x) then (dir.y, dir.z, tmin, tmax)");
-  // Two 16-byte stores per ray. An unaligned load of a per-ray vector reads the next ray's first
-  // float too, so the last ray (whose next float may lie past the array) is left to the loop below.
+  // Two 16-byte stores per ray, and the checks on the same registers. An unaligned load of a
+  // per-ray vector reads the next ray's first float too (checked with this ray: a false alarm
+  // only where the next ray is bad itself), so the last ray, whose next float may lie past the
+  // array, is left to the loop below.
   const __m128 interval = _mm_setr_ps(tmin, tmax, tmin, tmax);
   const __m128 one_origin = _mm_setr_ps(o[0], o[1], o[2], 0.0f);
-  const __m128 one_direction = _mm_setr_ps(d[0], d[1], d[2], 0.0f);
+  const __m128 one_direction = _mm_setr_ps(d[0], d[1], d[2], 1.0f);
+  const __m128i exponent = _mm_set1_epi32(0x7f800000);
+  const __m128i magnitude3 = _mm_setr_epi32(0x7fffffff, 0x7fffffff, 0x7fffffff, 0);
+  __m128i non_finite = _mm_setzero_si128();
+  int zero = 0;
   for (; i + 1 < n; ++i) {
     const __m128 oi = kOriginStride == 0 ? one_origin : _mm_loadu_ps(o + 3 * i);
     const __m128 di = kDirectionStride == 0 ? one_direction : _mm_loadu_ps(d + 3 * i);
     float* out = reinterpret_cast<float*>(batch + i);
     _mm_storeu_ps(out, _mm_insert_ps(oi, di, 0x30));  // (ox, oy, oz, dx)
     _mm_storeu_ps(out + 4, _mm_shuffle_ps(di, interval, _MM_SHUFFLE(1, 0, 2, 1)));
+    if constexpr (kOriginStride != 0) {
+      const __m128i e = _mm_and_si128(_mm_castps_si128(oi), exponent);
+      non_finite = _mm_or_si128(non_finite, _mm_cmpeq_epi32(e, exponent));
+    }
+    if constexpr (kDirectionStride != 0) {
+      const __m128i bits = _mm_castps_si128(di);
+      non_finite =
+          _mm_or_si128(non_finite, _mm_cmpeq_epi32(_mm_and_si128(bits, exponent), exponent));
+      zero |= _mm_testz_si128(bits, magnitude3);
+    }
   }
+  bad |=
+      static_cast<unsigned>(!_mm_testz_si128(non_finite, non_finite)) | static_cast<unsigned>(zero);
 #endif
   for (; i < n; ++i) {
     const float* oi = o + i * kOriginStride;
@@ -90,12 +112,9 @@ bool load_batch_fast(const RayArrays& in, size_t first, size_t n, Ray* batch) {
     batch[i].dir = glm::vec3(di[0], di[1], di[2]);
     batch[i].tmin = tmin;
     batch[i].tmax = tmax;
+    if constexpr (kOriginStride != 0) bad |= any_non_finite(oi, 3);
+    if constexpr (kDirectionStride != 0) bad |= any_non_finite(di, 3) | any_zero(di, 1);
   }
-  const size_t origin_floats = kOriginStride == 0 ? 3 : 3 * n;
-  const size_t direction_rays = kDirectionStride == 0 ? 1 : n;
-  const unsigned bad = any_non_finite(o, origin_floats) | any_non_finite(d, 3 * direction_rays) |
-                       any_zero(d, direction_rays) | static_cast<unsigned>(!(tmin >= 0.0f)) |
-                       static_cast<unsigned>(tmax != tmax);
   return bad == 0;
 }
 
@@ -189,7 +208,9 @@ std::optional<RayProblem> for_each_batch(const RayArrays& in, Fn&& fn) {
   std::atomic<bool> failed{false};
   parallel_chunks(in.count, kChunk, [&](size_t begin, size_t end) {
     if (failed.load(std::memory_order_relaxed)) return;
-    std::array<Ray, kChunk> batch;
+    // Per thread and reused, as the renderer's batches are: a fresh array would initialise every
+    // ray (Ray has default values) on each batch. No thread works on two batches at once.
+    thread_local std::array<Ray, kChunk> batch;
     const size_t n = end - begin;
     if (!load_batch(in, begin, n, batch.data())) {
       failed.store(true, std::memory_order_relaxed);
@@ -224,13 +245,23 @@ void scatter_hits(std::span<const Hit> hits, size_t first, const HitArrays& out,
     _MM_TRANSPOSE4_PS(r0, r1, r2, r3);  // r0: t, r1: u, r2: v, r3: prim
     const __m128 missed =
         _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_castps_si128(r3), _mm_set1_epi32(-1)));
-    _mm_storeu_ps(t + i, _mm_blendv_ps(r0, inf, missed));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(prim + i), _mm_castps_si128(r3));
+    const __m128 ht = _mm_blendv_ps(r0, inf, missed);
     const __m128 hu = _mm_andnot_ps(missed, swap_uv ? r2 : r1);
     const __m128 hv = _mm_andnot_ps(missed, swap_uv ? r1 : r2);
-    _mm_storeu_ps(u + i, hu);
-    _mm_storeu_ps(v + i, hv);
+    if (out.stream) {
+      // Large results: written around the cache, without first reading the lines they fill.
+      _mm_stream_ps(t + i, ht);
+      _mm_stream_si128(reinterpret_cast<__m128i*>(prim + i), _mm_castps_si128(r3));
+      _mm_stream_ps(u + i, hu);
+      _mm_stream_ps(v + i, hv);
+    } else {
+      _mm_storeu_ps(t + i, ht);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(prim + i), _mm_castps_si128(r3));
+      _mm_storeu_ps(u + i, hu);
+      _mm_storeu_ps(v + i, hv);
+    }
   }
+  if (out.stream) _mm_sfence();  // the streamed stores are seen before the batch counts as done
 #endif
   for (; i < hits.size(); ++i) {
     const Hit& h = hits[i];
@@ -275,7 +306,7 @@ std::optional<RayProblem> trace_closest(const Accel& accel, const RayArrays& ray
                                         const HitArrays& out, Coherence coherence,
                                         std::span<const uint32_t> triangle_ids, bool swap_uv) {
   return for_each_batch(rays, [&](std::span<const Ray> batch, size_t first) {
-    std::array<Hit, kChunk> hits;
+    thread_local std::array<Hit, kChunk> hits;
     const std::span<Hit> h(hits.data(), batch.size());
     if (use_packets(coherence, batch)) {
       accel.intersect(batch, h);

@@ -43,6 +43,9 @@ struct HitArrays {
   int32_t* prim = nullptr;
   float* u = nullptr;
   float* v = nullptr;
+  // Write with non-temporal stores (the four arrays 16-byte aligned): for results larger than the
+  // caches, which then need not read every line before filling it.
+  bool stream = false;
 };
 
 // The first ray that cannot be traced and why, in the words of an error message: an origin or
