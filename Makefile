@@ -7,12 +7,15 @@
 #   make test-portable  the BVH, renderer and kernel tests built for any AVX2 CPU (x86-64-v3)
 #   make leaks      the full closed-mesh leak count for every kernel (docs/RELIABILITY.md)
 #   make lint       clang-tidy over src/ and apps/ (.clang-tidy)
+#   make install    the Python module (import tritrace) and its stub into Python's packages folder
+#                   under PREFIX (default /usr/local: /usr/local/lib/python3.X/dist-packages)
 BUILD_DIR ?= build
 CMAKE_FLAGS ?=
 JOBS ?= $(shell nproc)
 ASAN_DIR ?= build-asan
 TSAN_DIR ?= build-tsan
 PORTABLE_DIR ?= build-portable
+PREFIX ?= /usr/local
 # -Werror where the project asks for it: every test target (and so CI) configures with it, while
 # TRITRACE_WERROR defaults to OFF for a plain CMake build, so that a newer compiler's new warning
 # does not stop a user's build. `make run` and `make build` pass nothing, so build/'s cache decides:
@@ -48,7 +51,7 @@ PORTABLE_FLAGS = -DCMAKE_BUILD_TYPE=Release -DTRITRACE_NATIVE=OFF -DTRITRACE_BUI
 PORTABLE_TESTS = *Bvh*:*BinnedSah*:*BruteForce*:*Kernel*:*Leak*:ClosedMeshes.*:*Lab*:*Renderer*:Placements/*:BlockKernels.*:*FarCamera*:TranslatedScene.*:RaysFromTriangles.*:Default*:*DefaultLab*:Path*:*WhiteFurnace*:*Sampler*:Sobol*:OffsetRayOrigin.*
 
 .PHONY: all deps configure build run test test-asan test-tsan test-portable leaks bench format \
-  lint clean
+  lint install clean
 
 all: build
 
@@ -88,6 +91,9 @@ test-portable: deps
 	@cmake -S . -B $(PORTABLE_DIR) $(PORTABLE_FLAGS) >/dev/null
 	@cmake --build $(PORTABLE_DIR) -j $(JOBS) --target tritrace_tests
 	@$(PORTABLE_DIR)/tests/tritrace_tests --gtest_filter='$(PORTABLE_TESTS)'
+
+install: build
+	@cmake --install $(BUILD_DIR) --prefix $(PREFIX)
 
 leaks: build
 	@$(BUILD_DIR)/tritrace_leaks

@@ -15,6 +15,9 @@ packages=(
   # window as a window manager does.
   libsdl2-dev libsdl2-ttf-dev fonts-dejavu-core xvfb xdotool libx11-dev
   clang-format clang-tidy
+  # The Python module (import tritrace): Debian's Python headers, pybind11 and NumPy; pytest runs
+  # its tests.
+  python3-dev pybind11-dev python3-numpy python3-pytest
   # The sanitizer runtimes for make test-asan / test-tsan (g++ pulls them in; named for clarity).
   libasan8 libubsan1 libtsan2
 )

@@ -1,0 +1,242 @@
+# Typed stub of the tritrace extension module (python/module.cpp), so that editors complete and
+# type checkers check calls; tests/python/test_stub.py keeps it in step with the module.
+"""tritrace: fast, watertight ray queries and renders of triangle scenes on NumPy arrays."""
+
+import os
+from typing import Literal, Optional, Sequence, Tuple, TypedDict, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+accels: Tuple[str, ...]
+"""The acceleration structures this build has: 'bvh', 'brute', 'bvh-single' and, where built,
+'embree', 'embree-single', 'embree8', 'embree-robust'."""
+kernels: Tuple[str, ...]
+"""The ray/triangle kernels: 'inverse', 'cramer', 'moller-trumbore', 'watertight'."""
+
+_Vec3 = Union[Sequence[float], npt.NDArray[np.floating], npt.NDArray[np.integer]]
+_Rays = npt.ArrayLike
+_Interval = Union[float, npt.ArrayLike]
+_Path = Union[str, bytes, "os.PathLike[str]", "os.PathLike[bytes]"]
+
+class CameraInfo(TypedDict):
+    width: int
+    height: int
+    position: Tuple[float, float, float]
+    look_at: Tuple[float, float, float]
+    up: Tuple[float, float, float]
+    forward: Tuple[float, float, float]
+    focal_length: float
+    vertical_fov: Optional[float]
+    lab_orbit: bool
+
+class LightInfo(TypedDict):
+    position: Tuple[float, float, float]
+    power: Tuple[float, float, float]
+
+class Scene:
+    """A triangle scene: geometry, materials, lights and a camera. Read-only once made.
+
+    Make one with tritrace.load(path), Scene.builtin(name) or Scene.from_arrays(...).
+    """
+
+    @staticmethod
+    def builtin(name: str) -> "Scene":
+        """A built-in scene: "cornell" (the lab's box, 30 triangles), "cornell-area" (the box
+        lit by a ceiling light) or "terrain:<triangles>" ("terrain:1m", "terrain:250k"), exactly
+        as `tritrace render --scene NAME` builds it. ValueError for an unknown name."""
+    @staticmethod
+    def from_arrays(
+        vertices: npt.ArrayLike,
+        triangles: npt.ArrayLike,
+        materials: Optional[npt.ArrayLike] = None,
+    ) -> "Scene":
+        """A scene of triangles given as arrays, set up as a mesh file is.
+
+        vertices: (N, 3) numbers; triangles: (M, 3) integer vertex indices; materials: None (the
+        neutral grey 0.6 of mesh files), one albedo (3,) for every triangle, or one per triangle
+        (M, 3), each in [0, 1]. The camera is framed on the bounds, with a point light near it,
+        as `tritrace render mesh.obj` does. Degenerate and non-finite triangles are dropped (with
+        a RuntimeWarning); hits still report indices into `triangles`.
+        """
+    @property
+    def source(self) -> str:
+        """The file, the built-in scene's name, or 'arrays'."""
+    @property
+    def triangle_count(self) -> int:
+        """Triangles in the scene (after dropping degenerate and non-finite ones)."""
+    @property
+    def dropped_degenerate(self) -> int:
+        """Zero-area triangles dropped while loading."""
+    @property
+    def dropped_non_finite(self) -> int:
+        """Triangles with a NaN or infinite vertex (or overflowing edges) dropped while loading."""
+    @property
+    def bounds(self) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """(lo, hi): the corners of the scene's bounding box, float32 arrays of shape (3,)."""
+    @property
+    def integrator(self) -> Literal["lab", "path"]:
+        """The integrator the scene asks for when render() is given none."""
+    @property
+    def camera(self) -> CameraInfo:
+        """The scene's own camera."""
+    @property
+    def lights(self) -> list[LightInfo]:
+        """The point lights."""
+    def camera_rays(
+        self,
+        *,
+        width: Optional[int] = None,
+        height: Optional[int] = None,
+        yaw: Optional[float] = None,
+        distance: Optional[float] = None,
+        position: Optional[_Vec3] = None,
+        look_at: Optional[_Vec3] = None,
+        up: Optional[_Vec3] = None,
+        vertical_fov: Optional[float] = None,
+        focal_length: Optional[float] = None,
+    ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """The camera's rays through every pixel's top-left corner, as the lab integrator traces
+        them: (origin, directions), origin of shape (3,) and unit directions of shape
+        (height, width, 3), float32. The keyword arguments are render()'s camera settings."""
+
+def load(path: _Path) -> Scene:
+    """Loads a scene file (.json) or a mesh file (anything assimp reads: .obj, .ply, .stl, .gltf,
+    .glb, ...) as `tritrace render FILE` does. Raises OSError (FileNotFoundError,
+    IsADirectoryError, PermissionError where they apply) with the CLI's message."""
+
+class Hits:
+    """The closest hits of a batch of rays, as arrays of the rays' shape.
+
+    t: distance along each ray in units of its direction's length (inf where it missed); prim:
+    triangle index (-1 where it missed); u, v: barycentric weights of the triangle's second and
+    third vertices (0 where it missed; for Scene.from_arrays those of triangles[prim, 1] and
+    triangles[prim, 2]); normal: (..., 3) unit geometric normal of the hit triangle, not turned
+    toward the ray (0 where it missed), computed when first read: the counter-clockwise
+    normalize(cross(b - a, c - a)) of each triangle (a, b, c) of Scene.from_arrays and of mesh
+    files, the lab's normalize(cross(v2 - v0, v1 - v0)) in built-in scenes and scene files'
+    inline meshes; hit: prim >= 0.
+    """
+
+    @property
+    def t(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def prim(self) -> npt.NDArray[np.int32]: ...
+    @property
+    def u(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def v(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def normal(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def hit(self) -> npt.NDArray[np.bool_]: ...
+
+class Accel:
+    """An acceleration structure over a scene's triangles, for batched ray queries.
+
+    kind is one of tritrace.accels ("bvh", "bvh-single", "brute", and the Embree modes where
+    built); kernel one of tritrace.kernels, by default the watertight kernel (Embree always uses
+    its own). Queries release the GIL, use every core and may run from several threads at once.
+    """
+
+    def __init__(self, scene: Scene, kind: str = "bvh", kernel: Optional[str] = None) -> None: ...
+    def intersect(
+        self,
+        origins: _Rays,
+        directions: _Rays,
+        tmin: _Interval = 0.0,
+        tmax: _Interval = float("inf"),
+        *,
+        coherent: Optional[bool] = None,
+    ) -> Hits:
+        """The closest hit of each ray within [tmin, tmax].
+
+        origins and directions: arrays of shape (..., 3), or (3,) for one shared by every ray;
+        any real dtype (C-contiguous float32 is read in place, anything else converted once).
+        tmin and tmax: numbers, or arrays of the rays' shape. Directions need not be unit
+        length: t is in units of their length. A ray with a non-finite origin or direction, a
+        zero direction, a negative or NaN tmin or a NaN tmax raises ValueError naming the first
+        one. coherent: None chooses per batch of 256 rays between packet traversal and single
+        rays; True or False forces one. The hits are the same either way, bit for bit.
+        """
+    def occluded(
+        self,
+        origins: _Rays,
+        directions: _Rays,
+        tmin: _Interval = 0.0,
+        tmax: _Interval = float("inf"),
+        *,
+        coherent: Optional[bool] = None,
+    ) -> npt.NDArray[np.bool_]:
+        """Whether each ray hits any triangle within [tmin, tmax]: a bool array of the rays'
+        shape. Arguments as for intersect()."""
+    @property
+    def kind(self) -> str: ...
+    @property
+    def kernel(self) -> str: ...
+    @property
+    def scene(self) -> Scene: ...
+    @property
+    def build_ms(self) -> float: ...
+
+class Frame:
+    """A rendered image and its AOVs.
+
+    image: (height, width, 3) linear radiance, row 0 at the top (a PFM file stores rows
+    bottom-up); albedo, normal: (height, width, 3) and depth: (height, width), or None when not
+    asked for.
+    """
+
+    @property
+    def image(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def albedo(self) -> Optional[npt.NDArray[np.float32]]: ...
+    @property
+    def normal(self) -> Optional[npt.NDArray[np.float32]]: ...
+    @property
+    def depth(self) -> Optional[npt.NDArray[np.float32]]: ...
+    @property
+    def integrator(self) -> Literal["lab", "path"]: ...
+    @property
+    def spp(self) -> int: ...
+    @property
+    def milliseconds(self) -> float: ...
+    @property
+    def rays(self) -> int: ...
+    @property
+    def threads(self) -> int: ...
+
+def render(
+    scene: Scene,
+    *,
+    integrator: Optional[Literal["lab", "path"]] = None,
+    spp: Optional[int] = None,
+    width: Optional[int] = None,
+    height: Optional[int] = None,
+    seed: Optional[int] = None,
+    sampler: Optional[Literal["sobol", "independent"]] = None,
+    max_depth: Optional[int] = None,
+    filter: Optional[Literal["box", "gaussian", "blackman-harris"]] = None,
+    aovs: Sequence[Literal["albedo", "normal", "depth"]] = (),
+    accel: Union[str, Accel, None] = None,
+    kernel: Optional[str] = None,
+    threads: Optional[int] = None,
+    position: Optional[_Vec3] = None,
+    look_at: Optional[_Vec3] = None,
+    up: Optional[_Vec3] = None,
+    vertical_fov: Optional[float] = None,
+    focal_length: Optional[float] = None,
+    yaw: Optional[float] = None,
+    distance: Optional[float] = None,
+    light: Optional[_Vec3] = None,
+) -> Frame:
+    """Renders the scene as `tritrace render` does: the image is bit for bit the one
+    `tritrace render ... -o out.pfm` writes with the same settings.
+
+    Every argument left None is the scene's own (or the CLI's default). accel: a name, or an
+    Accel built over this scene (reused across renders). Camera settings beyond the CLI's flags,
+    as a scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
+    focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a
+    look-at camera. Bad values raise ValueError with the CLI's message, wrong types TypeError.
+    """

@@ -1,0 +1,36 @@
+# The examples of docs/PYTHON.md run as written (in a scratch folder, since one writes a file), so
+# that the documentation stays true.
+import os
+import pathlib
+import re
+
+import pytest
+
+DOC = pathlib.Path(__file__).resolve().parents[2] / "docs" / "PYTHON.md"
+EXAMPLES = re.findall(r"```python\n(.*?)```", DOC.read_text(), re.S)
+
+
+def test_the_doc_has_its_three_examples():
+    assert len(EXAMPLES) == 3
+
+
+@pytest.mark.parametrize("index", range(len(EXAMPLES)))
+def test_example_runs(index, tmp_path, capsys):
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        namespace = {}
+        exec(compile(EXAMPLES[index], f"PYTHON.md example {index + 1}", "exec"), namespace)
+    finally:
+        os.chdir(cwd)
+    if index == 0:
+        assert "returns, nearest" in capsys.readouterr().out
+        assert namespace["depth"].shape == (500, 2000)
+        assert namespace["points"].shape == (500, 2000, 3)
+    elif index == 1:
+        assert namespace["visible"].shape == (100, 50)
+        assert 0 < namespace["visible"].mean() < 1  # the blocks hide some pairs, not all
+        assert "of the pairs see each other" in capsys.readouterr().out
+    else:
+        assert (tmp_path / "views.npz").exists()
+        assert namespace["images"].shape == (8, 128, 128, 3)

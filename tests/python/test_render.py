@@ -1,0 +1,176 @@
+# tritrace.render against the CLI: the same settings give the image `tritrace render` writes to a
+# PFM file bit for bit (and its EXR AOVs), for the lab integrator and the path tracer, built-in
+# scenes, scene files, cameras given as keyword arguments, and scenes built from arrays.
+import json
+import struct
+
+import numpy as np
+import pytest
+
+import tritrace
+from conftest import REPO, read_exr, read_pfm, run_cli
+
+
+def cli_image(tmp_path, *args):
+    out = tmp_path / "cli.pfm"
+    run_cli("render", *args, "-q", "-o", out)
+    return read_pfm(out)
+
+
+def assert_same_bits(a, b):
+    assert a.dtype == b.dtype == np.float32 and a.shape == b.shape
+    np.testing.assert_array_equal(a.view(np.uint32), b.view(np.uint32))
+
+
+def test_lab_image_is_the_clis(tmp_path, cornell):
+    frame = tritrace.render(cornell, width=120, height=90, yaw=0.4)
+    assert frame.image.shape == (90, 120, 3) and frame.integrator == "lab" and frame.spp == 1
+    assert_same_bits(frame.image, cli_image(tmp_path, "--width", 120, "--height", 90, "--yaw",
+                                            0.4))
+    # The default view and size: the lab's 500 x 500 image.
+    assert_same_bits(tritrace.render(cornell).image, cli_image(tmp_path))
+
+
+@pytest.mark.parametrize("kwargs, flags", [
+    ({"seed": 5}, ["--seed", 5]),
+    ({"sampler": "independent", "filter": "gaussian", "max_depth": 3, "seed": 11},
+     ["--sampler", "independent", "--filter", "gaussian", "--max-depth", 3, "--seed", 11]),
+    ({"distance": 2.5, "light": (0.2, -0.6, -0.4), "threads": 1},
+     ["--distance", 2.5, "--light", "0.2,-0.6,-0.4", "--threads", 1]),
+])
+def test_path_traced_image_is_the_clis(tmp_path, kwargs, flags):
+    scene = tritrace.Scene.builtin("cornell-area")
+    frame = tritrace.render(scene, width=40, height=32, spp=4, **kwargs)
+    assert frame.integrator == "path" and frame.spp == 4
+    assert_same_bits(frame.image, cli_image(tmp_path, "--scene", "cornell-area", "--width", 40,
+                                            "--height", 32, "--spp", 4, *flags))
+
+
+def test_integrator_and_kernel_choices_are_the_clis(tmp_path, cornell):
+    frame = tritrace.render(cornell, integrator="path", spp=2, width=32, height=24,
+                            kernel="moller-trumbore", accel="bvh-single")
+    assert_same_bits(frame.image, cli_image(tmp_path, "--integrator", "path", "--spp", 2,
+                                            "--width", 32, "--height", 24, "--kernel",
+                                            "moller-trumbore", "--accel", "bvh-single"))
+
+
+def test_aovs_are_the_clis_exr_layers(tmp_path):
+    scene = tritrace.Scene.builtin("cornell-area")
+    frame = tritrace.render(scene, width=36, height=28, spp=3, aovs=("albedo", "normal", "depth"))
+    out = tmp_path / "cli.exr"
+    run_cli("render", "--scene", "cornell-area", "--width", 36, "--height", 28, "--spp", 3,
+            "--aovs", "albedo,normal,depth", "-q", "-o", out)
+    exr = read_exr(out)
+
+    def layer(*names):
+        return np.stack([exr[n] for n in names], axis=-1)
+
+    assert_same_bits(frame.image, layer("R", "G", "B"))
+    assert_same_bits(frame.albedo, layer("albedo.R", "albedo.G", "albedo.B"))
+    assert_same_bits(frame.normal, layer("normal.X", "normal.Y", "normal.Z"))
+    assert_same_bits(frame.depth, exr["Z"])
+    # With AOVs the image comes from a film, without them from render(): the same bits.
+    assert_same_bits(frame.image, tritrace.render(scene, width=36, height=28, spp=3).image)
+    only_depth = tritrace.render(scene, width=36, height=28, spp=3, aovs=["depth"])
+    assert only_depth.albedo is None and only_depth.normal is None
+    assert_same_bits(only_depth.depth, frame.depth)
+
+
+def test_camera_keywords_are_a_scene_files_camera(tmp_path):
+    scene_json = {"meshes": [{"generator": "cornell"}],
+                  "lights": [{"position": [0, -0.5, -0.7], "power": [14, 14, 14]}],
+                  "integrator": {"type": "path", "spp": 2}}
+    base = tmp_path / "base.json"
+    base.write_text(json.dumps(scene_json))
+    camera = {"position": [0.5, -0.4, -2.5], "look_at": [0.1, 0.2, 0.3], "up": [0, -1, 0.1],
+              "vertical_fov": 50, "width": 48, "height": 36}
+    posed = tmp_path / "posed.json"
+    posed.write_text(json.dumps(dict(scene_json, camera=camera)))
+    scene = tritrace.load(base)
+    frame = tritrace.render(scene, position=camera["position"], look_at=camera["look_at"],
+                            up=camera["up"], vertical_fov=camera["vertical_fov"], width=48,
+                            height=36)
+    assert_same_bits(frame.image, cli_image(tmp_path, posed))
+    # ... and yaw and distance then orbit it, as the flags orbit the file's camera.
+    frame = tritrace.render(scene, position=camera["position"], look_at=camera["look_at"],
+                            up=camera["up"], vertical_fov=camera["vertical_fov"], width=48,
+                            height=36, yaw=-0.3, distance=2.0)
+    assert_same_bits(frame.image, cli_image(tmp_path, posed, "--yaw", -0.3, "--distance", 2))
+    # The scene keeps its own camera between renders.
+    assert scene.camera["position"] == (0.0, 0.0, -3.0)
+
+
+def test_scene_files_render_as_the_cli_renders_them(tmp_path):
+    path = REPO / "scenes" / "tetrahedron_in_box.json"
+    scene = tritrace.load(path)
+    frame = tritrace.render(scene, width=50, height=40, spp=2)
+    assert_same_bits(frame.image, cli_image(tmp_path, path, "--width", 50, "--height", 40,
+                                            "--spp", 2))
+
+
+def write_binary_ply(path, vertices, triangles):
+    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(vertices)}\n"
+              "property float x\nproperty float y\nproperty float z\n"
+              f"element face {len(triangles)}\nproperty list uchar int vertex_indices\n"
+              "end_header\n").encode()
+    body = np.asarray(vertices, "<f4").tobytes()
+    for t in triangles:
+        body += struct.pack("<B3i", 3, *t)
+    path.write_bytes(header + body)
+
+
+def test_from_arrays_is_the_scene_a_mesh_file_gives(tmp_path):
+    # A small terrain-like mesh: a 5 x 4 grid with varying heights, float32 values written as
+    # binary PLY so that the file holds exactly the same floats.
+    xs, zs = np.meshgrid(np.linspace(-1, 1, 5), np.linspace(-1, 1, 4))
+    heights = 0.3 * np.sin(3 * xs) * np.cos(2 * zs)
+    # + 0 turns the grid's -0.0 heights into +0.0, which is what assimp reads them as (and a hit
+    # point's zero's sign steers the ray offsets' ULP steps).
+    vertices = np.stack([xs, heights, zs], axis=-1).reshape(-1, 3).astype(np.float32) + 0.0
+    triangles = []
+    for r in range(3):
+        for c in range(4):
+            i = r * 5 + c
+            triangles += [(i, i + 5, i + 1), (i + 1, i + 5, i + 6)]
+    triangles = np.array(triangles, np.int32)
+    ply = tmp_path / "grid.ply"
+    write_binary_ply(ply, vertices, triangles)
+    # assimp gives a file without materials its default material, white.
+    scene = tritrace.Scene.from_arrays(vertices, triangles, materials=(1, 1, 1))
+    assert scene.triangle_count == 24 and scene.integrator == "path"
+    assert scene.camera == tritrace.load(ply).camera
+    frame = tritrace.render(scene, width=40, height=30, spp=2)
+    assert_same_bits(frame.image, cli_image(tmp_path, ply, "--width", 40, "--height", 30,
+                                            "--spp", 2))
+    # The same triangles, hit alike: from_arrays reports u and v in the order given.
+    origin, directions = scene.camera_rays(width=40, height=30)
+    ours = tritrace.Accel(scene).intersect(origin, directions)
+    loaded = tritrace.Accel(tritrace.load(ply)).intersect(origin, directions)
+    np.testing.assert_array_equal(ours.prim, loaded.prim)
+    np.testing.assert_array_equal(ours.t, loaded.t)
+    np.testing.assert_array_equal(ours.normal, loaded.normal)
+    np.testing.assert_array_equal(ours.u, loaded.v)  # the file's triangles are stored (a, c, b)
+
+
+def test_a_prebuilt_accel_renders_the_same_image(cornell):
+    accel = tritrace.Accel(cornell)
+    views = [tritrace.render(cornell, width=40, height=30, yaw=y, accel=accel).image
+             for y in (0.0, 0.5)]
+    for y, image in zip((0.0, 0.5), views):
+        assert_same_bits(image, tritrace.render(cornell, width=40, height=30, yaw=y).image)
+    assert not np.array_equal(views[0], views[1])
+
+
+def test_from_arrays_materials_colour_the_triangles():
+    v = np.float32([[-1, -1, 0], [1, -1, 0], [0, 1, 0], [-1, -1, 1], [1, -1, 1], [0, 1, 1]])
+    f = np.int32([[0, 1, 2], [3, 4, 5]])
+    albedo = np.float32([[0.9, 0.1, 0.1], [0.1, 0.9, 0.1]])
+    scene = tritrace.Scene.from_arrays(v, f, materials=albedo)
+    frame = tritrace.render(scene, width=16, height=16, spp=1, aovs=("albedo",),
+                            position=(0, 0, -4), look_at=(0, 0, 0), up=(0, 1, 0))
+    centre = frame.albedo[8, 8]
+    np.testing.assert_array_equal(centre, albedo[0])  # the front triangle, seen first
+    grey = tritrace.render(tritrace.Scene.from_arrays(v, f), width=16, height=16, spp=1,
+                           aovs=("albedo",), position=(0, 0, -4), look_at=(0, 0, 0),
+                           up=(0, 1, 0)).albedo[8, 8]
+    np.testing.assert_array_equal(grey, np.float32([0.6, 0.6, 0.6]))
