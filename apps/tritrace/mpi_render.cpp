@@ -11,6 +11,8 @@
 #include <mpi.h>
 #include <unistd.h>
 
+#include <csignal>
+
 #include <algorithm>
 #include <chrono>
 #include <cstring>
@@ -164,7 +166,8 @@ RankSetup setup(const RenderArgs& args) {
 
 void work(int rank, const RankSetup& s, const std::vector<PartRange>& units) {
   // For the test of a dying rank: TRITRACE_MPI_TEST_DIE=R makes rank R die on its first unit, as
-  // a crashed or killed process would.
+  // a process killed by the system (out of memory, a node lost) would. mpirun then ends the job
+  // and names the rank ("process rank R with PID ... exited on signal 9").
   const char* die = std::getenv("TRITRACE_MPI_TEST_DIE");
   const bool must_die = die && std::atoi(die) == rank;
   MPI_Send(nullptr, 0, MPI_BYTE, 0, kReady, MPI_COMM_WORLD);
@@ -173,7 +176,7 @@ void work(int rank, const RankSetup& s, const std::vector<PartRange>& units) {
     MPI_Status status;
     MPI_Recv(&unit, 1, MPI_INT, 0, MPI_ANY_TAG, MPI_COMM_WORLD, &status);
     if (status.MPI_TAG == kStop) return;
-    if (must_die) std::_Exit(86);
+    if (must_die) std::raise(SIGKILL);
     const PartRange& u = units[static_cast<size_t>(unit)];
     RenderOptions options = s.options;
     options.first_sample = u.first;

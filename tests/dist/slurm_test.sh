@@ -7,7 +7,8 @@
 # Usage: slurm_test.sh TRITRACE SCRIPTS_SLURM_DIR
 set -euo pipefail
 cli=$1
-scripts=$2
+scripts=$(cd "$2" && pwd)
+case "$cli" in */*) cli=$(readlink -f "$cli") ;; esac
 skip() { echo "slurm_test: skipped: $*"; exit 77; }
 fail() { echo "slurm_test: $*" >&2; exit 1; }
 [ "$(id -u)" -eq 0 ] || skip "needs root to start slurmd and munged"
@@ -105,19 +106,28 @@ fi
 scene=(--scene cornell-area --spp 20 --width 48 --height 40 --threads 1 -q)
 "$cli" render "${scene[@]}" -o "$dir/one.pfm"
 
-# Waits (at most 120 s) until job $1 has left the queue, then checks that it completed.
+# Waits (at most 120 s) until job $1 has ended (MinJobAge keeps its record), then checks that it
+# completed. A merge whose array failed would wait forever: its dependency is reported instead.
 wait_job() {
-  for _ in $(seq 600); do
-    [ -z "$(squeue -h -j "$1" 2>/dev/null)" ] && break
+  local info st=
+  for _ in $(seq "${SLURM_TEST_WAIT:-600}"); do
+    info=$(scontrol -o show job "$1" 2>/dev/null || true)
+    st=$(grep -o 'JobState=[A-Z_]*' <<<"$info" | head -n 1)
+    case "$st" in
+      JobState=PENDING | JobState=RUNNING | JobState=CONFIGURING | JobState=COMPLETING | "") ;;
+      *) break ;;
+    esac
+    if grep -q 'Reason=DependencyNeverSatisfied' <<<"$info"; then
+      tail -n 3 "$dir"/out/*.log >&2 2>/dev/null || true
+      fail "job $1 waits for an array task that failed"
+    fi
     sleep 0.2
   done
-  [ -z "$(squeue -h -j "$1" 2>/dev/null)" ] || fail "job $1 still queued after 120 s"
-  local st
-  st=$(scontrol -o show job "$1" 2>/dev/null | grep -o 'JobState=[A-Z_]*' | head -n 1)
-  [ "$st" = "JobState=COMPLETED" ] || {
-    cat "$dir"/out/*.log >&2 2>/dev/null || true
-    fail "job $1 ended as ${st:-unknown}"
-  }
+  if [ "$st" != "JobState=COMPLETED" ]; then
+    squeue -o "%i %T %r" >&2 || true
+    tail -n 3 "$dir"/out/*.log >&2 2>/dev/null || true
+    fail "job $1 ended as ${st:-unknown} (or did not end within 120 s)"
+  fi
 }
 
 cd "$dir/out"
