@@ -19,12 +19,24 @@ done
 dir=$(mktemp -d /tmp/tritrace-slurm.XXXXXX)
 chmod 755 "$dir"
 pids=()
+# Every process of this test's Slurm (slurmstepd and job steps included) carries its SLURM_CONF.
+own_processes() {
+  local p
+  for p in /proc/[0-9]*; do
+    if tr '\0' '\n' <"$p/environ" 2>/dev/null | grep -qx "SLURM_CONF=$dir/slurm.conf"; then
+      echo "${p#/proc/}"
+    fi
+  done
+}
 cleanup() {
+  if [ -n "${SLURM_CONF:-}" ]; then scancel --quiet --full -u root 2>/dev/null || true; fi
   for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
   for pid in "${pids[@]}"; do
     for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
     kill -9 "$pid" 2>/dev/null || true
   done
+  unset SLURM_CONF  # so that the scan's own tr and grep do not match
+  for pid in $(own_processes); do kill -9 "$pid" 2>/dev/null || true; done
   rm -rf "$dir"
 }
 trap cleanup EXIT
