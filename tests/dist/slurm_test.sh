@@ -11,6 +11,7 @@ scripts=$(cd "$2" && pwd)
 case "$cli" in */*) cli=$(readlink -f "$cli") ;; esac
 skip() { echo "slurm_test: skipped: $*"; exit 77; }
 fail() { echo "slurm_test: $*" >&2; exit 1; }
+trap 'echo "slurm_test: failed at line $LINENO" >&2' ERR
 [ "$(id -u)" -eq 0 ] || skip "needs root to start slurmd and munged"
 for tool in munged slurmctld slurmd sbatch squeue sacct scontrol; do
   command -v "$tool" >/dev/null || skip "$tool is not installed (scripts/install-deps.sh)"
@@ -23,7 +24,7 @@ pids=()
 own_processes() {
   local p
   for p in /proc/[0-9]*; do
-    if tr '\0' '\n' <"$p/environ" 2>/dev/null | grep -qx "SLURM_CONF=$dir/slurm.conf"; then
+    if { tr '\0' '\n' <"$p/environ"; } 2>/dev/null | grep -qx "SLURM_CONF=$dir/slurm.conf"; then
       echo "${p#/proc/}"
     fi
   done
@@ -124,7 +125,7 @@ wait_job() {
   local info st=
   for _ in $(seq "${SLURM_TEST_WAIT:-600}"); do
     info=$(scontrol -o show job "$1" 2>/dev/null || true)
-    st=$(grep -o 'JobState=[A-Z_]*' <<<"$info" | head -n 1)
+    st=$(grep -o 'JobState=[A-Z_]*' <<<"$info" | head -n 1 || true)
     case "$st" in
       JobState=PENDING | JobState=RUNNING | JobState=CONFIGURING | JobState=COMPLETING | "") ;;
       *) break ;;
