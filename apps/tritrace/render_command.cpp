@@ -290,6 +290,12 @@ int run_render(const RenderArgs& args) {
     const PartInfo info{
         render_identity(scene, spec, whole, accel_name(accel_kind), kernel_name(kernel), aovs),
         range};
+    if (path) {
+      // The part's share of the paths (tile parts hold about 1/N of the pixels each).
+      bar.show_paths(static_cast<uint64_t>(scene.camera.width()) * scene.camera.height() *
+                         render_options.spp / static_cast<uint64_t>(range.tiles),
+                     render_options.spp);
+    }
     Film film(scene.camera.width(), scene.camera.height(), aovs);
     render_to_film(scene, *accel, *integrator, film, render_options, &stats);
     bar.finish();
