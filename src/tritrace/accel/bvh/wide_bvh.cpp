@@ -129,6 +129,12 @@ class Collapser {
     }
     const CollapsePlan plan(tree_);
     plan_ = &plan;
+    // Both arrays at their final size from the start: no copy of a large array when one grows or
+    // shrinks.
+    size_t leaves = 0;
+    for (const BinaryNode& n : tree_.nodes) leaves += n.is_leaf() ? 1 : 0;
+    out_.blocks.reserve(leaves);
+    out_.nodes.reserve(count_nodes(0));
     collapse(0, 0);
     plan_ = nullptr;
   }
@@ -178,6 +184,20 @@ class Collapser {
     }
     gather(node.first, k, members, count);
     gather(node.right, slots - k, members, count);
+  }
+
+  // The wide nodes that collapse(., b) makes: b's and those under it.
+  size_t count_nodes(uint32_t b) const {
+    uint32_t members[kWidth];
+    int count = 0;
+    const int k = plan_->wide_split(b);
+    gather(tree_.nodes[b].first, k, members, count);
+    gather(tree_.nodes[b].right, kWidth - k, members, count);
+    size_t nodes = 1;
+    for (int slot = 0; slot < count; ++slot) {
+      if (!tree_.nodes[members[slot]].is_leaf()) nodes += count_nodes(members[slot]);
+    }
+    return nodes;
   }
 
   // Fills wide node `w` from binary inner node `b`.
@@ -237,11 +257,7 @@ WideBvh build_wide_bvh(const TriangleMesh& mesh, const BuildConfig& config) {
 WideBvh collapse_binary_bvh(const BinaryBvh& tree, const TriangleMesh& mesh) {
   WideBvh out;
   out.triangles = mesh.size();
-  out.nodes.reserve(tree.nodes.size() / 4 + 1);
-  out.blocks.reserve(tree.nodes.size() / 2 + 1);
   Collapser(tree, mesh, out).run();
-  out.nodes.shrink_to_fit();
-  out.blocks.shrink_to_fit();
   return out;
 }
 
