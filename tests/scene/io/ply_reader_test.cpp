@@ -283,7 +283,7 @@ TEST_F(PlyFiles, DamagedFilesAreLeftToAssimpAndStillFail) {
   out_of_range[17][1] = static_cast<int64_t>(points.size());
   auto negative = faces;
   negative[3][2] = -1;
-  const std::vector<std::pair<std::string, std::string>> damaged{
+  std::vector<std::pair<std::string, std::string>> damaged{
       {"truncated", truncated},
       {"index past the vertices",
        write_ply("binary_little_endian", plain, "uchar", "int", points, out_of_range)},
@@ -292,6 +292,15 @@ TEST_F(PlyFiles, DamagedFilesAreLeftToAssimpAndStillFail) {
       {"ascii index past the vertices",
        write_ply("ascii", plain, "uchar", "int", points, out_of_range)},
   };
+  // Counts far beyond the file's size, in both formats: damage, not a huge allocation.
+  for (const std::string format : {"ascii", "binary_little_endian"}) {
+    std::string huge = write_ply(format, plain, "uchar", "int", points, faces);
+    huge.replace(huge.find("element vertex"), 17, "element vertex 999999999999999");
+    damaged.emplace_back("huge vertex count, " + format, huge);
+    std::string many = write_ply(format, plain, "uchar", "int", points, faces);
+    many.replace(many.find("element face 50"), 15, "element face 99999999999");
+    damaged.emplace_back("huge face count, " + format, many);
+  }
   for (const auto& [name, bytes] : damaged) {
     SCOPED_TRACE(name);
     const std::string path = file("damaged.ply", bytes);

@@ -293,6 +293,9 @@ bool parse_number(std::string_view s, T& out) {
 }
 
 bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out) {
+  // A value takes two characters at least (a digit and a separator), a face line eight.
+  const size_t body = bytes.size() - l.body;
+  if (l.vertices > body / (2 * l.vertex_properties) || l.faces > body / 8) return false;
   Lines lines(bytes, l.body);
   std::vector<std::string_view> w;
   std::vector<glm::vec3> points(l.vertices);
@@ -332,6 +335,9 @@ std::optional<ImportedMesh> read_ply_triangles(std::span<const char> bytes,
                                                const std::string& subject) {
   const std::optional<Layout> layout = parse_header(bytes);
   if (!layout) return std::nullopt;
+  // Every element takes at least a byte: counts beyond the file are damage, not an allocation.
+  const size_t body = bytes.size() - layout->body;
+  if (layout->vertices > body || layout->faces > body) return std::nullopt;
   if (layout->faces > kMaxSceneTriangles) {
     throw Error(subject, "has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
   }
