@@ -116,6 +116,10 @@ Film unpack(const std::vector<float>& data, const RenderIdentity& r, const PartR
 
 // Everything a rank needs to render units, loaded and built the way `tritrace render` does.
 struct RankSetup {
+  RankSetup() = default;
+  RankSetup(const RankSetup&) = delete;
+  RankSetup& operator=(const RankSetup&) = delete;
+
   LoadedScene loaded;
   IntegratorSpec spec;
   RenderOptions options;
@@ -134,9 +138,10 @@ AovSet aovs_of(const std::string& text) {
   return set;
 }
 
-RankSetup setup(const RenderArgs& args) {
+// Fills `s` in place: the accel and integrator keep references into s.loaded.scene, so the setup
+// must never be moved or copied afterwards.
+void setup(const RenderArgs& args, RankSetup& s) {
   const auto start = std::chrono::steady_clock::now();
-  RankSetup s;
   s.loaded = load_scene_from(args.scene, scene_overrides(args.scene));
   const Scene& scene = s.loaded.scene;
   s.spec = integrator_spec(args.scene, s.loaded);
@@ -154,7 +159,6 @@ RankSetup setup(const RenderArgs& args) {
       render_identity(scene, s.spec, s.options, accel_name(accel), kernel_name(kernel), s.aovs);
   s.startup_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  return s;
 }
 
 [[noreturn]] void abort_job(int rank, const std::string& message) {
@@ -216,7 +220,7 @@ int run_render_mpi(const RenderArgs& args) {
       }
       check_writable_path(args.output);
     }
-    s = setup(args);
+    setup(args, s);
   } catch (const Error& e) {
     abort_job(rank, e.what());
   }
