@@ -1267,6 +1267,23 @@ TEST_F(CliTest, SlowRenderOnATerminalShowsProgress) {
   EXPECT_NE(screen.find("rendered 160x120"), std::string::npos) << screen;
 }
 
+// Before the render, on a terminal, phases that take more than about 0.3 s show a line with their
+// elapsed time: making (or loading) the scene and building its BVH, here two million triangles.
+TEST_F(CliTest, BigSceneOnATerminalShowsItsPhases) {
+  const std::string log = (capture_ / "terminal.log").string();
+  const std::string command = std::string("cd '") + work_.string() + "' && script -qec \"" +
+                              TRITRACE_CLI_PATH +
+                              " render --scene terrain:2m --width 8 --height 8 -o p.png\" "
+                              "/dev/null > '" +
+                              log + "' 2>&1";
+  if (std::system("command -v script > /dev/null") != 0) GTEST_SKIP() << "no script(1)";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  const std::string screen = ReadFile(log);
+  const std::regex building(R"(building bvh over [0-9]+ triangles  [0-9]+\.[0-9] s)");
+  EXPECT_TRUE(std::regex_search(screen, building)) << screen;
+  EXPECT_NE(screen.find("rendered 8x8"), std::string::npos) << screen;
+}
+
 // Without a terminal (as in every other test here) no bar is drawn: stderr stays empty.
 TEST_F(CliTest, SlowRenderWithoutATerminalPrintsNoProgress) {
   const RunResult r = Run({"render", "--scene", "terrain:20k", "--accel", "brute", "--threads", "1",
