@@ -124,7 +124,8 @@ class Collapser {
     if (tree_.nodes[0].is_leaf()) {
       // A root that is a leaf still gets a node, so traversal always starts at a node.
       init_node(0);
-      set_child(0, 0, tree_.nodes[0]);
+      set_child(0, 0, 0);
+      fill_blocks();
       return;
     }
     const CollapsePlan plan(tree_);
@@ -133,9 +134,10 @@ class Collapser {
     // shrinks.
     size_t leaves = 0;
     for (const BinaryNode& n : tree_.nodes) leaves += n.is_leaf() ? 1 : 0;
-    out_.blocks.reserve(leaves);
+    block_leaves_.reserve(leaves);
     out_.nodes.reserve(count_nodes(0));
     collapse(0, 0);
+    fill_blocks();
     plan_ = nullptr;
   }
 
@@ -150,9 +152,25 @@ class Collapser {
     }
   }
 
-  uint32_t make_block(const BinaryNode& leaf) {
-    const uint32_t index = static_cast<uint32_t>(out_.blocks.size());
-    TriangleBlock& b = out_.blocks.emplace_back();
+  // Numbers a block for binary leaf `leaf`; its triangles are copied in later, in parallel
+  // (fill_blocks): gathering the vertices of ten million triangles is most of the collapse.
+  uint32_t make_block(uint32_t leaf) {
+    const uint32_t index = static_cast<uint32_t>(block_leaves_.size());
+    block_leaves_.push_back(leaf);
+    return index;
+  }
+
+  void fill_blocks() {
+    out_.blocks.resize(block_leaves_.size());  // left uninitialised (HugePageAllocator::construct)
+    parallel::for_range(tbb::blocked_range<size_t>(0, block_leaves_.size(), 1024),
+                        [&](const auto& r) {
+                          for (size_t i = r.begin(); i != r.end(); ++i) {
+                            fill_block(out_.blocks[i], tree_.nodes[block_leaves_[i]]);
+                          }
+                        });
+  }
+
+  void fill_block(TriangleBlock& b, const BinaryNode& leaf) const {
     constexpr float nan = std::numeric_limits<float>::quiet_NaN();
     for (int lane = 0; lane < kWidth; ++lane) {
       const bool used = lane < static_cast<int>(leaf.count);
@@ -163,15 +181,16 @@ class Collapser {
       }
       b.prim[lane] = used ? p : kNoHit;
     }
-    return index;
   }
 
-  void set_child(uint32_t w, int slot, const BinaryNode& child, uint32_t ref = 0) {
+  // Slot `slot` of wide node w holds binary node b: a block for a leaf, else wide node `ref`.
+  void set_child(uint32_t w, int slot, uint32_t b, uint32_t ref = 0) {
+    const BinaryNode& child = tree_.nodes[b];
     WideNode& node = out_.nodes[w];
     node.lo_x[slot] = child.bounds.lo.x, node.hi_x[slot] = child.bounds.hi.x;
     node.lo_y[slot] = child.bounds.lo.y, node.hi_y[slot] = child.bounds.hi.y;
     node.lo_z[slot] = child.bounds.lo.z, node.hi_z[slot] = child.bounds.hi.z;
-    node.child[slot] = child.is_leaf() ? (kLeafBit | make_block(child)) : ref;
+    node.child[slot] = child.is_leaf() ? (kLeafBit | make_block(b)) : ref;
   }
 
   // The subtrees that fill `slots` slots for binary node n, by the plan, appended to members.
@@ -211,11 +230,11 @@ class Collapser {
     for (int slot = 0; slot < count; ++slot) {
       const BinaryNode& child = tree_.nodes[members[slot]];
       if (child.is_leaf()) {
-        set_child(w, slot, child);
+        set_child(w, slot, members[slot]);
       } else {
         const uint32_t cw = static_cast<uint32_t>(out_.nodes.size());
         out_.nodes.emplace_back();  // may reallocate: set the slot after, by index
-        set_child(w, slot, child, cw);
+        set_child(w, slot, members[slot], cw);
         collapse(cw, members[slot]);
       }
     }
@@ -225,6 +244,7 @@ class Collapser {
   const TriangleMesh& mesh_;
   WideBvh& out_;
   const CollapsePlan* plan_ = nullptr;
+  std::vector<uint32_t> block_leaves_;  // block i holds binary leaf block_leaves_[i]
 };
 
 }  // namespace
