@@ -182,10 +182,14 @@ std::string write_ply(const std::string& format, const std::vector<Property>& ve
   for (size_t i = 0; i < points.size(); ++i) {
     for (size_t k = 0; k < vertex_props.size(); ++k) {
       const std::string& n = vertex_props[k].name;
+      const std::string& type = vertex_props[k].type;
+      // Other properties: values every type holds exactly (a float-to-integer conversion out of
+      // range would be undefined behaviour).
+      const double other = type == "float" || type == "double" ? double(i) + 0.25 : double(i % 100);
       const double v = n == "x"   ? points[i][0]
                        : n == "y" ? points[i][1]
                        : n == "z" ? points[i][2]
-                                  : double(i) + 0.25;
+                                  : other;
       if (ascii) {
         std::ostringstream s;
         s.precision(17);
