@@ -296,14 +296,16 @@ TEST_F(PlyFiles, DamagedFilesAreLeftToAssimpAndStillFail) {
       {"ascii index past the vertices",
        write_ply("ascii", plain, "uchar", "int", points, out_of_range)},
   };
-  // Counts far beyond the file's size, in both formats: damage, not a huge allocation.
+  // Counts far beyond the file's size, in both formats: damage for the native reader, not a huge
+  // allocation. (Only the native reader is asked here: assimp, given such a header, tries the
+  // allocation, which takes minutes under AddressSanitizer.)
   for (const std::string format : {"ascii", "binary_little_endian"}) {
     std::string huge = write_ply(format, plain, "uchar", "int", points, faces);
     huge.replace(huge.find("element vertex"), 17, "element vertex 999999999999999");
-    damaged.emplace_back("huge vertex count, " + format, huge);
+    EXPECT_FALSE(native(file("huge.ply", huge)).has_value()) << format;
     std::string many = write_ply(format, plain, "uchar", "int", points, faces);
     many.replace(many.find("element face 50"), 15, "element face 99999999999");
-    damaged.emplace_back("huge face count, " + format, many);
+    EXPECT_FALSE(native(file("many.ply", many)).has_value()) << format;
   }
   for (const auto& [name, bytes] : damaged) {
     SCOPED_TRACE(name);
