@@ -22,6 +22,7 @@
 #include <thread>
 
 #include "tritrace/error.h"
+#include "tritrace/image/exr_memory_stream.h"
 #include "tritrace/math/random.h"
 
 namespace tritrace {
@@ -72,25 +73,6 @@ std::string aov_list(const AovSet& a) {
   }
   return s;
 }
-
-// An Imf::OStream over a growing byte vector (OpenEXR seeks back to write its offset table).
-class MemoryStream final : public Imf::OStream {
- public:
-  MemoryStream() : Imf::OStream("(in memory)") {}
-  void write(const char c[], int n) override {
-    const size_t end = pos_ + static_cast<size_t>(n);
-    if (end > bytes_.size()) bytes_.resize(end);
-    std::memcpy(bytes_.data() + pos_, c, static_cast<size_t>(n));
-    pos_ = end;
-  }
-  uint64_t tellp() override { return pos_; }
-  void seekp(uint64_t pos) override { pos_ = static_cast<size_t>(pos); }
-  std::vector<uint8_t> take() { return std::move(bytes_); }
-
- private:
-  std::vector<uint8_t> bytes_;
-  size_t pos_ = 0;
-};
 
 // OpenEXR (de)compresses a file's blocks of scanlines on this many threads: a 4K part is about
 // 8 million pixels of 4 to 11 floats, and ZIP on one core dominates a merge.
@@ -312,7 +294,7 @@ std::vector<uint8_t> encode_partial_film(const Film& film, const PartInfo& info)
       frame.insert(name, Imf::Slice(Imf::FLOAT, base + c.offset, stride, stride * width));
     }
   }
-  MemoryStream stream;
+  ExrMemoryStream stream;
   try {
     Imf::OutputFile file(stream, header, exr_threads());
     file.setFrameBuffer(frame);
