@@ -329,32 +329,40 @@ class Builder {
     return best;
   }
 
-  // best_split<float> on the bins as they are, without turning them into Bounds3: the same
-  // operations in the same order, so the same split (most nodes are small, and their sweeps were a
-  // tenth of the build).
-  Split best_split_float(const BinSet& bins, const std::array<AxisBins, 3>& axes,
-                         uint32_t count) const {
+  // best_split<float> on the bins as they are, without turning them into Bounds3, and over the
+  // occupied bins only: a split just after an empty bin costs exactly what the split before that
+  // bin costs, and the first of equal costs wins, so skipping them chooses the same split. (Most
+  // nodes are small, with few of their 48 bins occupied; their sweeps were a tenth of the build.)
+  Split best_split_float(const BinSet& bins, const std::array<AxisBins, 3>& axes) const {
     Split best;
     float best_cost = std::numeric_limits<float>::infinity();
     const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
     const __m128 minus_inf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
     for (int a = 0; a < 3; ++a) {
       if (!axes[a].splittable) continue;
-      float right_cost[kMaxBins];
+      int occupied[kMaxBins];
+      int m = 0;
+      for (int i = 0; i < config_.bins; ++i) {
+        occupied[m] = i;
+        m += bins.count[a][i] > 0 ? 1 : 0;
+      }
+      if (m < 2) continue;
+      float right_cost[kMaxBins];  // of the occupied bins from the j-th on
       __m128 lo = inf, hi = minus_inf;
       uint32_t n = 0;
-      for (int i = config_.bins - 1; i > 0; --i) {
+      for (int j = m - 1; j > 0; --j) {
+        const int i = occupied[j];
         lo = _mm_min_ps(lo, bins.lo[a][i]), hi = _mm_max_ps(hi, bins.hi[a][i]);
         n += bins.count[a][i];
-        right_cost[i] = n > 0 ? area4(lo, hi) * leaf_cost<float>(n) : 0.0f;
+        right_cost[j] = area4(lo, hi) * leaf_cost<float>(n);
       }
       lo = inf, hi = minus_inf;
       n = 0;
-      for (int i = 0; i < config_.bins - 1; ++i) {
+      for (int j = 0; j < m - 1; ++j) {
+        const int i = occupied[j];
         lo = _mm_min_ps(lo, bins.lo[a][i]), hi = _mm_max_ps(hi, bins.hi[a][i]);
         n += bins.count[a][i];
-        if (n == 0 || n == count) continue;
-        const float cost = area4(lo, hi) * leaf_cost<float>(n) + right_cost[i + 1];
+        const float cost = area4(lo, hi) * leaf_cost<float>(n) + right_cost[j + 1];
         if (cost < best_cost) {
           best_cost = cost;
           best.axis = a;
@@ -460,7 +468,7 @@ class Builder {
       // times the cost of a leaf of all its primitives.
       const double largest_cost = 2.0 * parent_area * leaf_cost(count);
       if (largest_cost < 0.25 * std::numeric_limits<float>::max()) {
-        best = best_split_float(bins, axes, count);
+        best = best_split_float(bins, axes);
       } else {
         std::array<std::array<Bounds3, kMaxBins>, 3> bin_bounds;
         for (int a = 0; a < 3; ++a) {
