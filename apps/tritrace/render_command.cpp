@@ -276,8 +276,8 @@ int run_render(const RenderArgs& args) {
   render_options.filter = filter_choice(args.scene);
   PhaseLine building(stderr, terminal,
                      "building " + std::string(accel_name(accel_kind)) + " over " +
-                         std::to_string(scene.mesh.size()) + " triangles");
-  const std::unique_ptr<Accel> accel = make_accel(accel_kind, scene.mesh, kernel);
+                         std::to_string(scene.drawn_triangles()) + " triangles");
+  const std::unique_ptr<Accel> accel = make_accel(accel_kind, scene, kernel);
   building.done();
   const std::unique_ptr<Integrator> integrator = make_integrator(spec, scene);
   ProgressBar bar(stderr);

@@ -187,7 +187,7 @@ class Viewer {
     start_ = initial_view(options_.scene, loaded_);
     view_ = start_;
     rates_ = MotionRates::for_distance(start_.distance);
-    accel_ = make_accel(cli::accel_kind(options_.scene), loaded_.scene.mesh,
+    accel_ = make_accel(cli::accel_kind(options_.scene), loaded_.scene,
                         cli::kernel_choice(options_.scene));
     render_options_.threads = cli::thread_count(options_.scene);
     // The integrator `tritrace render` would use with the same flags.
@@ -451,7 +451,7 @@ class Viewer {
                   last_times_.present, last_times_.events);
     char scene[256];
     std::snprintf(scene, sizeof scene, "%dx%d, %zu triangles, %s, %s, %d threads, %.3g Mrays/s",
-                  image_.width(), image_.height(), loaded_.scene.mesh.size(),
+                  image_.width(), image_.height(), static_cast<size_t>(loaded_.scene.drawn_triangles()),
                   std::string(accel_name(cli::accel_kind(options_.scene))).c_str(),
                   std::string(kernel_name(cli::kernel_choice(options_.scene))).c_str(), threads_,
                   mrays_);

@@ -276,7 +276,14 @@ void run_chunk(const Prepared& p, const LeakRun& run, const Accel* accel, bool a
     return;
   }
   scratch.rays.clear();
-  for (const Aim& aim : aims) scratch.rays.push_back(aim.ray);
+  for (const Aim& aim : aims) {
+    Ray r = aim.ray;
+    if (run.path.instance) {
+      r.origin = run.path.instance->apply(r.origin);
+      r.dir = run.path.instance->apply_vector(r.dir);
+    }
+    scratch.rays.push_back(r);
+  }
   scratch.hits.assign(aims.size(), Hit{});
   const std::span<const Ray> rays(scratch.rays);
   const std::span<Hit> hits(scratch.hits);
@@ -307,7 +314,8 @@ LeakCounts& LeakCounts::operator+=(const LeakCounts& o) {
 
 std::string leak_path_name(const LeakPath& path) {
   std::string name = path.accel ? std::string(accel_name(*path.accel)) : "kernel";
-  return path.bundles ? name + " bundles" : name;
+  if (path.bundles) name += " bundles";
+  return path.instance ? name + " instanced" : name;
 }
 
 std::vector<LeakPath> report_paths() {
@@ -323,12 +331,20 @@ std::vector<LeakCounts> count_leaks(const IndexedMesh& mesh, std::span<const Lea
   const Prepared p = prepare(mesh);
   std::vector<uint64_t> rays(runs.size());
   std::vector<std::unique_ptr<Accel>> accels(runs.size());
+  std::vector<std::unique_ptr<Scene>> scenes(runs.size());  // for instanced runs
   uint64_t scattered = 0, bundled = 0;
   for (size_t r = 0; r < runs.size(); ++r) {
     rays[r] = runs[r].rays ? runs[r].rays : options.rays;
     uint64_t& total = runs[r].path.bundles ? bundled : scattered;
     total = std::max(total, rays[r]);
-    if (runs[r].path.accel) accels[r] = make_accel(*runs[r].path.accel, p.mesh, runs[r].kernel);
+    if (runs[r].path.accel && runs[r].path.instance) {
+      scenes[r] = std::make_unique<Scene>();
+      scenes[r]->prototypes.push_back(p.mesh);
+      add_instance(*scenes[r], 0, *runs[r].path.instance);
+      accels[r] = make_accel(*runs[r].path.accel, *scenes[r], runs[r].kernel);
+    } else if (runs[r].path.accel) {
+      accels[r] = make_accel(*runs[r].path.accel, p.mesh, runs[r].kernel);
+    }
   }
   // How many of the chunk's rays are among the first `total`.
   auto in_chunk = [](uint64_t chunk, uint64_t total) {

@@ -50,12 +50,18 @@ inline constexpr int kBundleSize = 16;
 // reach it as one batch of kBundleSize coherent rays at a time (nearby origins, aimed at one vertex
 // or at points along a short stretch of one edge), which BvhAccel traces as one packet whose rays
 // reach the same leaves together.
+// With `instance`, the accel is built over a scene that places the mesh once, as an instance
+// moved by that transform (make_accel's two-level structure), and each aimed ray is moved to world
+// space by it (direction not renormalised, so the aim's t stays valid); the traversal moves it
+// back into object space, with rounding, before the kernel sees it.
 struct LeakPath {
   std::optional<AccelKind> accel;
   bool bundles = false;
+  std::optional<Affine> instance;
 };
 
-// "kernel", or the accel's name ("brute", "bvh-single", "bvh"), plus " bundles" for bundles.
+// "kernel", or the accel's name ("brute", "bvh-single", "bvh"), plus " bundles" for bundles and
+// " instanced" for an instance.
 std::string leak_path_name(const LeakPath& path);
 
 // The report's rows: the kernel alone, then brute, bvh-single and bvh on the same scattered rays,
