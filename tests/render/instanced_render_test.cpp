@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "tritrace/accel/make_accel.h"
+#include "tritrace/dist/partial_film.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/path_integrator.h"
 #include "tritrace/render/renderer.h"
@@ -26,9 +27,10 @@ Affine diagonal(glm::vec3 s) {
   return a;
 }
 
-// The lab box with its two blocks (triangles 10 to 21 and 22 to 33) made prototypes, each placed
-// as it was and again mirrored or at half or double size: power-of-two scales of either sign
-// about the box's centre (the origin). Such a scale moves every coordinate by an exact factor, so
+// The lab box with its two blocks (triangles 10 to 19 and 20 to 29) made prototypes, each placed
+// as it was and again mirrored or at half size: one power of two on every axis, each axis's sign
+// free, about the box's centre (the origin). Such a scale moves every coordinate by an exact
+// factor (the same on every axis, so the watertight kernel picks the same axes), so
 // flattening and the rays' move into object space round nothing, and each kernel operation on the
 // scaled values gives the scaled result: the hits, shading points and shadow rays are those of
 // the flattened scene bit for bit. (A translation would not do: o - t rounds for the arbitrary
@@ -38,7 +40,7 @@ Scene instanced_lab_box(const Scene& box) {
   s.mesh = TriangleMesh();
   TriangleMesh blocks[2];
   for (uint32_t i = 0; i < box.mesh.size(); ++i) {
-    TriangleMesh& to = i < 10 || i >= 34 ? s.mesh : blocks[i < 22 ? 0 : 1];
+    TriangleMesh& to = i < 10 || i >= 30 ? s.mesh : blocks[i < 20 ? 0 : 1];
     to.add(box.mesh.vertex(i, 0), box.mesh.vertex(i, 1), box.mesh.vertex(i, 2),
            box.mesh.material()[i]);
   }
@@ -47,12 +49,13 @@ Scene instanced_lab_box(const Scene& box) {
   add_instance(s, 1, diagonal({1, 1, 1}));
   add_instance(s, 0, diagonal({-1, 1, 1}));       // mirrored across x = 0
   add_instance(s, 1, diagonal({0.5f, 0.5f, -0.5f}));  // half size, mirrored in z, floating
-  add_instance(s, 0, diagonal({0.5f, -0.25f, 2}));    // squashed, upside down
+  add_instance(s, 0, diagonal({0.5f, -0.5f, 0.5f}));  // half size, upside down
   return s;
 }
 
 TEST(InstancedRender, LabImageIsTheFlattenedScenesBitForBit) {
   const Scene s = instanced_lab_box(make_cornell_box({.width = 96, .height = 72, .yaw = 0.3}));
+  ASSERT_EQ(s.mesh.size(), 10u) << "the room stays in the scene's own mesh";
   const Scene flat = flattened(s);
   ASSERT_EQ(s.drawn_triangles(), flat.mesh.size());
   const LabIntegrator lab;
@@ -71,6 +74,7 @@ TEST(InstancedRender, LabImageIsTheFlattenedScenesBitForBit) {
 
 TEST(InstancedRender, PathImageIsTheFlattenedScenesBitForBit) {
   const Scene s = instanced_lab_box(make_cornell_area({.width = 40, .height = 30}));
+  ASSERT_EQ(s.mesh.size(), 12u) << "the room and the area light stay in the scene's own mesh";
   const Scene flat = flattened(s);
   const PathIntegrator pt_flat(flat), pt(s);
   const auto flat_accel = make_accel(AccelKind::kBvh, flat, kDefaultKernel);
@@ -78,6 +82,37 @@ TEST(InstancedRender, PathImageIsTheFlattenedScenesBitForBit) {
   const Image want = render(flat, *flat_accel, pt_flat, options);
   const auto accel = make_accel(AccelKind::kBvh, s, kDefaultKernel);
   EXPECT_TRUE(same_bits(want, render(s, *accel, pt, options)));
+}
+
+// Parts of one render are merged only when their identities agree: an instance's transform or a
+// prototype's vertex changes pixels, so each must change the identity.
+TEST(InstancedRender, TransformsAndPrototypesAreInTheRenderIdentity) {
+  const Scene s = instanced_lab_box(make_cornell_box({.width = 16, .height = 16}));
+  auto identity = [](const Scene& scene) {
+    return render_identity(scene, IntegratorSpec{}, RenderOptions{}, "bvh", "watertight", AovSet{})
+        .hash;
+  };
+  const std::string base = identity(s);
+  EXPECT_EQ(base, identity(instanced_lab_box(make_cornell_box({.width = 16, .height = 16}))));
+  Scene moved = s;
+  moved.instances[2].to_world.translation.x += 0x1p-20f;
+  EXPECT_NE(base, identity(moved));
+  Scene turned = s;
+  turned.instances[1].to_world.linear[0][1] = 0x1p-20f;
+  EXPECT_NE(base, identity(turned));
+  Scene other = s;
+  std::swap(other.instances[0].prototype, other.instances[1].prototype);
+  EXPECT_NE(base, identity(other));
+  Scene reshaped = s;
+  TriangleMesh& proto = reshaped.prototypes[0];
+  TriangleMesh changed;
+  for (uint32_t i = 0; i < proto.size(); ++i) {
+    glm::vec3 a = proto.vertex(i, 0);
+    if (i == 0) a.y += 0x1p-16f;
+    changed.add(a, proto.vertex(i, 1), proto.vertex(i, 2), proto.material()[i]);
+  }
+  proto = changed;
+  EXPECT_NE(base, identity(reshaped));
 }
 
 }  // namespace

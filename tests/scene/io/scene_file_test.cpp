@@ -279,7 +279,7 @@ TEST(SceneFileErrors, InstancesRulesHaveTheirMessages) {
   EXPECT_EQ(error_of(mesh + R"([{}, {}, {}, {"scale": 0}]}]})"),
             "/meshes/0/instances/3/scale: must not be zero");
   EXPECT_EQ(error_of(mesh + R"([{}, {"translate": [1, 2]}]}]})"),
-            "/meshes/0/instances/1/translate: must be an array of 3 numbers, got [1,2]");
+            "/meshes/0/instances/1/translate: must be an array of 3 numbers, got 2 elements");
   EXPECT_EQ(error_of(mesh + R"([{"scale": 1e-39}]}]})"),
             "/meshes/0/instances/0: the transform is not invertible");
 }
