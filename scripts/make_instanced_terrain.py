@@ -39,6 +39,7 @@ def main():
     scene = {
         "description": f"{args.terrain} placed "
                        f"{args.count} time(s) as instances (scripts/make_instanced_terrain.py).",
+        "lights": [{"position": [0, -0.5, -1.5], "power": [20, 20, 20]}],
         "integrator": {"type": "lab"},
         "meshes": [{"generator": args.terrain, "instances": instances}],
     }

@@ -251,8 +251,8 @@ int run_bench(const BenchArgs& args) {
         if (kind == AccelKind::kBrute) {
           const double rays_per_pixel = path ? kPathRaysPerSample * spec.spp : 2.0;
           const double estimate = rays_per_pixel * width * height *
-                                  static_cast<double>(scene.drawn_triangles()) * kBruteNsPerTest * 1e-9 /
-                                  threads;
+                                  static_cast<double>(scene.drawn_triangles()) * kBruteNsPerTest *
+                                  1e-9 / threads;
           if (estimate > kBruteBudgetSeconds) {
             char line[160];
             std::snprintf(

@@ -47,8 +47,7 @@ int run_info(const InfoArgs& args) {
     // Drawn counts every placement; stored counts each prototype once (what memory holds).
     std::printf("instances: %zu of %zu instanced meshes\n", s.instances.size(),
                 s.prototypes.size());
-    std::printf("triangles stored: %llu\n",
-                static_cast<unsigned long long>(s.stored_triangles()));
+    std::printf("triangles stored: %llu\n", static_cast<unsigned long long>(s.stored_triangles()));
   }
   std::printf("meshes: %zu\n", loaded.stats.meshes);
   std::printf("materials: %zu\n", s.materials.size());

@@ -10,8 +10,8 @@
 #include <cstring>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/matrix.hpp>
-#include <string>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "test_rays.h"
@@ -73,15 +73,14 @@ void expect_same_hits(const std::vector<Hit>& want, const std::vector<Hit>& got,
   ASSERT_EQ(want.size(), got.size());
   size_t differ = 0;
   for (size_t i = 0; i < want.size(); ++i) {
-    const bool same =
-        zero_sign_free
-            ? want[i].prim == got[i].prim &&
-                  std::memcmp(&want[i].t, &got[i].t, sizeof(float)) == 0 &&
-                  want[i].u == got[i].u && want[i].v == got[i].v
-            : std::memcmp(&want[i], &got[i], sizeof(Hit)) == 0;
+    const bool same = zero_sign_free ? want[i].prim == got[i].prim &&
+                                           std::memcmp(&want[i].t, &got[i].t, sizeof(float)) == 0 &&
+                                           want[i].u == got[i].u && want[i].v == got[i].v
+                                     : std::memcmp(&want[i], &got[i], sizeof(Hit)) == 0;
     if (!same && differ++ < 5) {
-      ADD_FAILURE() << what << ": ray " << i << ": t " << want[i].t << " u " << want[i].u << " v " << want[i].v << " prim " << want[i].prim << " vs u " << got[i].u << " v " << got[i].v
-                    << " vs t " << got[i].t << " prim " << got[i].prim;
+      ADD_FAILURE() << what << ": ray " << i << ": t " << want[i].t << " u " << want[i].u << " v "
+                    << want[i].v << " prim " << want[i].prim << " vs u " << got[i].u << " v "
+                    << got[i].v << " vs t " << got[i].t << " prim " << got[i].prim;
     }
   }
   EXPECT_EQ(differ, 0u) << what;

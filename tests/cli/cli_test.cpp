@@ -951,8 +951,8 @@ TEST_F(CliTest, InfoPrintsWhatWasLoaded) {
 TEST_F(CliTest, InfoCountsInstancesAndTrianglesDrawnAndStored) {
   const RunResult r = Run({"info", kScenes + "instances.json"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  for (const std::string line : {"triangles: 50\n", "instances: 5 of 1 instanced meshes\n",
-                                 "triangles stored: 34\n"}) {
+  for (const std::string line :
+       {"triangles: 50\n", "instances: 5 of 1 instanced meshes\n", "triangles stored: 34\n"}) {
     EXPECT_NE(r.out.find(line), std::string::npos) << line << " not in:\n" << r.out;
   }
 }

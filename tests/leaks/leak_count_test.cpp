@@ -204,7 +204,8 @@ TEST(LeakCount, DefaultKernelLeaksNothingThroughEveryAccel) {
 // still lets nothing through (it is watertight for any ray, and all triangles of a copy see the
 // same object-space ray), and the top level drops nothing.
 TEST(LeakCount, WatertightKernelLetsNoRayThroughInstancedCopies) {
-  const glm::mat3 rotation = glm::mat3(glm::rotate(glm::mat4(1.0f), 0.7f, glm::vec3(0.3f, -0.8f, 0.5f)));
+  const glm::mat3 rotation =
+      glm::mat3(glm::rotate(glm::mat4(1.0f), 0.7f, glm::vec3(0.3f, -0.8f, 0.5f)));
   std::vector<LeakRun> runs;
   for (const glm::vec3 scale : {glm::vec3(1.0f), glm::vec3(2.5f, -0.75f, 1.25f)}) {
     Affine a;

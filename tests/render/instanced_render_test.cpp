@@ -47,7 +47,7 @@ Scene instanced_lab_box(const Scene& box) {
   s.prototypes = {blocks[0], blocks[1]};
   add_instance(s, 0, diagonal({1, 1, 1}));
   add_instance(s, 1, diagonal({1, 1, 1}));
-  add_instance(s, 0, diagonal({-1, 1, 1}));       // mirrored across x = 0
+  add_instance(s, 0, diagonal({-1, 1, 1}));           // mirrored across x = 0
   add_instance(s, 1, diagonal({0.5f, 0.5f, -0.5f}));  // half size, mirrored in z, floating
   add_instance(s, 0, diagonal({0.5f, -0.5f, 0.5f}));  // half size, upside down
   return s;

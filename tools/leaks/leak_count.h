@@ -92,8 +92,9 @@ struct LeakRun {
 // A ray leaks when, from inside, it hits none of the triangles around the target (through an
 // accel: nothing at all, as with all_triangles), or, from outside, its closest hit is not at the
 // target (none, or one farther than 1e-5 relative, 1e-3 through an instance: it went in without
-// touching the surface and only hit the far side). Rays depend only on the seed, so they are the same for every kernel and path
-// (scattered and bundled rays are two sets), and the count is the same for any thread count.
+// touching the surface and only hit the far side). Rays depend only on the seed, so they are the
+// same for every kernel and path (scattered and bundled rays are two sets), and the count is the
+// same for any thread count.
 LeakCounts count_leaks(const IndexedMesh& mesh, Kernel kernel, const LeakOptions& options);
 LeakCounts count_leaks(const IndexedMesh& mesh, const LeakPath& path, Kernel kernel,
                        const LeakOptions& options);

@@ -60,12 +60,14 @@ InstancedAccel::InstancedAccel(const Scene& scene, const MeshAccelFactory& make_
   // origin and of the instance's coordinates, stretched by at most the transform's condition
   // number. Each box is grown by 2^-16 times that, far above the handful of ulps the rounding can
   // take, so the top level never drops an instance that the prototype's structure would hit.
+  std::vector<Bounds3> prototype_bounds;
+  for (const TriangleMesh& p : scene.prototypes) prototype_bounds.push_back(p.bounds());
   boxes_.reserve(scene.instances.size());
   origin_pad_.reserve(scene.instances.size());
   for (const Instance& inst : scene.instances) {
     const float cond =
         std::max(1.0f, norm_inf(inst.to_world.linear) * norm_inf(inst.to_object.linear));
-    Bounds3 b = instance_bounds(scene, inst);
+    Bounds3 b = instance_bounds(prototype_bounds[inst.prototype], inst);
     const float size = std::max({largest_magnitude(b.lo), largest_magnitude(b.hi),
                                  largest_magnitude(inst.to_world.translation)});
     const float pad = 0x1p-16f * cond * size;

@@ -49,9 +49,9 @@ class InstancedAccel final : public Accel {
   void for_each_candidate(const Ray& ray, TMax&& tmax, Visit&& visit) const;
 
   const Scene& scene_;
-  std::unique_ptr<Accel> mesh_accel_;                 // the scene's own mesh; null when empty
+  std::unique_ptr<Accel> mesh_accel_;  // the scene's own mesh; null when empty
   std::vector<std::unique_ptr<Accel>> prototype_accels_;
-  std::vector<Bounds3> boxes_;  // per instance, world space, padded for rounding (.cpp)
+  std::vector<Bounds3> boxes_;     // per instance, world space, padded for rounding (.cpp)
   std::vector<float> origin_pad_;  // per instance: padding per unit of the ray origin's size
   TopLevel top_;
   bvh::BinaryBvh tree_;

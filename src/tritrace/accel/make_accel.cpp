@@ -139,10 +139,10 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const Scene& scene, Kernel ker
     total.triangle_copy_bytes += one.triangle_copy_bytes;
     return accel;
   };
-  auto accel = std::make_unique<InstancedAccel>(scene, per_mesh,
-                                                kind == AccelKind::kBrute
-                                                    ? InstancedAccel::TopLevel::kBrute
-                                                    : InstancedAccel::TopLevel::kBvh);
+  auto accel =
+      std::make_unique<InstancedAccel>(scene, per_mesh,
+                                       kind == AccelKind::kBrute ? InstancedAccel::TopLevel::kBrute
+                                                                 : InstancedAccel::TopLevel::kBvh);
   total.structure_bytes += accel->top_level_bytes();
   total.build_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

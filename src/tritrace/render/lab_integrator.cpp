@@ -273,10 +273,9 @@ uint64_t LabIntegrator::radiance(const SampleBatch& batch, const SampleOutput& o
       // SIMD lanes' gathers from the mesh's arrays cannot do; the scalar function gives the same
       // bits (lab_shadow_rays).
       for (size_t i = 0; i < n; ++i) {
-        shadows[i] = hits[i].found()
-                         ? lab_shadow_ray(scene.triangle(hits[i].prim), hits[i], light.position,
-                                          offset_)
-                         : ShadowRay{};
+        shadows[i] = hits[i].found() ? lab_shadow_ray(scene.triangle(hits[i].prim), hits[i],
+                                                      light.position, offset_)
+                                     : ShadowRay{};
       }
     } else {
       lab_shadow_rays(scene.mesh, std::span<const Hit>(hits.data(), n), light.position, offset_,

@@ -137,8 +137,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
           if (ls.delta) {
             // Intensity / r^2 is the irradiance normal to the light's direction.
             contribution = throughput[i] * f * ls.radiance * (cos_theta / (dist2 * ls.pdf));
-            end = offset_ray_origin(ls.point, -wi,
-                                    triangle_extent(tri.e1, tri.e2), offset_);
+            end = offset_ray_origin(ls.point, -wi, triangle_extent(tri.e1, tri.e2), offset_);
           } else {
             const float weight =
                 mis ? power_heuristic(1.0f, ls.pdf, 1.0f, cosine_hemisphere_pdf(cos_theta)) : 1.0f;

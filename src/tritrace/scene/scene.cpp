@@ -102,8 +102,7 @@ void add_instance(Scene& scene, uint32_t prototype, const Affine& to_world) {
   scene.instances.push_back(inst);
 }
 
-Bounds3 instance_bounds(const Scene& scene, const Instance& instance) {
-  const Bounds3 b = scene.prototypes[instance.prototype].bounds();
+Bounds3 instance_bounds(const Bounds3& b, const Instance& instance) {
   Bounds3 out = Bounds3::empty();
   for (int corner = 0; corner < 8; ++corner) {
     const glm::vec3 p((corner & 1) ? b.hi.x : b.lo.x, (corner & 2) ? b.hi.y : b.lo.y,
@@ -115,7 +114,10 @@ Bounds3 instance_bounds(const Scene& scene, const Instance& instance) {
 
 Bounds3 scene_bounds(const Scene& scene) {
   Bounds3 b = scene.mesh.empty() ? Bounds3::empty() : scene.mesh.bounds();
-  for (const Instance& i : scene.instances) b.extend(instance_bounds(scene, i));
+  std::vector<Bounds3> prototype_bounds;
+  for (const TriangleMesh& p : scene.prototypes) prototype_bounds.push_back(p.bounds());
+  for (const Instance& i : scene.instances)
+    b.extend(instance_bounds(prototype_bounds[i.prototype], i));
   return b.is_empty() ? Bounds3{} : b;
 }
 

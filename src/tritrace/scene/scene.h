@@ -118,8 +118,10 @@ struct Scene {
 // kMaxDrawnTriangles or `to_world` is not invertible.
 void add_instance(Scene& scene, uint32_t prototype, const Affine& to_world);
 
-// The world box of an instance: its prototype's box with the eight corners moved to world space.
-Bounds3 instance_bounds(const Scene& scene, const Instance& instance);
+// The world box of an instance: its prototype's box (`prototype_bounds`, computed once per
+// prototype by the caller: a box costs a pass over the mesh) with the eight corners moved to
+// world space.
+Bounds3 instance_bounds(const Bounds3& prototype_bounds, const Instance& instance);
 // The box of everything the scene draws.
 Bounds3 scene_bounds(const Scene& scene);
 

@@ -272,7 +272,8 @@ TEST(SceneFileInstances, AGeneratedMeshCanBeInstancedAndTransformedFirst) {
 }
 
 TEST(SceneFileErrors, InstancesRulesHaveTheirMessages) {
-  const std::string mesh = R"({"meshes": [{"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2]], "instances": )";
+  const std::string mesh =
+      R"({"meshes": [{"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2]], "instances": )";
   EXPECT_EQ(error_of(mesh + "5}]}"), "/meshes/0/instances: must be a list of transforms, got 5");
   EXPECT_EQ(error_of(mesh + "[]}]}"),
             "/meshes/0/instances: must list at least one transform (an empty list draws nothing)");

@@ -366,9 +366,9 @@ class Parser {
     for (size_t k = 0; k < j.size(); ++k) {
       const Transform t = *parse_transform(j[k], where + "/" + std::to_string(k));
       Affine a;
-      a.linear = t.rotate * glm::mat3(glm::vec3(t.scale.x, 0.0f, 0.0f),
-                                      glm::vec3(0.0f, t.scale.y, 0.0f),
-                                      glm::vec3(0.0f, 0.0f, t.scale.z));
+      a.linear =
+          t.rotate * glm::mat3(glm::vec3(t.scale.x, 0.0f, 0.0f), glm::vec3(0.0f, t.scale.y, 0.0f),
+                               glm::vec3(0.0f, 0.0f, t.scale.z));
       a.translation = t.translate;
       out.push_back(a);
     }
@@ -381,9 +381,9 @@ class Parser {
     for (size_t i = 0; i < j.size(); ++i) {
       const std::string where = "/meshes/" + std::to_string(i);
       object(j[i], where);
-      check_keys(j[i], where,
-                 {"file", "generator", "positions", "triangles", "material", "transform",
-                  "instances"});
+      check_keys(
+          j[i], where,
+          {"file", "generator", "positions", "triangles", "material", "transform", "instances"});
       const int sources =
           static_cast<int>(j[i].contains("file")) + static_cast<int>(j[i].contains("generator")) +
           static_cast<int>(j[i].contains("positions") || j[i].contains("triangles"));
