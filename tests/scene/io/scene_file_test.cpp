@@ -255,8 +255,10 @@ TEST(SceneFileInstances, PlaceTheMeshOncePerTransformWithoutCopying) {
   EXPECT_EQ(flat.mesh.vertex(2, 1), glm::vec3(3, 0, 0));
   EXPECT_EQ(flat.mesh.vertex(3, 1), glm::vec3(2, 0, 5));
   EXPECT_EQ(flat.mesh.vertex(3, 2), glm::vec3(0, -1, 5));
-  // Mirrored by the negative scale: the normal still follows the vertex order's front, which the
-  // mirror turns from +z... to the side cross(e2, e1) gives for the moved vertices.
+  // The third copy is mirrored (scale -1 in y): normalize(cross(e2, e1)) of its moved vertices,
+  // by hand (0, -1, 0) x (2, 0, 0) = (0, 0, 2), so +z where the unmirrored copy faces -z: the
+  // inverse transpose's -z flipped by the negative determinant.
+  EXPECT_EQ(scene.triangle(3).normal, -scene.triangle(1).normal);
   EXPECT_EQ(scene.triangle(3).normal, flat.mesh.normal()[3]);
 }
 
