@@ -17,6 +17,10 @@ namespace tritrace::python {
 namespace {
 
 std::shared_ptr<SceneData> wrap(LoadedScene loaded, std::string source) {
+  // The module works on one triangle array (normals, counts and hits index it), so instances are
+  // copied out into it: the same triangles in the same numbering as the CLI's instanced render
+  // (Scene::triangle), at the memory of the copies.
+  if (loaded.scene.has_instances()) loaded.scene = flattened(loaded.scene);
   auto data = std::make_shared<SceneData>();
   data->camera = loaded.scene.camera;
   data->lights = loaded.scene.lights;

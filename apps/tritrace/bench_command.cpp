@@ -239,7 +239,7 @@ int run_bench(const BenchArgs& args) {
       for (const std::optional<Kernel> kernel : kernels) {
         Record r;
         r.scene = scene_name;
-        r.triangles = scene.mesh.size();
+        r.triangles = static_cast<size_t>(scene.drawn_triangles());
         r.accel = std::string(accel_name(kind));
         r.kernel = kernel ? std::string(kernel_name(*kernel)) : "embree";
         r.robust = kind == AccelKind::kEmbreeRobust;
@@ -251,8 +251,8 @@ int run_bench(const BenchArgs& args) {
         if (kind == AccelKind::kBrute) {
           const double rays_per_pixel = path ? kPathRaysPerSample * spec.spp : 2.0;
           const double estimate = rays_per_pixel * width * height *
-                                  static_cast<double>(scene.mesh.size()) * kBruteNsPerTest * 1e-9 /
-                                  threads;
+                                  static_cast<double>(scene.drawn_triangles()) * kBruteNsPerTest *
+                                  1e-9 / threads;
           if (estimate > kBruteBudgetSeconds) {
             char line[160];
             std::snprintf(
@@ -265,7 +265,7 @@ int run_bench(const BenchArgs& args) {
         AccelInfo info;
         // Embree ignores the kernel.
         const std::unique_ptr<Accel> accel =
-            make_accel(kind, scene.mesh, kernel.value_or(kDefaultKernel), &info);
+            make_accel(kind, scene, kernel.value_or(kDefaultKernel), &info);
         r.build_ms = info.build_ms;
         r.bytes_per_tri =
             static_cast<double>(info.structure_bytes) / std::max<size_t>(1, r.triangles);

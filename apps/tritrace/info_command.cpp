@@ -40,9 +40,15 @@ int run_info(const InfoArgs& args) {
   const LoadedScene loaded =
       args.file.empty() ? load_builtin_scene("cornell") : load_scene(args.file);
   const Scene& s = loaded.scene;
-  const Bounds3 b = s.mesh.bounds();
+  const Bounds3 b = scene_bounds(s);
   std::printf("file: %s\n", args.file.empty() ? "(built-in cornell)" : args.file.c_str());
-  std::printf("triangles: %zu\n", s.mesh.size());
+  std::printf("triangles: %llu\n", static_cast<unsigned long long>(s.drawn_triangles()));
+  if (s.has_instances()) {
+    // Drawn counts every placement; stored counts each prototype once (what memory holds).
+    std::printf("instances: %zu of %zu instanced meshes\n", s.instances.size(),
+                s.prototypes.size());
+    std::printf("triangles stored: %llu\n", static_cast<unsigned long long>(s.stored_triangles()));
+  }
   std::printf("meshes: %zu\n", loaded.stats.meshes);
   std::printf("materials: %zu\n", s.materials.size());
   std::printf("bounds: %s to %s\n", vec(b.lo).c_str(), vec(b.hi).c_str());
@@ -50,9 +56,14 @@ int run_info(const InfoArgs& args) {
   for (const PointLight& l : s.lights) {
     std::printf("  light at %s, power %s\n", vec(l.position).c_str(), vec(l.power).c_str());
   }
-  size_t emissive = 0;
-  for (size_t i = 0; i < s.mesh.size(); ++i) emissive += s.materials[s.mesh.material()[i]].emits();
-  std::printf("emissive triangles: %zu\n", emissive);
+  auto emissive_in = [&](const TriangleMesh& m) {
+    unsigned long long n = 0;
+    for (size_t i = 0; i < m.size(); ++i) n += s.materials[m.material()[i]].emits();
+    return n;
+  };
+  unsigned long long emissive = emissive_in(s.mesh);
+  for (const Instance& inst : s.instances) emissive += emissive_in(s.prototypes[inst.prototype]);
+  std::printf("emissive triangles: %llu\n", emissive);
   std::printf("ambient: %s\n", vec(s.ambient).c_str());
   const IntegratorSpec& spec = loaded.integrator;
   if (spec.kind == IntegratorSpec::Kind::kLab) {

@@ -152,7 +152,7 @@ void setup(const RenderArgs& args, RankSetup& s) {
   s.options.filter = filter_choice(args.scene);
   const AccelKind accel = accel_kind(args.scene);
   const Kernel kernel = kernel_choice(args.scene);
-  s.accel = make_accel(accel, scene.mesh, kernel);
+  s.accel = make_accel(accel, scene, kernel);
   s.integrator = make_integrator(s.spec, scene);
   s.aovs = aovs_of(args.aovs);
   s.identity =

@@ -270,8 +270,8 @@ int run_render(const RenderArgs& args) {
   render_options.seed = spec.seed;
   render_options.sampler = spec.sampler;
   render_options.filter = filter_choice(args.scene);
-  PhaseLine building(stderr, terminal, building_phase(accel_kind, scene.mesh.size()));
-  const std::unique_ptr<Accel> accel = make_accel(accel_kind, scene.mesh, kernel);
+  PhaseLine building(stderr, terminal, building_phase(accel_kind, scene.drawn_triangles()));
+  const std::unique_ptr<Accel> accel = make_accel(accel_kind, scene, kernel);
   building.done();
   const std::unique_ptr<Integrator> integrator = make_integrator(spec, scene);
   ProgressBar bar(stderr);

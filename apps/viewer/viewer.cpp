@@ -239,10 +239,11 @@ class Viewer {
         loaded_ = cli::load_scene_from(options_.scene, overrides);
         {
           const std::lock_guard<std::mutex> lock(mutex);
-          phase = cli::building_phase(cli::accel_kind(options_.scene), loaded_.scene.mesh.size());
+          phase =
+              cli::building_phase(cli::accel_kind(options_.scene), loaded_.scene.drawn_triangles());
           phase_start = Clock::now();
         }
-        accel_ = make_accel(cli::accel_kind(options_.scene), loaded_.scene.mesh,
+        accel_ = make_accel(cli::accel_kind(options_.scene), loaded_.scene,
                             cli::kernel_choice(options_.scene));
       } catch (...) {
         error = std::current_exception();
@@ -537,11 +538,11 @@ class Viewer {
                   last_times_.total(), last_times_.render, last_times_.convert, last_times_.upload,
                   last_times_.present, last_times_.events);
     char scene[256];
-    std::snprintf(scene, sizeof scene, "%dx%d, %zu triangles, %s, %s, %d threads, %.3g Mrays/s",
-                  image_.width(), image_.height(), loaded_.scene.mesh.size(),
-                  std::string(accel_name(cli::accel_kind(options_.scene))).c_str(),
-                  std::string(kernel_name(cli::kernel_choice(options_.scene))).c_str(), threads_,
-                  mrays_);
+    std::snprintf(
+        scene, sizeof scene, "%dx%d, %zu triangles, %s, %s, %d threads, %.3g Mrays/s",
+        image_.width(), image_.height(), static_cast<size_t>(loaded_.scene.drawn_triangles()),
+        std::string(accel_name(cli::accel_kind(options_.scene))).c_str(),
+        std::string(kernel_name(cli::kernel_choice(options_.scene))).c_str(), threads_, mrays_);
     std::string view = "yaw " + cli::format_double(image_view_.yaw) + " rad, distance " +
                        cli::format_float(image_view_.distance);
     if (image_view_.light) view += ", light " + cli::format_vec3(*image_view_.light);

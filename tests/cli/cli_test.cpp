@@ -946,6 +946,26 @@ TEST_F(CliTest, InfoPrintsWhatWasLoaded) {
   ExpectOnlyFiles(work_, {});
 }
 
+// scenes/instances.json: the 30-triangle box drawn once, the 4-triangle tetrahedron stored once
+// and placed five times.
+TEST_F(CliTest, InfoCountsInstancesAndTrianglesDrawnAndStored) {
+  const RunResult r = Run({"info", kScenes + "instances.json"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  for (const std::string line :
+       {"triangles: 50\n", "instances: 5 of 1 instanced meshes\n", "triangles stored: 34\n"}) {
+    EXPECT_NE(r.out.find(line), std::string::npos) << line << " not in:\n" << r.out;
+  }
+}
+
+TEST_F(CliTest, EmbreeRefusesAnInstancedSceneInOneLine) {
+  const RunResult r = Run({"render", kScenes + "instances.json", "--accel", "embree", "--width",
+                           "8", "--height", "8", "-o", "x.png"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_EQ(r.err.rfind("tritrace: --accel: ", 0), 0u) << r.err;
+  ExpectOnlyFiles(work_, {});
+}
+
 TEST_F(CliTest, InfoCountsTheStlHeadersTriangles) {
   // The binary STL header's triangle count, read here independently of assimp.
   const std::string bytes = ReadFile(kModels + "STL/Spider_binary.stl");

@@ -174,3 +174,12 @@ def test_from_arrays_materials_colour_the_triangles():
                            aovs=("albedo",), position=(0, 0, -4), look_at=(0, 0, 0),
                            up=(0, 1, 0)).albedo[8, 8]
     np.testing.assert_array_equal(grey, np.float32([0.6, 0.6, 0.6]))
+
+
+def test_instances_are_copied_out_into_one_mesh():
+    # scenes/instances.json: the 30-triangle box once and a 4-triangle tetrahedron placed five
+    # times; the module copies the instances out (in the CLI's triangle numbering), drops none.
+    scene = tritrace.load(REPO / "scenes" / "instances.json")
+    assert scene.triangle_count == 30 + 5 * 4
+    frame = tritrace.render(scene, width=32, height=24)
+    assert frame.image.shape == (24, 32, 3) and frame.image.max() > 0

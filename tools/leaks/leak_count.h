@@ -23,6 +23,9 @@ struct LeakCounts {
   uint64_t inside_rays = 0, inside_leaks = 0;    // origin inside: any hit is the exit
   uint64_t outside_rays = 0, outside_leaks = 0;  // origin outside: the first hit must be the entry
   uint64_t vertex_rays = 0, vertex_leaks = 0;    // aimed at a vertex (the rest at edge points)
+  // Through an instance only: outside rays that missed the whole mesh, not counted as leaks
+  // (run_chunk in leak_count.cpp says why).
+  uint64_t grazing_misses = 0;
 
   LeakCounts& operator+=(const LeakCounts& o);
   bool operator==(const LeakCounts&) const = default;
@@ -50,12 +53,18 @@ inline constexpr int kBundleSize = 16;
 // reach it as one batch of kBundleSize coherent rays at a time (nearby origins, aimed at one vertex
 // or at points along a short stretch of one edge), which BvhAccel traces as one packet whose rays
 // reach the same leaves together.
+// With `instance`, the accel is built over a scene that places the mesh once, as an instance
+// moved by that transform (make_accel's two-level structure), and each aimed ray is moved to world
+// space by it (direction not renormalised, so the aim's t stays valid); the traversal moves it
+// back into object space, with rounding, before the kernel sees it.
 struct LeakPath {
   std::optional<AccelKind> accel;
   bool bundles = false;
+  std::optional<Affine> instance = std::nullopt;
 };
 
-// "kernel", or the accel's name ("brute", "bvh-single", "bvh"), plus " bundles" for bundles.
+// "kernel", or the accel's name ("brute", "bvh-single", "bvh"), plus " bundles" for bundles and
+// " instanced" for an instance.
 std::string leak_path_name(const LeakPath& path);
 
 // The report's rows: the kernel alone, then brute, bvh-single and bvh on the same scattered rays,
@@ -82,9 +91,10 @@ struct LeakRun {
 //
 // A ray leaks when, from inside, it hits none of the triangles around the target (through an
 // accel: nothing at all, as with all_triangles), or, from outside, its closest hit is not at the
-// target (none, or one farther than 1e-5 relative: it went in without touching the surface and only
-// hit the far side). Rays depend only on the seed, so they are the same for every kernel and path
-// (scattered and bundled rays are two sets), and the count is the same for any thread count.
+// target (none, or one farther than 1e-5 relative, 1e-3 through an instance: it went in without
+// touching the surface and only hit the far side). Rays depend only on the seed, so they are the
+// same for every kernel and path (scattered and bundled rays are two sets), and the count is the
+// same for any thread count.
 LeakCounts count_leaks(const IndexedMesh& mesh, Kernel kernel, const LeakOptions& options);
 LeakCounts count_leaks(const IndexedMesh& mesh, const LeakPath& path, Kernel kernel,
                        const LeakOptions& options);

@@ -6,6 +6,7 @@
 
 #include "tritrace/accel/brute_force.h"
 #include "tritrace/accel/bvh/bvh_accel.h"
+#include "tritrace/accel/instanced_accel.h"
 #include "tritrace/error.h"
 #if TRITRACE_HAVE_EMBREE
 #include <embree3/rtcore_config.h>
@@ -118,6 +119,34 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kern
   local.build_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (info) *info = local;
+  return accel;
+}
+
+std::unique_ptr<Accel> make_accel(AccelKind kind, const Scene& scene, Kernel kernel,
+                                  AccelInfo* info) {
+  if (!scene.has_instances()) return make_accel(kind, scene.mesh, kernel, info);
+  if (is_embree(kind)) {
+    throw Error("--accel", std::string(accel_name(kind)) +
+                               ": instanced scenes are not supported by the Embree backend (use "
+                               "bvh or brute)");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  AccelInfo total;
+  auto per_mesh = [&](const TriangleMesh& mesh) {
+    AccelInfo one;
+    std::unique_ptr<Accel> accel = make_accel(kind, mesh, kernel, &one);
+    total.structure_bytes += one.structure_bytes;
+    total.triangle_copy_bytes += one.triangle_copy_bytes;
+    return accel;
+  };
+  auto accel =
+      std::make_unique<InstancedAccel>(scene, per_mesh,
+                                       kind == AccelKind::kBrute ? InstancedAccel::TopLevel::kBrute
+                                                                 : InstancedAccel::TopLevel::kBvh);
+  total.structure_bytes += accel->top_level_bytes();
+  total.build_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (info) *info = total;
   return accel;
 }
 

@@ -10,6 +10,7 @@
 #include "tritrace/accel/accel.h"
 #include "tritrace/geometry/intersect.h"
 #include "tritrace/geometry/triangle_mesh.h"
+#include "tritrace/scene/scene.h"
 
 namespace tritrace {
 
@@ -45,6 +46,13 @@ struct AccelInfo {
 // Builds the structure over `mesh` (which must outlive it). The kernel applies to brute and bvh;
 // Embree uses its own. Throws Error(name, reason) when the backend is not built in.
 std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kernel kernel,
+                                  AccelInfo* info = nullptr);
+
+// The structure for a whole scene (which must outlive it): make_accel over scene.mesh when it has
+// no instances, else an InstancedAccel with one structure of `kind` per prototype (brute: every
+// instance in turn, the oracle; bvh, bvh-single: a binned SAH tree over the instances). Embree
+// backends refuse instanced scenes: Error("--accel", ...).
+std::unique_ptr<Accel> make_accel(AccelKind kind, const Scene& scene, Kernel kernel,
                                   AccelInfo* info = nullptr);
 
 }  // namespace tritrace

@@ -239,6 +239,18 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
   h.add_vector(m.v1());
   h.add_vector(m.v2());
   h.add_vector(m.material());
+  // Only a scene with instances adds these, so every other scene keeps its identity.
+  for (const TriangleMesh& p : scene.prototypes) {
+    h.add_vector(p.v0());
+    h.add_vector(p.v1());
+    h.add_vector(p.v2());
+    h.add_vector(p.material());
+  }
+  for (const Instance& inst : scene.instances) {
+    h.add_value(inst.prototype);
+    for (int c = 0; c < 3; ++c) h.add_value(inst.to_world.linear[c]);
+    h.add_value(inst.to_world.translation);
+  }
   for (const Material& mat : scene.materials) {
     h.add_value(mat.albedo);
     h.add_value(mat.emission);

@@ -12,12 +12,12 @@ void write_first_hit_aovs(const Scene& scene, std::span<const Ray> rays, std::sp
     const Hit& h = hits[i];
     if (!out.albedo.empty()) {
       out.albedo[i] =
-          h.found() ? scene.materials[scene.mesh.material()[h.prim]].albedo : glm::vec3(0.0f);
+          h.found() ? scene.materials[scene.material_of(h.prim)].albedo : glm::vec3(0.0f);
     }
     if (!out.normal.empty()) {
       glm::vec3 n(0.0f);
       if (h.found()) {
-        n = scene.mesh.normal()[h.prim];
+        n = scene.triangle(h.prim).normal;
         if (glm::dot(n, rays[i].dir) > 0.0f) n = -n;
       }
       out.normal[i] = n;

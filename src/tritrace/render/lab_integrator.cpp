@@ -30,17 +30,21 @@ Scratch& thread_scratch() {
 
 ShadowRay lab_shadow_ray(const TriangleMesh& mesh, const Hit& hit, glm::vec3 light,
                          const RayOffsetParams& offset) {
+  return lab_shadow_ray(stored_triangle(mesh, hit.prim), hit, light, offset);
+}
+
+ShadowRay lab_shadow_ray(const SurfaceTriangle& tri, const Hit& hit, glm::vec3 light,
+                         const RayOffsetParams& offset) {
   ShadowRay s;
-  const uint32_t prim = hit.prim;
-  const glm::vec3 e1 = mesh.e1()[prim], e2 = mesh.e2()[prim];
+  const glm::vec3 e1 = tri.e1, e2 = tri.e2;
   // From the barycentrics rather than origin + t * dir: the error is then relative to the
   // triangle's own coordinates, not to the distance the primary ray travelled.
-  const glm::vec3 x = mesh.v0()[prim] + hit.u * e1 + hit.v * e2;
+  const glm::vec3 x = tri.v0 + hit.u * e1 + hit.v * e2;
   const glm::vec3 r = light - x;
   s.dist2 = glm::dot(r, r);
   const float dist = std::sqrt(s.dist2);
   const glm::vec3 dir = r / dist;
-  const glm::vec3 normal = mesh.normal()[prim];
+  const glm::vec3 normal = tri.normal;
   s.cos_theta = glm::dot(dir, normal);
   // Facing away (or the hit sits on the light): no direct light, no shadow ray needed.
   if (!(s.cos_theta > 0.0f) || !(dist > 0.0f)) return s;
@@ -50,7 +54,7 @@ ShadowRay lab_shadow_ray(const TriangleMesh& mesh, const Hit& hit, glm::vec3 lig
   // So the point first moves the same way towards its triangle's centroid, off every edge's
   // neighbour, then off its own surface.
   const float extent = triangle_extent(e1, e2);
-  const glm::vec3 inward = mesh.v0()[prim] + (e1 + e2) / 3.0f - x;
+  const glm::vec3 inward = tri.v0 + (e1 + e2) / 3.0f - x;
   const float inward_length = std::sqrt(glm::dot(inward, inward));
   const glm::vec3 inside =
       inward_length > 0.0f ? offset_ray_origin(x, inward / inward_length, extent, offset) : x;
@@ -264,8 +268,19 @@ uint64_t LabIntegrator::radiance(const SampleBatch& batch, const SampleOutput& o
 
   std::span<ShadowRay> shadows = std::span(scratch.shadows).first(n);
   for (const PointLight& light : scene.lights) {
-    lab_shadow_rays(scene.mesh, std::span<const Hit>(hits.data(), n), light.position, offset_,
-                    shadows);
+    if (scene.has_instances()) {
+      // An instanced hit's triangle is made in world space per hit (Scene::triangle), which the
+      // SIMD lanes' gathers from the mesh's arrays cannot do; the scalar function gives the same
+      // bits (lab_shadow_rays).
+      for (size_t i = 0; i < n; ++i) {
+        shadows[i] = hits[i].found() ? lab_shadow_ray(scene.triangle(hits[i].prim), hits[i],
+                                                      light.position, offset_)
+                                     : ShadowRay{};
+      }
+    } else {
+      lab_shadow_rays(scene.mesh, std::span<const Hit>(hits.data(), n), light.position, offset_,
+                      shadows);
+    }
     size_t m = 0;
     for (size_t i = 0; i < n; ++i) {
       const ShadowRay& shadow = shadows[i];
@@ -292,7 +307,7 @@ uint64_t LabIntegrator::radiance(const SampleBatch& batch, const SampleOutput& o
       radiance[i] = glm::vec3(0.0f);
       continue;
     }
-    const glm::vec3& albedo = scene.materials[scene.mesh.material()[hits[i].prim]].albedo;
+    const glm::vec3& albedo = scene.materials[scene.material_of(hits[i].prim)].albedo;
     radiance[i] = albedo * (direct[i] + scene.ambient);
   }
   write_first_hit_aovs(scene, rays, std::span<const Hit>(hits.data(), n), out);

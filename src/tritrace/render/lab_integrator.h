@@ -7,6 +7,7 @@
 #include "tritrace/geometry/triangle_mesh.h"
 #include "tritrace/math/offset_ray.h"
 #include "tritrace/render/integrator.h"
+#include "tritrace/scene/scene.h"
 
 namespace tritrace {
 
@@ -28,6 +29,9 @@ struct ShadowRay {
   float dist2 = 0.0f;      // squared distance from the hit point to the light
 };
 ShadowRay lab_shadow_ray(const TriangleMesh& mesh, const Hit& hit, glm::vec3 light,
+                         const RayOffsetParams& offset = {});
+// The same for a triangle given in world space (an instanced one: Scene::triangle).
+ShadowRay lab_shadow_ray(const SurfaceTriangle& tri, const Hit& hit, glm::vec3 light,
                          const RayOffsetParams& offset = {});
 
 // lab_shadow_ray for each hit of a batch, out[i] for hits[i] (a missed ray gets a default

@@ -29,14 +29,14 @@ Scratch& thread_scratch() {
   return scratch;
 }
 
-// A point on triangle `prim` moved off it towards the side `n` (its normal, facing the way the ray
+// A point on triangle `tri` moved off it towards the side `n` (its normal, facing the way the ray
 // leaves), first towards the centroid (a point on an edge lies on the neighbour's plane too) then
 // off the surface, as the lab's shadow rays start (lab_integrator.cpp; Wächter and Binder 2019).
-glm::vec3 leave_surface(const TriangleMesh& mesh, uint32_t prim, glm::vec3 x, glm::vec3 n,
+glm::vec3 leave_surface(const SurfaceTriangle& tri, glm::vec3 x, glm::vec3 n,
                         const RayOffsetParams& offset) {
-  const glm::vec3 e1 = mesh.e1()[prim], e2 = mesh.e2()[prim];
+  const glm::vec3 e1 = tri.e1, e2 = tri.e2;
   const float extent = triangle_extent(e1, e2);
-  const glm::vec3 inward = mesh.v0()[prim] + (e1 + e2) / 3.0f - x;
+  const glm::vec3 inward = tri.v0 + (e1 + e2) / 3.0f - x;
   const float inward_length = std::sqrt(glm::dot(inward, inward));
   const glm::vec3 inside =
       inward_length > 0.0f ? offset_ray_origin(x, inward * (1.0f / inward_length), extent, offset)
@@ -97,10 +97,12 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       const float u_light = u_choice.x, u_roulette = u_choice.y;
 
       const uint32_t prim = hit.prim;
-      const Material& material = scene.materials[mesh.material()[prim]];
-      const glm::vec3 x = mesh.v0()[prim] + hit.u * mesh.e1()[prim] + hit.v * mesh.e2()[prim];
+      // In world space: an instanced triangle is moved there here (Scene::triangle).
+      const SurfaceTriangle tri = scene.triangle(prim);
+      const Material& material = scene.materials[tri.material];
+      const glm::vec3 x = tri.v0 + hit.u * tri.e1 + hit.v * tri.e2;
       const glm::vec3 wo = -scratch.rays[k].dir;
-      const glm::vec3 n_lab = mesh.normal()[prim];
+      const glm::vec3 n_lab = tri.normal;
 
       if (material.emits()) {
         const glm::vec3 le = emitted_radiance(material, n_lab, wo);
@@ -119,7 +121,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       // The side the path arrived from: the two-sided surface reflects there, and both the shadow
       // ray and the bounce leave from that side.
       const glm::vec3 n = glm::dot(n_lab, wo) >= 0.0f ? n_lab : -n_lab;
-      const glm::vec3 start = leave_surface(mesh, prim, x, n, offset_);
+      const glm::vec3 start = leave_surface(tri, x, n, offset_);
       const glm::vec3 f = material.albedo * kInvPi;  // Lambert
       if (!lights_.empty()) {
         LightSample ls = lights_.sample(scene, x, u_light, u_light_point);
@@ -135,8 +137,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
           if (ls.delta) {
             // Intensity / r^2 is the irradiance normal to the light's direction.
             contribution = throughput[i] * f * ls.radiance * (cos_theta / (dist2 * ls.pdf));
-            end = offset_ray_origin(ls.point, -wi,
-                                    triangle_extent(mesh.e1()[prim], mesh.e2()[prim]), offset_);
+            end = offset_ray_origin(ls.point, -wi, triangle_extent(tri.e1, tri.e2), offset_);
           } else {
             const float weight =
                 mis ? power_heuristic(1.0f, ls.pdf, 1.0f, cosine_hemisphere_pdf(cos_theta)) : 1.0f;

@@ -9,6 +9,14 @@ Scene transformed(const Scene& scene, const Similarity& xf) {
   for (size_t i = 0; i < m.size(); ++i) {
     out.mesh.add(xf.apply(m.v0()[i]), xf.apply(m.v1()[i]), xf.apply(m.v2()[i]), m.material()[i]);
   }
+  // Instances keep their prototypes; the similarity is composed into each placement.
+  out.prototypes = scene.prototypes;
+  for (const Instance& inst : scene.instances) {
+    Affine a = inst.to_world;
+    a.linear *= xf.scale;
+    a.translation = xf.apply(a.translation);
+    add_instance(out, inst.prototype, a);
+  }
   out.materials = scene.materials;
   for (const PointLight& light : scene.lights) {
     out.lights.push_back({xf.apply(light.position), light.power * (xf.scale * xf.scale)});

@@ -16,10 +16,10 @@ struct Similarity {
   glm::vec3 apply(glm::vec3 p) const { return scale * p + translation; }
 };
 
-// Every vertex, light position and the camera position moved by `xf`; the camera keeps its
-// orientation and focal length. Light power is multiplied by scale^2, so that the inverse-square
-// falloff leaves the direct light at corresponding points unchanged: the image is the same up to
-// rounding.
+// Every vertex, instance placement, light position and the camera position moved by `xf`; the
+// camera keeps its orientation and focal length. Light power is multiplied by scale^2, so that the
+// inverse-square falloff leaves the direct light at corresponding points unchanged: the image is
+// the same up to rounding.
 Scene transformed(const Scene& scene, const Similarity& xf);
 
 }  // namespace tritrace

@@ -232,3 +232,60 @@ TEST(EditDistance, CountsInsertionsDeletionsAndSubstitutions) {
 
 }  // namespace
 }  // namespace tritrace
+
+namespace tritrace {
+namespace {
+
+// One triangle placed three times: stored once, drawn three times, each copy where "transform"
+// would have put it.
+TEST(SceneFileInstances, PlaceTheMeshOncePerTransformWithoutCopying) {
+  const LoadedScene s = parse(R"({"meshes": [
+      {"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2]]},
+      {"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2]],
+       "instances": [{}, {"translate": [2, 0, 0]}, {"scale": [2, -1, 1], "translate": [0, 0, 5]}]}]})");
+  const Scene& scene = s.scene;
+  EXPECT_EQ(scene.mesh.size(), 1u);
+  ASSERT_EQ(scene.prototypes.size(), 1u);
+  EXPECT_EQ(scene.prototypes[0].size(), 1u);
+  ASSERT_EQ(scene.instances.size(), 3u);
+  EXPECT_EQ(scene.drawn_triangles(), 4u);
+  EXPECT_EQ(scene.stored_triangles(), 2u);
+  const Scene flat = flattened(scene);
+  ASSERT_EQ(flat.mesh.size(), 4u);
+  EXPECT_EQ(flat.mesh.vertex(2, 1), glm::vec3(3, 0, 0));
+  EXPECT_EQ(flat.mesh.vertex(3, 1), glm::vec3(2, 0, 5));
+  EXPECT_EQ(flat.mesh.vertex(3, 2), glm::vec3(0, -1, 5));
+  // The third copy is mirrored (scale -1 in y): normalize(cross(e2, e1)) of its moved vertices,
+  // by hand (0, -1, 0) x (2, 0, 0) = (0, 0, 2), so +z where the unmirrored copy faces -z: the
+  // inverse transpose's -z flipped by the negative determinant.
+  EXPECT_EQ(scene.triangle(3).normal, -scene.triangle(1).normal);
+  EXPECT_EQ(scene.triangle(3).normal, flat.mesh.normal()[3]);
+}
+
+TEST(SceneFileInstances, AGeneratedMeshCanBeInstancedAndTransformedFirst) {
+  const LoadedScene s = parse(R"({"meshes": [{"generator": "cornell",
+      "transform": {"scale": 0.5}, "instances": [{"translate": [-1, 0, 0]}, {"translate": [1, 0, 0]}]}]})");
+  EXPECT_TRUE(s.scene.mesh.empty());
+  ASSERT_EQ(s.scene.prototypes.size(), 1u);
+  EXPECT_EQ(s.scene.instances.size(), 2u);
+  const Bounds3 b = scene_bounds(s.scene);
+  EXPECT_FLOAT_EQ(b.lo.x, -1.5f);
+  EXPECT_FLOAT_EQ(b.hi.x, 1.5f);
+}
+
+TEST(SceneFileErrors, InstancesRulesHaveTheirMessages) {
+  const std::string mesh =
+      R"({"meshes": [{"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,2]], "instances": )";
+  EXPECT_EQ(error_of(mesh + "5}]}"), "/meshes/0/instances: must be a list of transforms, got 5");
+  EXPECT_EQ(error_of(mesh + "[]}]}"),
+            "/meshes/0/instances: must list at least one transform (an empty list draws nothing)");
+  EXPECT_EQ(error_of(mesh + R"([{}, {}, {}, {"scale": 0}]}]})"),
+            "/meshes/0/instances/3/scale: must not be zero");
+  EXPECT_EQ(error_of(mesh + R"([{}, {"translate": [1, 2]}]}]})"),
+            "/meshes/0/instances/1/translate: must be an array of 3 numbers, got 2 elements");
+  EXPECT_EQ(error_of(mesh + R"([{"scale": 1e-39}]}]})"),
+            "/meshes/0/instances/0: the transform is not invertible");
+}
+
+}  // namespace
+}  // namespace tritrace

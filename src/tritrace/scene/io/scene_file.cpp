@@ -339,9 +339,13 @@ class Parser {
     return t;
   }
 
+  // Where the current mesh's triangles go: the scene's mesh, or a prototype when it has
+  // "instances".
+  TriangleMesh& target() { return target_ ? *target_ : out_.scene.mesh; }
+
   void add(glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t material,
            const std::optional<Transform>& t, const std::string& where) {
-    if (out_.scene.mesh.size() >= kMaxSceneTriangles) {
+    if (stored_triangles_ >= kMaxSceneTriangles) {
       fail(where, "the scene has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
     }
     if (t) {
@@ -349,7 +353,26 @@ class Parser {
       b = t->apply(b);
       c = t->apply(c);
     }
-    add_checked(out_.scene.mesh, a, b, c, material, out_.stats);
+    stored_triangles_ += add_checked(target(), a, b, c, material, out_.stats) ? 1 : 0;
+  }
+
+  // "instances": a list of transforms, each placing the mesh once: to_world p = T + R (S p), the
+  // "transform" object's meaning.
+  std::vector<Affine> parse_instances(const Json& j, const std::string& where) const {
+    if (!j.is_array()) fail(where, "must be a list of transforms, got " + describe(j));
+    if (j.empty()) fail(where, "must list at least one transform (an empty list draws nothing)");
+    std::vector<Affine> out;
+    out.reserve(j.size());
+    for (size_t k = 0; k < j.size(); ++k) {
+      const Transform t = *parse_transform(j[k], where + "/" + std::to_string(k));
+      Affine a;
+      a.linear =
+          t.rotate * glm::mat3(glm::vec3(t.scale.x, 0.0f, 0.0f), glm::vec3(0.0f, t.scale.y, 0.0f),
+                               glm::vec3(0.0f, 0.0f, t.scale.z));
+      a.translation = t.translate;
+      out.push_back(a);
+    }
+    return out;
   }
 
   void parse_meshes(const Json& j) {
@@ -358,8 +381,9 @@ class Parser {
     for (size_t i = 0; i < j.size(); ++i) {
       const std::string where = "/meshes/" + std::to_string(i);
       object(j[i], where);
-      check_keys(j[i], where,
-                 {"file", "generator", "positions", "triangles", "material", "transform"});
+      check_keys(
+          j[i], where,
+          {"file", "generator", "positions", "triangles", "material", "transform", "instances"});
       const int sources =
           static_cast<int>(j[i].contains("file")) + static_cast<int>(j[i].contains("generator")) +
           static_cast<int>(j[i].contains("positions") || j[i].contains("triangles"));
@@ -375,6 +399,13 @@ class Parser {
       if (j[i].contains("transform"))
         transform = parse_transform(j[i]["transform"], where + "/transform");
 
+      std::vector<Affine> placements;
+      if (j[i].contains("instances")) {
+        placements = parse_instances(j[i]["instances"], where + "/instances");
+        out_.scene.prototypes.emplace_back();
+        target_ = &out_.scene.prototypes.back();
+      }
+
       if (j[i].contains("file")) {
         add_file(j[i]["file"], where + "/file", material, transform);
       } else if (j[i].contains("generator")) {
@@ -382,9 +413,24 @@ class Parser {
       } else {
         add_inline(j[i], where, material ? *material : default_material(), transform);
       }
+      if (target_) {
+        target_ = nullptr;
+        if (out_.scene.prototypes.back().empty()) {
+          out_.scene.prototypes.pop_back();  // every triangle dropped: nothing to place
+        } else {
+          const uint32_t prototype = static_cast<uint32_t>(out_.scene.prototypes.size() - 1);
+          for (size_t k = 0; k < placements.size(); ++k) {
+            try {
+              add_instance(out_.scene, prototype, placements[k]);
+            } catch (const Error& e) {
+              fail(where + "/instances/" + std::to_string(k), e.reason());
+            }
+          }
+        }
+      }
       ++out_.stats.meshes;
     }
-    if (out_.scene.mesh.empty()) {
+    if (out_.scene.mesh.empty() && out_.scene.instances.empty()) {
       fail("", "no geometry: every triangle was degenerate or non-finite (" +
                    std::to_string(out_.stats.dropped_degenerate) + " degenerate, " +
                    std::to_string(out_.stats.dropped_non_finite) + " non-finite)");
@@ -449,7 +495,11 @@ class Parser {
     const TriangleMesh& g = generated->mesh;
     if (!t && !material) {
       // Copied as stored, so that a generated scene is bit-identical to the built-in one.
-      out_.scene.mesh.append(g, offset);
+      if (stored_triangles_ + g.size() > kMaxSceneTriangles) {
+        fail(where, "the scene has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
+      }
+      target().append(g, offset);
+      stored_triangles_ += g.size();
       return;
     }
     for (size_t k = 0; k < g.size(); ++k) {
@@ -549,6 +599,8 @@ class Parser {
   LoadedScene out_;
   std::map<std::string, uint32_t> named_;
   std::optional<uint32_t> default_material_;
+  TriangleMesh* target_ = nullptr;
+  size_t stored_triangles_ = 0;
 };
 
 }  // namespace

@@ -1,0 +1,139 @@
+// Instances: their triangle numbering, their world-space triangles and boxes, and flattening.
+#include "tritrace/scene/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <glm/geometric.hpp>
+#include <string>
+
+#include "tritrace/error.h"
+
+namespace tritrace {
+
+Affine inverse(const Affine& a) {
+  // Cofactors in double: the inverse of a float matrix, rounded once per entry.
+  double m[3][3];
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) m[r][c] = a.linear[c][r];
+  }
+  const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                     m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+  double inv[3][3];
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      // inv = adj / det, adj[r][c] = cofactor of m[c][r].
+      const int r1 = (c + 1) % 3, r2 = (c + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
+      inv[r][c] = (m[r1][c1] * m[r2][c2] - m[r1][c2] * m[r2][c1]) / det;
+    }
+  }
+  Affine out;
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) out.linear[c][r] = static_cast<float>(inv[r][c]);
+  }
+  for (int r = 0; r < 3; ++r) {
+    double t = 0.0;
+    for (int c = 0; c < 3; ++c) t -= inv[r][c] * a.translation[c];
+    out.translation[r] = static_cast<float>(t);
+  }
+  return out;
+}
+
+uint64_t Scene::drawn_triangles() const {
+  uint64_t n = mesh.size();
+  for (const Instance& i : instances) n += prototypes[i.prototype].size();
+  return n;
+}
+
+uint64_t Scene::stored_triangles() const {
+  uint64_t n = mesh.size();
+  for (const TriangleMesh& p : prototypes) n += p.size();
+  return n;
+}
+
+const Instance& Scene::instance_of(uint32_t prim) const {
+  // The last instance whose first triangle is at or before prim.
+  const auto it = std::upper_bound(instances.begin(), instances.end(), prim,
+                                   [](uint32_t p, const Instance& i) { return p < i.first_prim; });
+  return *(it - 1);
+}
+
+SurfaceTriangle Scene::instanced_triangle(uint32_t prim) const {
+  const Instance& inst = instance_of(prim);
+  const TriangleMesh& proto = prototypes[inst.prototype];
+  const uint32_t k = prim - inst.first_prim;
+  // TriangleMesh::add's arithmetic on the world vertices, so flattened() stores the same bits.
+  const glm::vec3 a = inst.to_world.apply(proto.v0()[k]);
+  const glm::vec3 b = inst.to_world.apply(proto.v1()[k]);
+  const glm::vec3 c = inst.to_world.apply(proto.v2()[k]);
+  SurfaceTriangle t;
+  t.v0 = a;
+  t.e1 = b - a;
+  t.e2 = c - a;
+  const glm::vec3 n = glm::cross(t.e2, t.e1);
+  const float len = glm::length(n);
+  t.normal = len > 0.0f ? n / len : glm::vec3(0.0f);
+  t.material = proto.material()[k];
+  return t;
+}
+
+void add_instance(Scene& scene, uint32_t prototype, const Affine& to_world) {
+  const uint64_t drawn = scene.drawn_triangles();
+  const uint64_t added = scene.prototypes.at(prototype).size();
+  if (drawn + added > kMaxDrawnTriangles) {
+    throw Error("instances", "the scene would draw more than " +
+                                 std::to_string(kMaxDrawnTriangles) + " triangles");
+  }
+  Instance inst;
+  inst.prototype = prototype;
+  inst.to_world = to_world;
+  inst.to_object = inverse(to_world);
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) {
+      if (!std::isfinite(inst.to_object.linear[c][r]) || !std::isfinite(to_world.linear[c][r])) {
+        throw Error("instances", "the transform is not invertible");
+      }
+    }
+    if (!std::isfinite(inst.to_object.translation[c]) || !std::isfinite(to_world.translation[c])) {
+      throw Error("instances", "the transform is not invertible");
+    }
+  }
+  inst.first_prim = static_cast<uint32_t>(drawn);
+  scene.instances.push_back(inst);
+}
+
+Bounds3 instance_bounds(const Bounds3& b, const Instance& instance) {
+  Bounds3 out = Bounds3::empty();
+  for (int corner = 0; corner < 8; ++corner) {
+    const glm::vec3 p((corner & 1) ? b.hi.x : b.lo.x, (corner & 2) ? b.hi.y : b.lo.y,
+                      (corner & 4) ? b.hi.z : b.lo.z);
+    out.extend(instance.to_world.apply(p));
+  }
+  return out;
+}
+
+Bounds3 scene_bounds(const Scene& scene) {
+  Bounds3 b = scene.mesh.empty() ? Bounds3::empty() : scene.mesh.bounds();
+  std::vector<Bounds3> prototype_bounds;
+  for (const TriangleMesh& p : scene.prototypes) prototype_bounds.push_back(p.bounds());
+  for (const Instance& i : scene.instances)
+    b.extend(instance_bounds(prototype_bounds[i.prototype], i));
+  return b.is_empty() ? Bounds3{} : b;
+}
+
+Scene flattened(const Scene& scene) {
+  Scene out = scene;
+  out.prototypes.clear();
+  out.instances.clear();
+  out.mesh.reserve(scene.drawn_triangles());
+  for (const Instance& inst : scene.instances) {
+    const TriangleMesh& proto = scene.prototypes[inst.prototype];
+    for (uint32_t k = 0; k < proto.size(); ++k) {
+      out.mesh.add(inst.to_world.apply(proto.v0()[k]), inst.to_world.apply(proto.v1()[k]),
+                   inst.to_world.apply(proto.v2()[k]), proto.material()[k]);
+    }
+  }
+  return out;
+}
+
+}  // namespace tritrace

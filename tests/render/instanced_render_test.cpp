@@ -1,0 +1,119 @@
+// Instanced scenes render like the same scene flattened into one mesh: the lab and path
+// integrators, bit for bit, where the transforms make the arithmetic exact.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <vector>
+
+#include "tritrace/accel/make_accel.h"
+#include "tritrace/dist/partial_film.h"
+#include "tritrace/render/lab_integrator.h"
+#include "tritrace/render/path_integrator.h"
+#include "tritrace/render/renderer.h"
+#include "tritrace/scene/cornell_box.h"
+
+namespace tritrace {
+namespace {
+
+bool same_bits(const Image& a, const Image& b) {
+  return a.pixels().size() == b.pixels().size() &&
+         std::memcmp(a.pixels().data(), b.pixels().data(), a.pixels().size() * sizeof(glm::vec3)) ==
+             0;
+}
+
+Affine diagonal(glm::vec3 s) {
+  Affine a;
+  a.linear = glm::mat3(glm::vec3(s.x, 0, 0), glm::vec3(0, s.y, 0), glm::vec3(0, 0, s.z));
+  return a;
+}
+
+// The lab box with its two blocks (triangles 10 to 19 and 20 to 29) made prototypes, each placed
+// as it was and again mirrored or at half size: one power of two on every axis, each axis's sign
+// free, about the box's centre (the origin). Such a scale moves every coordinate by an exact
+// factor (the same on every axis, so the watertight kernel picks the same axes), so
+// flattening and the rays' move into object space round nothing, and each kernel operation on the
+// scaled values gives the scaled result: the hits, shading points and shadow rays are those of
+// the flattened scene bit for bit. (A translation would not do: o - t rounds for the arbitrary
+// origin of a shadow ray.)
+Scene instanced_lab_box(const Scene& box) {
+  Scene s = box;
+  s.mesh = TriangleMesh();
+  TriangleMesh blocks[2];
+  for (uint32_t i = 0; i < box.mesh.size(); ++i) {
+    TriangleMesh& to = i < 10 || i >= 30 ? s.mesh : blocks[i < 20 ? 0 : 1];
+    to.add(box.mesh.vertex(i, 0), box.mesh.vertex(i, 1), box.mesh.vertex(i, 2),
+           box.mesh.material()[i]);
+  }
+  s.prototypes = {blocks[0], blocks[1]};
+  add_instance(s, 0, diagonal({1, 1, 1}));
+  add_instance(s, 1, diagonal({1, 1, 1}));
+  add_instance(s, 0, diagonal({-1, 1, 1}));           // mirrored across x = 0
+  add_instance(s, 1, diagonal({0.5f, 0.5f, -0.5f}));  // half size, mirrored in z, floating
+  add_instance(s, 0, diagonal({0.5f, -0.5f, 0.5f}));  // half size, upside down
+  return s;
+}
+
+TEST(InstancedRender, LabImageIsTheFlattenedScenesBitForBit) {
+  const Scene s = instanced_lab_box(make_cornell_box({.width = 96, .height = 72, .yaw = 0.3}));
+  ASSERT_EQ(s.mesh.size(), 10u) << "the room stays in the scene's own mesh";
+  const Scene flat = flattened(s);
+  ASSERT_EQ(s.drawn_triangles(), flat.mesh.size());
+  const LabIntegrator lab;
+  const auto flat_accel = make_accel(AccelKind::kBvh, flat, kDefaultKernel);
+  const Image want = render(flat, *flat_accel, lab);
+  for (AccelKind kind : {AccelKind::kBvh, AccelKind::kBvhSingle, AccelKind::kBrute}) {
+    const auto accel = make_accel(kind, s, kDefaultKernel);
+    EXPECT_TRUE(same_bits(want, render(s, *accel, lab))) << accel_name(kind);
+  }
+  // The instances are in the picture: without them it differs.
+  Scene bare = s;
+  bare.instances.clear();
+  const auto bare_accel = make_accel(AccelKind::kBvh, bare, kDefaultKernel);
+  EXPECT_FALSE(same_bits(want, render(bare, *bare_accel, lab)));
+}
+
+TEST(InstancedRender, PathImageIsTheFlattenedScenesBitForBit) {
+  const Scene s = instanced_lab_box(make_cornell_area({.width = 40, .height = 30}));
+  ASSERT_EQ(s.mesh.size(), 12u) << "the room and the area light stay in the scene's own mesh";
+  const Scene flat = flattened(s);
+  const PathIntegrator pt_flat(flat), pt(s);
+  const auto flat_accel = make_accel(AccelKind::kBvh, flat, kDefaultKernel);
+  const RenderOptions options{.spp = 8, .seed = 3};
+  const Image want = render(flat, *flat_accel, pt_flat, options);
+  const auto accel = make_accel(AccelKind::kBvh, s, kDefaultKernel);
+  EXPECT_TRUE(same_bits(want, render(s, *accel, pt, options)));
+}
+
+// Parts of one render are merged only when their identities agree: an instance's transform or a
+// prototype's vertex changes pixels, so each must change the identity.
+TEST(InstancedRender, TransformsAndPrototypesAreInTheRenderIdentity) {
+  const Scene s = instanced_lab_box(make_cornell_box({.width = 16, .height = 16}));
+  auto identity = [](const Scene& scene) {
+    return render_identity(scene, IntegratorSpec{}, RenderOptions{}, "bvh", "watertight", AovSet{})
+        .hash;
+  };
+  const std::string base = identity(s);
+  EXPECT_EQ(base, identity(instanced_lab_box(make_cornell_box({.width = 16, .height = 16}))));
+  Scene moved = s;
+  moved.instances[2].to_world.translation.x += 0x1p-20f;
+  EXPECT_NE(base, identity(moved));
+  Scene turned = s;
+  turned.instances[1].to_world.linear[0][1] = 0x1p-20f;
+  EXPECT_NE(base, identity(turned));
+  Scene other = s;
+  std::swap(other.instances[0].prototype, other.instances[1].prototype);
+  EXPECT_NE(base, identity(other));
+  Scene reshaped = s;
+  TriangleMesh& proto = reshaped.prototypes[0];
+  TriangleMesh changed;
+  for (uint32_t i = 0; i < proto.size(); ++i) {
+    glm::vec3 a = proto.vertex(i, 0);
+    if (i == 0) a.y += 0x1p-16f;
+    changed.add(a, proto.vertex(i, 1), proto.vertex(i, 2), proto.material()[i]);
+  }
+  proto = changed;
+  EXPECT_NE(base, identity(reshaped));
+}
+
+}  // namespace
+}  // namespace tritrace
