@@ -2,6 +2,7 @@
 // lights, the constant indirect (ambient) term and the camera.
 #pragma once
 
+#include <cstdint>
 #include <glm/vec3.hpp>
 #include <vector>
 
@@ -10,15 +11,34 @@
 
 namespace tritrace {
 
-// A two-sided Lambertian (diffuse) surface that may also emit light.
+// What a surface does with light (render/material/bsdf.h builds its BSDF from this). The lab
+// integrator reads only `albedo` (and shades every type as diffuse, with the lab's one-sided rule).
+enum class MaterialType : uint8_t {
+  kDiffuse,    // two-sided Lambert, reflectance `albedo`
+  kConductor,  // metal: GGX microfacets (a mirror at roughness 0), Schlick Fresnel from F0 = albedo
+  kDielectric,  // glass: GGX reflection and refraction with exact Fresnel, index `ior` inside
+  kPrincipled,  // glTF metallic-roughness: conductor, glass and coated diffuse mixed by weights
+};
+
+// A surface material that may also emit light.
 struct Material {
-  glm::vec3 albedo{0.75f};  // diffuse reflectance rho, linear RGB
+  glm::vec3 albedo{0.75f};  // diffuse reflectance rho (or F0, or transmission tint), linear RGB
   // Emitted radiance Le (linear RGB, W/(m^2 sr) per channel), from the triangle's front (the side
   // its lab normal, normalize(cross(e2, e1)), points to), or from both sides when two_sided.
   glm::vec3 emission{0.0f};
   bool two_sided = false;
+  MaterialType type = MaterialType::kDiffuse;
+  // Perceptual roughness in [0, 1]; the GGX width is alpha = roughness^2 (glTF's and Blender's
+  // convention). Below kSmoothAlpha the surface is treated as perfectly smooth (a delta lobe).
+  float roughness = 0.0f;
+  // Index of refraction of the material's inside (the side opposite its lab normal) relative to
+  // the outside; dielectric and principled only.
+  float ior = 1.5f;
+  float metallic = 0.0f;      // principled only: the conductor's weight
+  float transmission = 0.0f;  // principled only: the glass lobe's share of the non-metal weight
 
   bool emits() const { return emission.x > 0.0f || emission.y > 0.0f || emission.z > 0.0f; }
+  bool is_diffuse() const { return type == MaterialType::kDiffuse; }
 };
 
 // Radiates intensity power / (4 pi) in every direction (the lab's light).
