@@ -263,6 +263,58 @@ TEST(PathStrategies, MisAndLightSamplingAgreeToHalfAPercent) {
   EXPECT_LT(4.5 * image_se, 0.005 * mis.mean.back()) << "the test resolves half a percent";
 }
 
+// The same agreement with glossy surfaces, where the strategies' weights come from the Bsdf's eval
+// and pdf: a wrong density or a lobe counted twice shows as a disagreement. Walls principled
+// (varnished diffuse), blocks a rough metal; the light stays diffuse and emissive.
+TEST(PathStrategies, AgreeWithGlossyMaterials) {
+  Scene scene = cornell_area_below_the_light();
+  for (Material& m : scene.materials) {
+    if (m.emits()) continue;
+    const glm::vec3 albedo = m.albedo;
+    m = Material{.albedo = albedo, .type = MaterialType::kPrincipled, .roughness = 0.5f};
+  }
+  // The blocks are the last triangles of the box: give them their own rough gold material.
+  scene.materials.push_back(Material{
+      .albedo = glm::vec3(1.0f, 0.8f, 0.35f), .type = MaterialType::kConductor, .roughness = 0.4f});
+  TriangleMesh mesh;
+  const uint32_t gold = static_cast<uint32_t>(scene.materials.size() - 1);
+  for (size_t k = 0; k < scene.mesh.size(); ++k) {
+    const uint32_t m = scene.mesh.material()[k];
+    const bool block = k >= 10 && !scene.materials[m].emits();
+    mesh.add(scene.mesh.vertex(k, 0), scene.mesh.vertex(k, 1), scene.mesh.vertex(k, 2),
+             block ? gold : m);
+  }
+  scene.mesh = std::move(mesh);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const BlockMeans mis =
+      block_means(scene, accel, {.max_depth = 3, .strategy = Strategy::kMis}, 600, 16);
+  const BlockMeans light =
+      block_means(scene, accel, {.max_depth = 3, .strategy = Strategy::kLightOnly}, 700, 16);
+  const BlockMeans bsdf =
+      block_means(scene, accel, {.max_depth = 3, .strategy = Strategy::kBsdfOnly}, 800, 16);
+  EXPECT_GT(expect_agree(mis, light, "glossy: mis vs light only"), 16);
+  EXPECT_GT(expect_agree(mis, bsdf, "glossy: mis vs bsdf only"), 16);
+}
+
+// A pane of "glass" with index 1 and a clear tint changes nothing: light passes straight through
+// (F = 0, no bending, no 1/eta^2). Its image must agree with the scene without it.
+TEST(PathDielectric, IndexOneIsInvisible) {
+  Scene plain = cornell_area_below_the_light();
+  Scene with_pane = plain;
+  with_pane.materials.push_back(
+      Material{.albedo = glm::vec3(1.0f), .type = MaterialType::kDielectric, .ior = 1.0f});
+  const uint32_t pane = static_cast<uint32_t>(with_pane.materials.size() - 1);
+  // Across the room between the camera and the blocks.
+  with_pane.mesh.add({-0.9f, -0.9f, -0.5f}, {0.9f, -0.9f, -0.5f}, {0.9f, 0.9f, -0.5f}, pane);
+  with_pane.mesh.add({-0.9f, -0.9f, -0.5f}, {0.9f, 0.9f, -0.5f}, {-0.9f, 0.9f, -0.5f}, pane);
+  const BvhAccel a(plain.mesh, kDefaultKernel), b(with_pane.mesh, kDefaultKernel);
+  // Default depth: Russian roulette, not a vertex count, ends paths, so crossing the pane (a
+  // vertex) does not change what is estimated.
+  const BlockMeans without = block_means(plain, a, {}, 900, 16);
+  const BlockMeans through = block_means(with_pane, b, {}, 901, 16);
+  EXPECT_GT(expect_agree(without, through, "pane of index 1"), 8);
+}
+
 // The solid angle a triangle subtends from x: Van Oosterom and Strackee, "The Solid Angle of a
 // Plane Triangle", IEEE Trans. Biomed. Eng. 30(2), 1983, in double.
 double solid_angle(glm::dvec3 x, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) {

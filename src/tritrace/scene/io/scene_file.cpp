@@ -27,6 +27,8 @@ using Json = nlohmann::json;
 namespace fs = std::filesystem;
 
 constexpr size_t kMaxShownChars = 60;
+// Indices of refraction beyond any real material's (diamond 2.4, germanium 4) or their inverse.
+constexpr float kMaxIor = 10.0f;
 
 // A user's string made safe for a one-line message: control characters become '?', long text is
 // cut.
@@ -214,6 +216,22 @@ class Parser {
     return v;
   }
 
+  float unit(const Json& j, const std::string& where) const {
+    const float v = single(j, where);
+    if (!(v >= 0.0f && v <= 1.0f)) fail(where, "must be from 0 to 1, got " + describe(j));
+    return v;
+  }
+
+  MaterialType material_type(const Json& j, const std::string& where) const {
+    const std::string t = string(j, where);
+    if (t == "diffuse") return MaterialType::kDiffuse;
+    if (t == "conductor") return MaterialType::kConductor;
+    if (t == "dielectric") return MaterialType::kDielectric;
+    if (t == "principled") return MaterialType::kPrincipled;
+    fail(where, "unknown material type '" + shown(t) +
+                    "' (use diffuse, conductor, dielectric or principled)");
+  }
+
   std::string string(const Json& j, const std::string& where) const {
     if (!j.is_string()) fail(where, "must be a string, got " + describe(j));
     return j.get<std::string>();
@@ -275,15 +293,49 @@ class Parser {
     for (size_t i = 0; i < j.size(); ++i) {
       const std::string where = "/materials/" + std::to_string(i);
       object(j[i], where);
-      check_keys(j[i], where, {"name", "albedo", "emission", "two_sided"});
+      check_keys(j[i], where,
+                 {"name", "type", "albedo", "emission", "two_sided", "roughness", "ior", "metallic",
+                  "transmission"});
       if (!j[i].contains("name")) fail(where, "missing \"name\"");
-      if (!j[i].contains("albedo")) fail(where, "missing \"albedo\"");
       const std::string name = string(j[i]["name"], where + "/name");
       if (name.empty()) fail(where + "/name", "must not be empty");
       Material m;
-      m.albedo = non_negative_vec3(j[i]["albedo"], where + "/albedo");
-      for (int k = 0; k < 3; ++k) {
-        if (m.albedo[k] > 1.0f) fail(where + "/albedo/" + std::to_string(k), "must be at most 1");
+      if (j[i].contains("type")) m.type = material_type(j[i]["type"], where + "/type");
+      // A dielectric's albedo tints what it transmits and is clear (1) by default; every other
+      // type needs its colour.
+      if (m.type == MaterialType::kDielectric) {
+        m.albedo = glm::vec3(1.0f);
+      } else if (!j[i].contains("albedo")) {
+        fail(where, "missing \"albedo\"");
+      }
+      if (j[i].contains("albedo")) {
+        m.albedo = non_negative_vec3(j[i]["albedo"], where + "/albedo");
+        for (int k = 0; k < 3; ++k) {
+          if (m.albedo[k] > 1.0f) fail(where + "/albedo/" + std::to_string(k), "must be at most 1");
+        }
+      }
+      const bool diffuse = m.type == MaterialType::kDiffuse;
+      const bool principled = m.type == MaterialType::kPrincipled;
+      const auto only_for = [&](const char* key, bool allowed, const char* types) {
+        if (j[i].contains(key) && !allowed) {
+          fail(where + "/" + key, std::string("only ") + types + " materials have it");
+        }
+      };
+      only_for("roughness", !diffuse, "conductor, dielectric and principled");
+      only_for("ior", m.type == MaterialType::kDielectric || principled,
+               "dielectric and principled");
+      only_for("metallic", principled, "principled");
+      only_for("transmission", principled, "principled");
+      if (j[i].contains("roughness")) m.roughness = unit(j[i]["roughness"], where + "/roughness");
+      if (j[i].contains("metallic")) m.metallic = unit(j[i]["metallic"], where + "/metallic");
+      if (j[i].contains("transmission")) {
+        m.transmission = unit(j[i]["transmission"], where + "/transmission");
+      }
+      if (j[i].contains("ior")) {
+        m.ior = single(j[i]["ior"], where + "/ior");
+        if (!(m.ior >= 1.0f / kMaxIor && m.ior <= kMaxIor)) {
+          fail(where + "/ior", "must be from 0.1 to 10, got " + describe(j[i]["ior"]));
+        }
       }
       if (j[i].contains("emission")) {
         m.emission = non_negative_vec3(j[i]["emission"], where + "/emission");
