@@ -18,6 +18,8 @@
 #include "tritrace/math/sampling.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/io/scene_file.h"
+#include "tritrace/scene/io/scene_loader.h"
 
 namespace tritrace {
 namespace {
@@ -408,6 +410,90 @@ TEST(PathRender, SampleRangesAddUpToTheWholeRender) {
   Film other_seed(24, 24);
   render_to_film(scene, accel, pt, other_seed, {.spp = 6, .seed = 6});
   EXPECT_FALSE(same_bits(whole.resolve(), other_seed.resolve()));
+}
+
+}  // namespace
+}  // namespace tritrace
+
+namespace tritrace {
+namespace {
+
+// The white furnace per BSDF: a sphere (scenes/models/sphere.obj, 1280 facets) of one material in
+// a uniform environment of radiance 1 and nothing else. A surface that conserves energy (diffuse
+// albedo 1, a smooth mirror of F0 = 1, smooth glass, whose radiance scaling by 1/eta^2 going in
+// and eta^2 going out cancels) returns 1 from every pixel; rough lobes lose energy between
+// microfacets and so never exceed 1.
+Scene sphere_in_furnace(const std::string& material_json) {
+  const std::string text = R"({"camera": {"position": [0, 0, -3], "look_at": [0, 0, 0],
+      "up": [0, -1, 0], "vertical_fov": 30, "width": 24, "height": 24},
+      "environment": {"color": [1, 1, 1]},
+      "materials": [)" + material_json +
+                           R"(], "meshes": [{"file": "sphere.obj", "material": "m"}]})";
+  LoadedScene loaded =
+      parse_scene_json(text, std::string(TRITRACE_SOURCE_DIR) + "/scenes/models/furnace.json");
+  apply_overrides(loaded, {});
+  return std::move(loaded.scene);
+}
+
+struct FurnaceCase {
+  std::string name;
+  std::string material;
+  bool exact;  // conserves energy: every pixel 1; otherwise at most 1
+  double pixel_tolerance = 0.0;
+};
+
+class SphereFurnace : public ::testing::TestWithParam<FurnaceCase> {};
+
+TEST_P(SphereFurnace, ReturnsOneOrLessAtEveryPixel) {
+  const FurnaceCase& c = GetParam();
+  const Scene scene = sphere_in_furnace(c.material);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator integrator(scene);
+  const Image image = render(scene, accel, integrator, {.spp = 64, .seed = 3});
+  const PixelStats s = stats_against(image, 1.0);
+  const double se = s.pixel_sd / std::sqrt(static_cast<double>(image.pixels().size()));
+  ::testing::Test::RecordProperty("mean", std::to_string(s.mean));
+  if (c.exact) {
+    EXPECT_LT(std::abs(s.mean - 1.0), 4.0 * se + 1e-5) << "mean " << s.mean << " se " << se;
+    // Diffuse and the mirror reflect exactly 1 at every bounce: no noise at all. Glass scatters
+    // with weight 1/eta^2 in, eta^2 out, and Russian roulette adds noise; a tolerance of a quarter
+    // still catches a pixel that loses or gains a factor (1/eta^2 = 0.44, eta^2 = 2.25).
+    for (const glm::vec3& p : image.pixels()) {
+      EXPECT_NEAR((p.x + p.y + p.z) / 3.0, 1.0, c.pixel_tolerance);
+    }
+  } else {
+    EXPECT_LT(s.mean, 1.0 + 4.0 * se) << "mean " << s.mean << " se " << se;
+    EXPECT_GT(s.mean, 0.5);  // lost energy, but not most of it
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Materials, SphereFurnace,
+    ::testing::Values(
+        FurnaceCase{"diffuse", R"({"name": "m", "albedo": [1, 1, 1]})", true, 1e-5},
+        FurnaceCase{"mirror", R"({"name": "m", "type": "conductor", "albedo": [1, 1, 1]})", true,
+                    1e-5},
+        FurnaceCase{"glass", R"({"name": "m", "type": "dielectric", "ior": 1.5})", true, 0.25},
+        FurnaceCase{"rough_metal",
+                    R"({"name": "m", "type": "conductor", "albedo": [1, 1, 1], "roughness": 0.6})",
+                    false},
+        FurnaceCase{"rough_glass", R"({"name": "m", "type": "dielectric", "roughness": 0.5})",
+                    false},
+        FurnaceCase{"principled",
+                    R"({"name": "m", "type": "principled", "albedo": [1, 1, 1], "roughness": 0.5,
+                        "metallic": 0.3, "transmission": 0.3})",
+                    false}),
+    [](const auto& info) { return info.param.name; });
+
+// The environment is what escaping rays see: an empty view is its colour exactly.
+TEST(PathEnvironment, CameraRaysThatMissSeeTheEnvironment) {
+  Scene scene = sphere_in_furnace(R"({"name": "m", "albedo": [0, 0, 0]})");
+  scene.environment = glm::vec3(0.25f, 0.5f, 2.0f);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator integrator(scene);
+  const Image image = render(scene, accel, integrator, {.spp = 4, .seed = 1});
+  EXPECT_EQ(image.at(0, 0), glm::vec3(0.25f, 0.5f, 2.0f));  // a corner: no sphere there
+  EXPECT_EQ(image.at(12, 12), glm::vec3(0.0f));             // the black sphere's centre
 }
 
 }  // namespace

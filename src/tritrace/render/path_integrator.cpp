@@ -88,8 +88,13 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
     size_t shadows = 0, next = 0;
     for (size_t k = 0; k < active; ++k) {
       const Hit& hit = scratch.hits[k];
-      if (!hit.found()) continue;  // escaped: no environment light yet
       const uint16_t i = path[k];
+      if (!hit.found()) {
+        // Escaped into the environment, found by BSDF sampling only (light sampling does not
+        // choose it), so with weight 1.
+        out.radiance[i] += throughput[i] * scene.environment;
+        continue;
+      }
       Sampler& sampler = batch.samplers[i];
       // A fixed number of dimensions per vertex, whichever branches are taken, in three 2-D groups
       // (each stratified over a pixel's samples by the Sobol sampler): the light's choice with the

@@ -52,6 +52,9 @@ struct Scene {
   std::vector<Material> materials;
   std::vector<PointLight> lights;
   glm::vec3 ambient{0.0f};  // the lab's constant indirect light N
+  // Radiance arriving from every direction that no surface blocks (the path integrator's constant
+  // environment light; the lab integrator ignores it).
+  glm::vec3 environment{0.0f};
   Camera camera;
 };
 

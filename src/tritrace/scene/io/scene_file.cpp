@@ -121,8 +121,8 @@ class Parser {
     const Json doc = parse_text(text_, path_);
     if (!doc.is_object()) fail("", "a scene must be a JSON object, got " + describe(doc));
     check_keys(doc, "",
-               {"description", "camera", "lights", "ambient", "materials", "meshes", "output",
-                "integrator"});
+               {"description", "camera", "lights", "ambient", "environment", "materials", "meshes",
+                "output", "integrator"});
     if (doc.contains("description") && !doc["description"].is_string()) {
       fail("/description", "must be a string, got " + describe(doc["description"]));
     }
@@ -131,6 +131,12 @@ class Parser {
     if (doc.contains("lights")) parse_lights(doc["lights"]);
     if (doc.contains("ambient")) {
       out_.scene.ambient = non_negative_vec3(doc["ambient"], "/ambient");
+    }
+    if (doc.contains("environment")) {
+      const Json& env = object(doc["environment"], "/environment");
+      check_keys(env, "/environment", {"color"});
+      if (!env.contains("color")) fail("/environment", "missing \"color\"");
+      out_.scene.environment = non_negative_vec3(env["color"], "/environment/color");
     }
     if (doc.contains("materials")) parse_materials(doc["materials"]);
     if (!doc.contains("meshes")) fail("", "no geometry: the scene has no \"meshes\"");
