@@ -8,16 +8,20 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "build_info.h"
 #include "flags/flag_values.h"
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/render/make_integrator.h"
 #include "tritrace/render/renderer.h"
+#include "tritrace/scene/io/input_file.h"
 #include "tritrace/scene/io/loaded_scene.h"
+#include "tritrace/scene/io/scene_loader.h"
 #include "tritrace/scene/procedural.h"
 
 namespace tritrace::cli {
@@ -108,6 +112,10 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
       "bench",
       "Measure every acceleration structure on the lab workload or the path tracer's, beside "
       "Embree, in one run");
+  sub->add_option("files", args.files,
+                  "Scene files (.json) or mesh files to measure, after the --scene ones (the "
+                  "default scenes only when neither is given)")
+      ->type_name("FILE ...");
   sub->add_option("--scene", args.scenes,
                   "Scene to measure, repeatable (default: cornell, terrain:1m, terrain:10m; with "
                   "--integrator path, cornell-area)")
@@ -156,6 +164,7 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
 
 int run_bench(const BenchArgs& args) {
   if (!args.json.empty()) check_writable_path(args.json);
+  for (const std::string& file : args.files) check_input_file(file);  // before any output
   const bool path = args.integrator == "path";
   IntegratorSpec spec;
   spec.kind = path ? IntegratorSpec::Kind::kPath : IntegratorSpec::Kind::kLab;
@@ -163,7 +172,7 @@ int run_bench(const BenchArgs& args) {
       path ? static_cast<uint32_t>(args.spp.empty() ? kDefaultBenchSpp : *parse_integer(args.spp))
            : 1;
   std::vector<std::string> scenes = args.scenes;
-  if (scenes.empty()) {
+  if (scenes.empty() && args.files.empty()) {
     scenes = path ? std::vector<std::string>{"cornell-area"}
                   : std::vector<std::string>{"cornell", "terrain:1m", "terrain:10m"};
   }
@@ -201,8 +210,20 @@ int run_bench(const BenchArgs& args) {
   std::fflush(stdout);
 
   std::vector<Record> records;
-  for (const std::string& scene_name : scenes) {
-    const Scene scene = make_builtin_scene(scene_name, {.width = width, .height = height});
+  // Built-in scenes by name, then files: each loaded as `tritrace render` loads it, at the
+  // bench's image size; a file's row is named after the file.
+  std::vector<std::pair<std::string, std::string>> sources;  // (row name, file or "")
+  for (const std::string& name : scenes) sources.emplace_back(name, "");
+  for (const std::string& file : args.files) {
+    sources.emplace_back(std::filesystem::path(file).filename().string(), file);
+  }
+  for (const auto& [scene_name, file] : sources) {
+    SceneOverrides size;
+    size.width = width;
+    size.height = height;
+    const Scene scene = file.empty()
+                            ? make_builtin_scene(scene_name, {.width = width, .height = height})
+                            : load_scene(file, size).scene;
     const size_t first = records.size();
     std::vector<std::string> skipped;
     for (AccelKind kind : accels) {
@@ -325,7 +346,12 @@ int run_bench(const BenchArgs& args) {
   }
   if (!args.json.empty()) {
     nlohmann::json out = nlohmann::json::array();
-    for (const Record& r : records) out.push_back(to_json(r));
+    const nlohmann::json build = build_json();
+    for (const Record& r : records) {
+      nlohmann::json j = to_json(r);
+      j.update(build);  // commit, compiler, CPU model, Embree version ... in every record
+      out.push_back(j);
+    }
     const std::string text = out.dump(2) + "\n";
     write_file_atomic(args.json,
                       std::span(reinterpret_cast<const uint8_t*>(text.data()), text.size()));

@@ -2,7 +2,8 @@
 // with --integrator path the path tracer's (coherent camera rays, incoherent bounces and shadow
 // rays), on several scenes, every acceleration structure and the kernels asked for, side by side
 // in one run, with the ratio of each to Embree's best non-robust mode and to Embree's robust mode.
-// Prints a table; --json writes the same records for scripts.
+// Also takes scene and mesh files. Prints a table; --json writes the same records for scripts,
+// each with the build and CPU (build_info.h).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -12,7 +13,9 @@
 namespace tritrace::cli {
 
 struct BenchArgs {
-  std::vector<std::string> scenes;  // empty: cornell, terrain:1m, terrain:10m (path: cornell-area)
+  std::vector<std::string> scenes;  // empty (and no files): cornell, terrain:1m, terrain:10m
+                                    // (path: cornell-area)
+  std::vector<std::string> files;   // scene files (.json) and mesh files, after the built-ins
   std::vector<std::string> accels;  // empty: every accel this build has
   std::string integrator = "lab";
   std::string width;   // empty: 1920 (path: 256)

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bench_command.h"
+#include "build_info.h"
 #include "flags/flag_values.h"
 #include "info_command.h"
 #include "render_command.h"
@@ -59,6 +60,9 @@ int main(int argc, char** argv) {
 
   CLI::App app("tritrace: a fast ray tracer for triangle scenes", "tritrace");
   app.require_subcommand(1);
+  app.set_version_flag(
+      "--version", [] { return tritrace::cli::version_text(); },
+      "Print the version, commit, compiler, SIMD width and optional parts, and exit");
   tritrace::cli::RenderArgs render_args;
   CLI::App* render = tritrace::cli::add_render_command(app, render_args);
   // Listed for --help only: `view` is handed to tritrace-view above, before any parsing.
@@ -77,6 +81,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     std::fprintf(stderr, "tritrace: %s\n", usage_message(e, argc, argv).c_str());

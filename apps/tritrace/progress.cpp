@@ -2,12 +2,15 @@
 // after the next draw time has passed, so most calls cost one clock read and one compare.
 #include "progress.h"
 
+#include <utility>
+
 namespace tritrace::cli {
 namespace {
 
 constexpr int64_t kDelayNs = 1'000'000'000;  // no bar for renders shorter than about a second
 constexpr int64_t kIntervalNs = 100'000'000;
 constexpr int kBarWidth = 30;
+constexpr int64_t kPhaseDelayNs = 300'000'000;  // phases shorter than this draw nothing
 
 int64_t now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(
@@ -60,6 +63,43 @@ void ProgressBar::draw(int done, int total, int64_t now) noexcept {
                  static_cast<int>(fraction * 100.0), elapsed, paths);
   }
   std::fflush(out_);
+}
+
+PhaseLine::PhaseLine(std::FILE* out, bool enabled, std::string what)
+    : out_(out), what_(std::move(what)), start_ns_(now_ns()) {
+  if (enabled) thread_ = std::thread([this] { run(); });
+}
+
+PhaseLine::~PhaseLine() {
+  done();
+}
+
+void PhaseLine::done() noexcept {
+  if (!thread_.joinable()) return;
+  {
+    const std::lock_guard lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_one();
+  thread_.join();
+  if (shown_) {
+    std::fprintf(out_, "\r%s  %.1f s          \n", what_.c_str(),
+                 static_cast<double>(now_ns() - start_ns_) * 1e-9);
+    std::fflush(out_);
+  }
+}
+
+void PhaseLine::run() {
+  std::unique_lock lock(mutex_);
+  if (wake_.wait_for(lock, std::chrono::nanoseconds(kPhaseDelayNs), [this] { return stop_; })) {
+    return;
+  }
+  do {
+    std::fprintf(out_, "\r%s  %.1f s ", what_.c_str(),
+                 static_cast<double>(now_ns() - start_ns_) * 1e-9);
+    std::fflush(out_);
+    shown_ = true;
+  } while (!wake_.wait_for(lock, std::chrono::nanoseconds(kIntervalNs), [this] { return stop_; }));
 }
 
 }  // namespace tritrace::cli

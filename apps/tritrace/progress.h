@@ -1,11 +1,16 @@
-// The render progress bar on stderr: percentage, elapsed time and ETA, shown only when stderr is a
+// The render progress bar on stderr, and the phase line shown before it while a scene loads and
+// its BVH builds. The bar: percentage, elapsed time and ETA, shown only when stderr is a
 // terminal and the render has run for about a second, redrawn at most ten times a second.
 #pragma once
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <cstdio>
+#include <mutex>
+#include <string>
+#include <thread>
 
 #include "tritrace/render/renderer.h"
 
@@ -35,6 +40,31 @@ class ProgressBar final : public RenderProgress {
   std::atomic<int> total_{0};
   uint64_t total_paths_ = 0;  // set before the render starts
   uint32_t spp_ = 0;
+};
+
+// A phase before the render (loading the scene, building the BVH), which can take seconds on big
+// models: on a terminal, once it has run for kPhaseDelay, one line `building BVH  1.3 s` redrawn
+// by a thread of its own every tenth of a second, and finished with the phase's total time when
+// it ends. Nothing when `enabled` is false (not a terminal, or --quiet).
+class PhaseLine final {
+ public:
+  PhaseLine(std::FILE* out, bool enabled, std::string what);
+  PhaseLine(const PhaseLine&) = delete;
+  PhaseLine& operator=(const PhaseLine&) = delete;
+  ~PhaseLine();
+  void done() noexcept;  // ends the phase; the destructor calls it too
+
+ private:
+  void run();
+
+  std::FILE* out_;
+  std::string what_;
+  int64_t start_ns_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stop_ = false;
+  bool shown_ = false;
+  std::thread thread_;
 };
 
 }  // namespace tritrace::cli

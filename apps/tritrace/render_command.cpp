@@ -143,7 +143,14 @@ int run_render(const RenderArgs& args) {
   RenderOptions render_options;
   render_options.threads = thread_count(args.scene);
 
+  const bool terminal = !args.quiet && ::isatty(STDERR_FILENO);
+  PhaseLine loading(
+      stderr, terminal,
+      args.scene.file.empty()
+          ? "making " + (args.scene.scene.empty() ? std::string("cornell") : args.scene.scene)
+          : "loading " + args.scene.file);
   const LoadedScene loaded = load_scene_from(args.scene, overrides);
+  loading.done();
   const std::string output =
       args.output_given ? args.output : default_output(args.scene.file, loaded);
   if (!args.output_given) {
@@ -170,10 +177,14 @@ int run_render(const RenderArgs& args) {
   render_options.seed = spec.seed;
   render_options.sampler = spec.sampler;
   render_options.filter = filter_choice(args.scene);
+  PhaseLine building(stderr, terminal,
+                     "building " + std::string(accel_name(accel_kind)) + " over " +
+                         std::to_string(scene.mesh.size()) + " triangles");
   const std::unique_ptr<Accel> accel = make_accel(accel_kind, scene.mesh, kernel);
+  building.done();
   const std::unique_ptr<Integrator> integrator = make_integrator(spec, scene);
   ProgressBar bar(stderr);
-  if (!args.quiet && ::isatty(STDERR_FILENO)) render_options.progress = &bar;
+  if (terminal) render_options.progress = &bar;
   if (path) {
     bar.show_paths(static_cast<uint64_t>(scene.camera.width()) * scene.camera.height() * spec.spp,
                    spec.spp);

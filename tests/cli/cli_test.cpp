@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 
+#include <OpenEXRConfig.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -25,6 +26,9 @@
 
 #include "../image/exr_read_back.h"
 #include "tritrace/accel/make_accel.h"
+#if TRITRACE_HAVE_EMBREE
+#include <embree3/rtcore_config.h>
+#endif
 #include "tritrace/image/image_io.h"
 
 #ifndef TRITRACE_CLI_PATH
@@ -779,6 +783,72 @@ TEST_F(CliTest, BenchSkipsBruteForceWhereAFrameWouldTakeSeconds) {
   EXPECT_NE(r.out.find("skipped"), std::string::npos) << r.out;
 }
 
+// The project's version as CMakeLists.txt's project() line gives it.
+std::string ProjectVersion() {
+  const std::string cmake = ReadFile(fs::path(TRITRACE_SOURCE_DIR) / "CMakeLists.txt");
+  std::smatch m;
+  EXPECT_TRUE(std::regex_search(cmake, m, std::regex(R"(project\(tritrace VERSION ([0-9.]+))")));
+  return m.size() > 1 ? m[1].str() : "";
+}
+
+TEST_F(CliTest, VersionNamesTheBuildAndExitsZero) {
+  const RunResult r = Run({"--version"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(
+      r.out, m, std::regex(R"(^tritrace ([0-9.]+) \(commit ([0-9a-f]+|unknown)(-dirty)?\)\n)")))
+      << r.out;
+  EXPECT_EQ(m[1].str(), ProjectVersion());
+  // The commit is one of this repository's (where git and the repository are at hand).
+  const std::string commit = m[2].str();
+  if (commit != "unknown" && fs::exists(fs::path(TRITRACE_SOURCE_DIR) / ".git")) {
+    const std::string check = "git -C '" + std::string(TRITRACE_SOURCE_DIR) + "' cat-file -e " +
+                              commit + "^{commit} 2>/dev/null";
+    EXPECT_EQ(std::system(check.c_str()), 0) << commit << " is not a commit here";
+  }
+  for (const char* line : {"\ncompiler: ", "\nSIMD: ", "\nEmbree: ", "\nOpenEXR: ", "\nMPI: "}) {
+    EXPECT_NE(r.out.find(line), std::string::npos) << line;
+  }
+#if TRITRACE_HAVE_EMBREE
+  EXPECT_NE(r.out.find("\nEmbree: " RTC_VERSION_STRING "\n"), std::string::npos) << r.out;
+#else
+  EXPECT_NE(r.out.find("\nEmbree: not built in\n"), std::string::npos) << r.out;
+#endif
+  EXPECT_NE(r.out.find("\nOpenEXR: " OPENEXR_VERSION_STRING "\n"), std::string::npos) << r.out;
+}
+
+TEST_F(CliTest, BenchTakesSceneAndMeshFilesAndRecordsTheBuild) {
+  const std::string scene = std::string(TRITRACE_SOURCE_DIR) + "/scenes/cornell.json";
+  const std::string mesh = "/usr/share/assimp/models/PLY/cube_binary.ply";
+  const RunResult r = Run({"bench", scene, mesh, "--accel", "bvh", "--width", "32", "--height",
+                           "24", "--reps", "1", "--json", "b.json", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json records = nlohmann::json::parse(ReadFile(work_ / "b.json"));
+  ASSERT_EQ(records.size(), 2u);  // the default scenes are not added when files are given
+  EXPECT_EQ(records[0]["scene"], "cornell.json");
+  EXPECT_EQ(records[0]["triangles"], 30);  // the lab box of the scene file
+  EXPECT_EQ(records[1]["scene"], "cube_binary.ply");
+  EXPECT_EQ(records[1]["triangles"], 12);  // its header's 12 faces
+  const RunResult version = Run({"--version"});
+  for (const nlohmann::json& rec : records) {
+    for (const char* key : {"commit", "compiler", "cpu", "embree_version", "openexr_version",
+                            "simd_lanes", "version", "mpi"}) {
+      EXPECT_TRUE(rec.contains(key)) << key;
+    }
+    EXPECT_NE(version.out.find("(commit " + rec["commit"].get<std::string>() + ")"),
+              std::string::npos);
+    EXPECT_NE(version.out.find("compiler: " + rec["compiler"].get<std::string>() + "\n"),
+              std::string::npos);
+    EXPECT_FALSE(rec["cpu"].get<std::string>().empty());
+  }
+}
+
+TEST_F(CliTest, BenchOfAMissingFileIsAnErrorNamingIt) {
+  const RunResult r = Run({"bench", "no-such.ply", "--reps", "1"});
+  ExpectErrorLine(r, 1, "no-such.ply", "");
+}
+
 TEST_F(CliTest, BenchRejectsAnUnknownScene) {
   const RunResult r = Run({"bench", "--scene", "teapot"});
   ExpectErrorLine(r, 2, "--scene", "unknown scene");
@@ -1195,6 +1265,23 @@ TEST_F(CliTest, SlowRenderOnATerminalShowsProgress) {
   EXPECT_NE(screen.find("elapsed"), std::string::npos) << screen;
   EXPECT_NE(screen.find("ETA"), std::string::npos) << screen;
   EXPECT_NE(screen.find("rendered 160x120"), std::string::npos) << screen;
+}
+
+// Before the render, on a terminal, phases that take more than about 0.3 s show a line with their
+// elapsed time: making (or loading) the scene and building its BVH, here two million triangles.
+TEST_F(CliTest, BigSceneOnATerminalShowsItsPhases) {
+  const std::string log = (capture_ / "terminal.log").string();
+  const std::string command = std::string("cd '") + work_.string() + "' && script -qec \"" +
+                              TRITRACE_CLI_PATH +
+                              " render --scene terrain:2m --width 8 --height 8 -o p.png\" "
+                              "/dev/null > '" +
+                              log + "' 2>&1";
+  if (std::system("command -v script > /dev/null") != 0) GTEST_SKIP() << "no script(1)";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  const std::string screen = ReadFile(log);
+  const std::regex building(R"(building bvh over [0-9]+ triangles  [0-9]+\.[0-9] s)");
+  EXPECT_TRUE(std::regex_search(screen, building)) << screen;
+  EXPECT_NE(screen.find("rendered 8x8"), std::string::npos) << screen;
 }
 
 // Without a terminal (as in every other test here) no bar is drawn: stderr stays empty.

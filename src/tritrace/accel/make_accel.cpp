@@ -8,6 +8,8 @@
 #include "tritrace/accel/bvh/bvh_accel.h"
 #include "tritrace/error.h"
 #if TRITRACE_HAVE_EMBREE
+#include <embree3/rtcore_config.h>
+
 #include "tritrace/accel/embree_accel.h"
 #endif
 
@@ -60,6 +62,14 @@ std::vector<AccelKind> available_accels() {
     if (accel_available(k)) out.push_back(k);
   }
   return out;
+}
+
+std::string_view embree_version() {
+#if TRITRACE_HAVE_EMBREE
+  return RTC_VERSION_STRING;
+#else
+  return {};
+#endif
 }
 
 Kernel default_kernel_for(AccelKind /*kind*/) {

@@ -26,6 +26,8 @@ std::string_view accel_name(AccelKind kind);
 std::optional<AccelKind> parse_accel(std::string_view name);
 bool accel_available(AccelKind kind);  // Embree only when built with it
 std::vector<AccelKind> available_accels();
+// The Embree this build links ("3.13.5"), or empty when built without it.
+std::string_view embree_version();
 
 // The kernel used when none is asked for: the watertight kernel for every accel tritrace
 // implements (brute, bvh, bvh-single), so that they write byte-identical images by default. Issue

@@ -7,6 +7,7 @@
 #include <ImfHeader.h>
 #include <ImfIO.h>
 #include <ImfOutputFile.h>
+#include <OpenEXRConfig.h>
 #include <half.h>
 
 #include <algorithm>
@@ -82,6 +83,10 @@ std::string one_line(std::string text) {
 }
 
 }  // namespace
+
+std::string_view openexr_version() {
+  return OPENEXR_VERSION_STRING;
+}
 
 std::vector<uint8_t> encode_exr(const Image& image, const AovImages& aovs, ExrPixelType type) {
   if (image.width() <= 0 || image.height() <= 0) throw Error("exr", "the image is empty");

@@ -2,6 +2,8 @@
 // denoisers such as Open Image Denoise take, in one single-part scanline file.
 #pragma once
 
+#include <string_view>
+
 #include <cstdint>
 #include <vector>
 
@@ -28,6 +30,9 @@ struct AovImages {
 // The file's bytes: scanlines top row first, ZIP compression (lossless), values stored as they
 // are (no clamp, no curve, NaN and infinity kept). Throws Error("exr", reason) when the AOVs'
 // sizes differ from the image's or OpenEXR fails.
+// The OpenEXR library this build uses ("3.1.5").
+std::string_view openexr_version();
+
 std::vector<uint8_t> encode_exr(const Image& image, const AovImages& aovs = {},
                                 ExrPixelType type = ExrPixelType::kFloat);
 

@@ -117,6 +117,8 @@ inline bool block_watertight_axis(const TriangleBlock& b, const WatertightRay& r
   const __m256 nonpos = _mm256_and_ps(
       _mm256_and_ps(_mm256_cmp_ps(u, zero, _CMP_LE_OQ), _mm256_cmp_ps(v, zero, _CMP_LE_OQ)),
       _mm256_cmp_ps(w, zero, _CMP_LE_OQ));
+  // Most blocks a ray reaches hold no triangle it passes through: leave before the division.
+  if (_mm256_movemask_ps(_mm256_or_ps(_mm256_or_ps(nonneg, nonpos), on_edge)) == 0) return false;
   const __m256 det = _mm256_add_ps(_mm256_add_ps(u, v), w);
   const __m256 inv_det = _mm256_div_ps(_mm256_set1_ps(1.0f), det);
   const __m256 t =

@@ -124,11 +124,17 @@ inline bool block_scalar(const TriangleBlock& b, const TriangleArrays& tris,
 
 // With best == nullptr: any hit ends the search (occlusion). Otherwise: the closest hit. `prepared`
 // is `ray` with the kernel's per-ray work done once for the whole traversal.
-template <Kernel K>
-inline bool intersect_block(const TriangleBlock& b, const TriangleArrays& tris, const Ray& ray,
-                            const PreparedRay<K>& prepared, Hit* best) {
+// Kz >= 0: the watertight kernel for a ray whose dominant axis is Kz, chosen once per ray (see
+// closest_hit), so that the block test inlines into the traversal loop with no switch per leaf.
+template <Kernel K, int Kz = -1>
+[[gnu::always_inline]] inline bool intersect_block(const TriangleBlock& b,
+                                                   const TriangleArrays& tris, const Ray& ray,
+                                                   const PreparedRay<K>& prepared, Hit* best) {
 #if defined(__AVX2__)
   if constexpr (K == Kernel::kMollerTrumbore) return block_moller_trumbore(b, ray, best);
+  if constexpr (K == Kernel::kWatertight && Kz >= 0) {
+    return block_watertight_axis<Kz>(b, prepared.watertight(), best);
+  }
   if constexpr (K == Kernel::kWatertight) return block_watertight(b, prepared.watertight(), best);
 #endif
   return block_scalar<K>(b, tris, prepared, best);
@@ -143,24 +149,31 @@ inline bool traceable(const Ray& ray) {
   return ray.tmin <= ray.tmax;
 }
 
+// Asks for every cache line of a node or a triangle block, without waiting for them.
+inline void prefetch(const WideBvh& tree, uint32_t ref) {
+  const char* p = ref & kLeafBit ? reinterpret_cast<const char*>(&tree.blocks[ref & ~kLeafBit])
+                                 : reinterpret_cast<const char*>(&tree.nodes[ref]);
+  const size_t bytes = ref & kLeafBit ? sizeof(TriangleBlock) : sizeof(WideNode);
+  for (size_t line = 0; line < bytes; line += 64) __builtin_prefetch(p + line);
+}
+
 struct StackEntry {
   uint32_t ref;
   float t;
 };
 
-template <Kernel K>
-Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray) {
+template <Kernel K, int Kz>
+Hit closest_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
+                     const PreparedRay<K>& prepared) {
   Hit best;
-  if (tree.nodes.empty() || !traceable(ray)) return best;
   const RayBoxSetup setup = box_setup(ray);
-  const PreparedRay<K> prepared(ray);
   StackEntry stack[kStackSize];
   int sp = 0;
   uint32_t ref = 0;
   alignas(32) float tnear[kWidth];
   for (;;) {
     if (ref & kLeafBit) {
-      intersect_block<K>(tree.blocks[ref & ~kLeafBit], tris, ray, prepared, &best);
+      intersect_block<K, Kz>(tree.blocks[ref & ~kLeafBit], tris, ray, prepared, &best);
     } else {
       const WideNode& node = tree.nodes[ref];
       const float tmax = std::min(best.t, ray.tmax);
@@ -170,20 +183,24 @@ Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray)
           ref = node.child[std::countr_zero(mask)];
           continue;
         }
-        // Nearest child next, the others on the stack, farthest deepest.
-        StackEntry hits[kWidth];
+        // Nearest child next, the others on the stack, farthest deepest: sorted by insertion
+        // straight into the stack's top, so nothing is copied.
+        assert(sp + std::popcount(mask) <= kStackSize);  // the builder bounds the depth
+        StackEntry* top = stack + sp;
         int n = 0;
         while (mask) {
           const int i = std::countr_zero(mask);
           mask &= mask - 1;
-          StackEntry e{node.child[i], tnear[i]};
+          const StackEntry e{node.child[i], tnear[i]};
           int j = n++;
-          for (; j > 0 && hits[j - 1].t < e.t; --j) hits[j] = hits[j - 1];
-          hits[j] = e;
+          for (; j > 0 && top[j - 1].t < e.t; --j) top[j] = top[j - 1];
+          top[j] = e;
         }
-        assert(sp + n - 1 <= kStackSize);  // the builder bounds the depth (wide_bvh.h)
-        for (int i = 0; i < n - 1; ++i) stack[sp++] = hits[i];
-        ref = hits[n - 1].ref;
+        // The stacked children are fetched from memory while the nearest is traversed: on a
+        // big scene most node and leaf visits wait on memory.
+        for (int i = 0; i < n - 1; ++i) prefetch(tree, top[i].ref);
+        sp += n - 1;
+        ref = top[n - 1].ref;
         continue;
       }
     }
@@ -194,6 +211,27 @@ Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray)
     } while (stack[sp].t > best.t);
     ref = stack[sp].ref;
   }
+}
+
+// The closest hit of one ray. For the watertight kernel the ray's dominant axis picks one of three
+// instantiations, once per ray rather than once per leaf.
+template <Kernel K>
+Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray) {
+  if (tree.nodes.empty() || !traceable(ray)) return Hit{};
+  const PreparedRay<K> prepared(ray);
+#if defined(__AVX2__)
+  if constexpr (K == Kernel::kWatertight) {
+    switch (prepared.watertight().kz) {
+      case 0:
+        return closest_hit_from<K, 0>(tree, tris, ray, prepared);
+      case 1:
+        return closest_hit_from<K, 1>(tree, tris, ray, prepared);
+      default:
+        return closest_hit_from<K, 2>(tree, tris, ray, prepared);
+    }
+  }
+#endif
+  return closest_hit_from<K, -1>(tree, tris, ray, prepared);
 }
 
 template <Kernel K>

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "tritrace/accel/bvh/binned_sah_builder.h"
+#include "tritrace/accel/bvh/huge_page_allocator.h"
 #include "tritrace/geometry/triangle_mesh.h"
 
 namespace tritrace::bvh {
@@ -57,8 +58,9 @@ struct alignas(32) TriangleBlock {
 static_assert(sizeof(TriangleBlock) == 320);
 
 struct WideBvh {
-  std::vector<WideNode> nodes;  // nodes[0] is the root; empty when the mesh is
-  std::vector<TriangleBlock> blocks;
+  std::vector<WideNode, HugePageAllocator<WideNode>>
+      nodes;  // nodes[0] is the root; empty when the mesh is
+  std::vector<TriangleBlock, HugePageAllocator<TriangleBlock>> blocks;
   size_t triangles = 0;
 
   size_t node_bytes() const { return nodes.size() * sizeof(WideNode); }
@@ -70,5 +72,11 @@ struct WideBvh {
 // rounding that grows with the ray origin's distance is padded per ray by the traversals
 // (origin_padding below).
 [[nodiscard]] WideBvh build_wide_bvh(const TriangleMesh& mesh, const BuildConfig& config = {});
+
+// The second half of build_wide_bvh: the binary tree (over `mesh`'s triangles, leaves of at most
+// kMaxLeafSize) collapsed into eight-wide nodes. Of all ways to choose which binary nodes become
+// wide nodes (each holding at most eight leaves or wide nodes), it takes one whose wide nodes'
+// summed surface area, the SAH's expected number of node visits, is least.
+[[nodiscard]] WideBvh collapse_binary_bvh(const BinaryBvh& tree, const TriangleMesh& mesh);
 
 }  // namespace tritrace::bvh

@@ -11,16 +11,19 @@
 #include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/LogStream.hpp>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <exception>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
 #include "tritrace/error.h"
 #include "tritrace/scene/io/input_file.h"
 #include "tritrace/scene/io/isolated_call.h"
+#include "tritrace/scene/io/ply_reader.h"
 #include "tritrace/scene/io/triangle_filter.h"
 
 namespace tritrace {
@@ -162,6 +165,15 @@ ImportedMesh import_with(const std::string& subject, ReadFn&& read) {
   }
 }
 
+// PLY files go to the native reader first (ply_reader.h), which leaves what it does not take to
+// assimp.
+bool is_ply(const std::string& path) {
+  if (path.size() < 4) return false;
+  std::string ext = path.substr(path.size() - 4);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".ply";
+}
+
 // ImportedMesh to bytes and back, for the trip from the importer process.
 class Bytes {
  public:
@@ -258,6 +270,15 @@ ImportedMesh import_isolated(const std::string& subject, const std::function<Imp
 
 ImportedMesh import_mesh_file(const std::string& path) {
   check_input_file(path);
+  if (is_ply(path)) {
+    const std::string bytes = read_input_file(path);
+    if (std::optional<ImportedMesh> mesh = read_ply_triangles(bytes, path)) return std::move(*mesh);
+  }
+  return import_mesh_file_with_assimp(path);
+}
+
+ImportedMesh import_mesh_file_with_assimp(const std::string& path) {
+  check_input_file(path);
   return import_isolated(path, [&] {
     return import_with(
         path, [&](Assimp::Importer& importer) { return importer.ReadFile(path, kImportFlags); });
@@ -267,6 +288,12 @@ ImportedMesh import_mesh_file(const std::string& path) {
 ImportedMesh import_mesh_memory(std::span<const uint8_t> bytes, const std::string& format_hint,
                                 const std::string& subject) {
   if (bytes.empty()) throw Error(subject, "is empty");
+  if (is_ply("." + format_hint)) {
+    const std::span<const char> chars(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    if (std::optional<ImportedMesh> mesh = read_ply_triangles(chars, subject)) {
+      return std::move(*mesh);
+    }
+  }
   return import_isolated(
       subject, [&] { return import_mesh_memory_in_process(bytes, format_hint, subject); });
 }
@@ -275,6 +302,12 @@ ImportedMesh import_mesh_memory_in_process(std::span<const uint8_t> bytes,
                                            const std::string& format_hint,
                                            const std::string& subject) {
   if (bytes.empty()) throw Error(subject, "is empty");
+  if (is_ply("." + format_hint)) {
+    const std::span<const char> chars(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    if (std::optional<ImportedMesh> mesh = read_ply_triangles(chars, subject)) {
+      return std::move(*mesh);
+    }
+  }
   return import_with(subject, [&](Assimp::Importer& importer) {
     return importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags,
                                        format_hint.c_str());

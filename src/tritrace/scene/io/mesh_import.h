@@ -26,10 +26,15 @@ struct ImportedMesh {
   size_t triangles() const { return material.size(); }
 };
 
-// Reads a mesh file. Throws Error(path, reason) when the file is missing, unreadable or empty,
+// Reads a mesh file: PLY triangle meshes through a native reader (ply_reader.h), everything else
+// through assimp. Throws Error(path, reason) when the file is missing, unreadable or empty,
 // when assimp rejects it, or when it holds no triangles. Triangles are not yet checked for
 // degeneracy: add_checked does that when they join a scene.
 ImportedMesh import_mesh_file(const std::string& path);
+
+// import_mesh_file through assimp alone, without the native PLY reader: the reference the tests
+// compare that reader with.
+ImportedMesh import_mesh_file_with_assimp(const std::string& path);
 
 // The same from bytes in memory; `format_hint` is a file extension without the dot ("obj") and
 // `subject` names the data in error messages.

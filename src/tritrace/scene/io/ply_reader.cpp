@@ -1,0 +1,368 @@
+// The PLY header is parsed into a small layout description; binary bodies are then read with fixed
+// strides (every face is checked to have three indices, so face records have one size too), which
+// makes both element arrays readable in parallel chunks. ASCII bodies are read line by line.
+#include "tritrace/scene/io/ply_reader.h"
+
+#include <tbb/blocked_range.h>
+
+#include <algorithm>
+#include <bit>
+#include <charconv>
+#include <cstdint>
+#include <cstring>
+#include <string_view>
+#include <type_traits>
+#include <vector>
+
+#include "tritrace/error.h"
+#include "tritrace/parallel.h"
+#include "tritrace/scene/io/triangle_filter.h"
+
+namespace tritrace {
+namespace {
+
+enum class Format { kAscii, kLittleEndian, kBigEndian };
+
+enum class Type { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
+
+std::optional<Type> parse_type(std::string_view name) {
+  if (name == "char" || name == "int8") return Type::kInt8;
+  if (name == "uchar" || name == "uint8") return Type::kUint8;
+  if (name == "short" || name == "int16") return Type::kInt16;
+  if (name == "ushort" || name == "uint16") return Type::kUint16;
+  if (name == "int" || name == "int32") return Type::kInt32;
+  if (name == "uint" || name == "uint32") return Type::kUint32;
+  if (name == "float" || name == "float32") return Type::kFloat32;
+  if (name == "double" || name == "float64") return Type::kFloat64;
+  return std::nullopt;
+}
+
+size_t size_of(Type t) {
+  switch (t) {
+    case Type::kInt8:
+    case Type::kUint8:
+      return 1;
+    case Type::kInt16:
+    case Type::kUint16:
+      return 2;
+    case Type::kInt32:
+    case Type::kUint32:
+    case Type::kFloat32:
+      return 4;
+    case Type::kFloat64:
+      return 8;
+  }
+  return 0;
+}
+
+bool is_integer(Type t) {
+  return t != Type::kFloat32 && t != Type::kFloat64;
+}
+
+// What the body holds: V vertex records (x, y, z at byte offsets of scalar properties), then F
+// face records of one list (count, then indices).
+struct Layout {
+  Format format = Format::kAscii;
+  size_t vertices = 0, faces = 0;
+  size_t vertex_bytes = 0;  // binary: one vertex record
+  size_t vertex_properties = 0;
+  int xyz_property[3] = {-1, -1, -1};  // index among the vertex properties
+  size_t xyz_offset[3] = {0, 0, 0};    // binary: byte offset in the record
+  Type xyz_type[3] = {Type::kFloat32, Type::kFloat32, Type::kFloat32};
+  Type count_type = Type::kUint8, index_type = Type::kInt32;
+  size_t body = 0;  // offset of the first byte after end_header's line
+};
+
+// Splits a header line into whitespace-separated words.
+std::vector<std::string_view> words(std::string_view line) {
+  std::vector<std::string_view> out;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
+    const size_t start = i;
+    while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
+    if (i > start) out.push_back(line.substr(start, i - start));
+  }
+  return out;
+}
+
+bool parse_count(std::string_view text, size_t& out) {
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), out);
+  return ec == std::errc() && end == text.data() + text.size();
+}
+
+std::optional<Layout> parse_header(std::span<const char> bytes) {
+  const std::string_view all(bytes.data(), bytes.size());
+  Layout layout;
+  size_t pos = 0;
+  bool have_format = false;
+  int element = -1;  // 0 vertex, 1 face
+  bool face_list = false;
+  size_t line_number = 0;
+  for (;;) {
+    const size_t end = all.find('\n', pos);
+    if (end == std::string_view::npos) return std::nullopt;
+    const std::vector<std::string_view> w = words(all.substr(pos, end - pos));
+    pos = end + 1;
+    if (line_number++ == 0) {
+      if (w.size() != 1 || w[0] != "ply") return std::nullopt;
+      continue;
+    }
+    if (w.empty()) return std::nullopt;
+    if (w[0] == "comment" || w[0] == "obj_info") continue;
+    // Some writers put free text in the header (Blender 2.4's "Created by ..."); assimp passes
+    // over such lines, and so does this reader (the tests compare with assimp on such a file).
+    if (w[0] != "end_header" && w[0] != "format" && w[0] != "element" && w[0] != "property") {
+      continue;
+    }
+    if (w[0] == "end_header") break;
+    if (w[0] == "format") {
+      if (w.size() != 3 || w[2] != "1.0" || have_format) return std::nullopt;
+      if (w[1] == "ascii") {
+        layout.format = Format::kAscii;
+      } else if (w[1] == "binary_little_endian") {
+        layout.format = Format::kLittleEndian;
+      } else if (w[1] == "binary_big_endian") {
+        layout.format = Format::kBigEndian;
+      } else {
+        return std::nullopt;
+      }
+      have_format = true;
+    } else if (w[0] == "element") {
+      // Exactly a vertex element, then a face element.
+      if (w.size() != 3 || !have_format) return std::nullopt;
+      size_t count = 0;
+      if (!parse_count(w[2], count)) return std::nullopt;
+      if (element == -1 && w[1] == "vertex") {
+        layout.vertices = count;
+      } else if (element == 0 && w[1] == "face") {
+        layout.faces = count;
+      } else {
+        return std::nullopt;
+      }
+      ++element;
+    } else if (w[0] == "property") {
+      if (element == 0) {
+        if (w.size() != 3) return std::nullopt;  // vertex lists are left to assimp
+        const std::optional<Type> type = parse_type(w[1]);
+        if (!type) return std::nullopt;
+        const int axis = w[2] == "x" ? 0 : w[2] == "y" ? 1 : w[2] == "z" ? 2 : -1;
+        if (axis >= 0) {
+          if (layout.xyz_property[axis] >= 0) return std::nullopt;
+          layout.xyz_property[axis] = static_cast<int>(layout.vertex_properties);
+          layout.xyz_offset[axis] = layout.vertex_bytes;
+          layout.xyz_type[axis] = *type;
+        }
+        ++layout.vertex_properties;
+        layout.vertex_bytes += size_of(*type);
+      } else if (element == 1) {
+        // One index list and nothing else.
+        if (face_list || w.size() != 5 || w[1] != "list") return std::nullopt;
+        if (w[4] != "vertex_indices" && w[4] != "vertex_index") return std::nullopt;
+        const std::optional<Type> count = parse_type(w[2]), index = parse_type(w[3]);
+        if (!count || !index || !is_integer(*count) || !is_integer(*index)) return std::nullopt;
+        layout.count_type = *count;
+        layout.index_type = *index;
+        face_list = true;
+      } else {
+        return std::nullopt;
+      }
+    } else {
+      return std::nullopt;
+    }
+  }
+  if (element != 1 || !face_list || layout.vertices == 0 || layout.faces == 0) return std::nullopt;
+  for (int a = 0; a < 3; ++a) {
+    if (layout.xyz_property[a] < 0) return std::nullopt;
+  }
+  layout.body = pos;
+  return layout;
+}
+
+// A binary value of type t at p, in the file's byte order, as double (exact for every PLY type).
+template <bool kSwap>
+double binary_value(const char* p, Type t) {
+  auto load = [p]<typename T>(T) {
+    T v;
+    std::memcpy(&v, p, sizeof(T));
+    if constexpr (kSwap && sizeof(T) > 1) {
+      using U = std::conditional_t<sizeof(T) == 2, uint16_t,
+                                   std::conditional_t<sizeof(T) == 4, uint32_t, uint64_t>>;
+      U u = std::bit_cast<U>(v);
+      if constexpr (sizeof(T) == 2) u = __builtin_bswap16(u);
+      if constexpr (sizeof(T) == 4) u = __builtin_bswap32(u);
+      if constexpr (sizeof(T) == 8) u = __builtin_bswap64(u);
+      v = std::bit_cast<T>(u);
+    }
+    return v;
+  };
+  switch (t) {
+    case Type::kInt8:
+      return load(int8_t{});
+    case Type::kUint8:
+      return load(uint8_t{});
+    case Type::kInt16:
+      return load(int16_t{});
+    case Type::kUint16:
+      return load(uint16_t{});
+    case Type::kInt32:
+      return load(int32_t{});
+    case Type::kUint32:
+      return load(uint32_t{});
+    case Type::kFloat32:
+      return load(float{});
+    case Type::kFloat64:
+      return load(double{});
+  }
+  return 0.0;
+}
+
+// Model files wind front faces counter-clockwise; tritrace stores (a, c, b), as mesh_import.cpp.
+void emit(ImportedMesh& out, size_t face, const std::vector<glm::vec3>& p, const int64_t idx[3]) {
+  out.corners[3 * face] = p[static_cast<size_t>(idx[0])];
+  out.corners[3 * face + 1] = p[static_cast<size_t>(idx[2])];
+  out.corners[3 * face + 2] = p[static_cast<size_t>(idx[1])];
+}
+
+template <bool kSwap>
+bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out) {
+  const size_t face_bytes = size_of(l.count_type) + 3 * size_of(l.index_type);
+  const size_t available = bytes.size() - l.body;
+  if (l.vertex_bytes == 0 || l.vertices > available / l.vertex_bytes) return false;
+  if (l.faces > (available - l.vertices * l.vertex_bytes) / face_bytes) return false;
+  const char* vertex_data = bytes.data() + l.body;
+  const char* face_data = vertex_data + l.vertices * l.vertex_bytes;
+
+  std::vector<glm::vec3> points(l.vertices);
+  parallel::for_range(tbb::blocked_range<size_t>(0, l.vertices, 1 << 14), [&](const auto& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const char* rec = vertex_data + i * l.vertex_bytes;
+      for (int a = 0; a < 3; ++a) {
+        // As a float, as assimp keeps it: every PLY type is exact in double, so one rounding.
+        points[i][a] =
+            static_cast<float>(binary_value<kSwap>(rec + l.xyz_offset[a], l.xyz_type[a]));
+      }
+    }
+  });
+
+  out.corners.resize(3 * l.faces);
+  const size_t index_bytes = size_of(l.index_type), count_bytes = size_of(l.count_type);
+  const bool ok = parallel::reduce(
+      tbb::blocked_range<size_t>(0, l.faces, 1 << 14), true,
+      [&](const auto& r, bool good) {
+        for (size_t f = r.begin(); good && f != r.end(); ++f) {
+          const char* rec = face_data + f * face_bytes;
+          if (binary_value<kSwap>(rec, l.count_type) != 3.0) return false;
+          int64_t idx[3];
+          for (int k = 0; k < 3; ++k) {
+            const double v = binary_value<kSwap>(rec + count_bytes + k * index_bytes, l.index_type);
+            if (!(v >= 0.0 && v < static_cast<double>(l.vertices))) return false;
+            idx[k] = static_cast<int64_t>(v);
+          }
+          emit(out, f, points, idx);
+        }
+        return good;
+      },
+      [](bool a, bool b) { return a && b; });
+  return ok;
+}
+
+// ASCII: one element per line, exactly its values.
+class Lines {
+ public:
+  Lines(std::span<const char> bytes, size_t pos) : text_(bytes.data(), bytes.size()), pos_(pos) {}
+  // The next line's words into w; false at the end of the text.
+  bool next(std::vector<std::string_view>& w) {
+    if (pos_ >= text_.size()) return false;
+    size_t end = text_.find('\n', pos_);
+    if (end == std::string_view::npos) end = text_.size();
+    w = words(text_.substr(pos_, end - pos_));
+    pos_ = end + 1;
+    return true;
+  }
+
+ private:
+  std::string_view text_;
+  size_t pos_;
+};
+
+template <typename T>
+bool parse_number(std::string_view s, T& out) {
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+  return ec == std::errc() && end == s.data() + s.size();
+}
+
+bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out) {
+  // A value takes two characters at least (a digit and a separator), a face line eight.
+  const size_t body = bytes.size() - l.body;
+  if (l.vertices > body / (2 * l.vertex_properties) || l.faces > body / 8) return false;
+  Lines lines(bytes, l.body);
+  std::vector<std::string_view> w;
+  std::vector<glm::vec3> points(l.vertices);
+  for (size_t i = 0; i < l.vertices; ++i) {
+    if (!lines.next(w) || w.size() != l.vertex_properties) return false;
+    for (int a = 0; a < 3; ++a) {
+      const std::string_view s = w[static_cast<size_t>(l.xyz_property[a])];
+      if (is_integer(l.xyz_type[a])) {
+        int64_t v = 0;
+        if (!parse_number(s, v)) return false;
+        points[i][a] = static_cast<float>(v);
+      } else if (l.xyz_type[a] == Type::kFloat32) {
+        if (!parse_number(s, points[i][a])) return false;
+      } else {
+        double v = 0.0;
+        if (!parse_number(s, v)) return false;
+        points[i][a] = static_cast<float>(v);
+      }
+    }
+  }
+  out.corners.resize(3 * l.faces);
+  for (size_t f = 0; f < l.faces; ++f) {
+    if (!lines.next(w) || w.size() != 4 || w[0] != "3") return false;
+    int64_t idx[3];
+    for (int k = 0; k < 3; ++k) {
+      if (!parse_number(w[static_cast<size_t>(k) + 1], idx[k])) return false;
+      if (idx[k] < 0 || static_cast<uint64_t>(idx[k]) >= l.vertices) return false;
+    }
+    emit(out, f, points, idx);
+  }
+  return true;
+}
+
+}  // namespace
+
+std::optional<ImportedMesh> read_ply_triangles(std::span<const char> bytes,
+                                               const std::string& subject) {
+  const std::optional<Layout> layout = parse_header(bytes);
+  if (!layout) return std::nullopt;
+  // Every element takes at least a byte: counts beyond the file are damage, not an allocation.
+  const size_t body = bytes.size() - layout->body;
+  if (layout->vertices > body || layout->faces > body) return std::nullopt;
+  if (layout->faces > kMaxSceneTriangles) {
+    throw Error(subject, "has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
+  }
+  ImportedMesh out;
+  bool ok = false;
+  switch (layout->format) {
+    case Format::kAscii:
+      ok = read_ascii(bytes, *layout, out);
+      break;
+    case Format::kLittleEndian:
+      ok = std::endian::native == std::endian::little ? read_binary<false>(bytes, *layout, out)
+                                                      : read_binary<true>(bytes, *layout, out);
+      break;
+    case Format::kBigEndian:
+      ok = std::endian::native == std::endian::big ? read_binary<false>(bytes, *layout, out)
+                                                   : read_binary<true>(bytes, *layout, out);
+      break;
+  }
+  if (!ok) return std::nullopt;
+  // assimp gives a PLY file one material, unnamed, white (its default for PLY); the tests compare.
+  out.material.assign(layout->faces, 0);
+  out.materials = {Material{glm::vec3(1.0f)}};
+  out.material_names = {""};
+  out.meshes = 1;
+  return out;
+}
+
+}  // namespace tritrace
