@@ -25,7 +25,12 @@ PREFIX ?= /usr/local
 WERROR = -DTRITRACE_WERROR=ON
 # Sanitized builds: optimised (the tests trace millions of rays) with debug info for reports; no
 # benchmarks.
-SANITIZE_FLAGS = -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRITRACE_BUILD_BENCH=OFF $(WERROR)
+# MPI is left out: Open MPI dlcloses its components in MPI_Finalize, so LeakSanitizer reports their
+# process-lifetime allocations (about 120 KB in 3300 blocks per rank) with stacks that end in an
+# unknown module, which no suppression can name. The MPI test passed under ASan + UBSan with leak
+# detection off (docs/DISTRIBUTED.md); the normal build runs it in `make test`.
+SANITIZE_FLAGS = -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRITRACE_BUILD_BENCH=OFF -DTRITRACE_WITH_MPI=OFF \
+  $(WERROR)
 # UBSan's `undefined` group leaves out float-cast-overflow (a float-to-int cast of a value out of
 # the int's range, inf or NaN: undefined behaviour), so it is named as well.
 # Left out under ASan: this test feeds libassimp a file that crashes it, on purpose, in the isolated

@@ -18,6 +18,9 @@ packages=(
   # The Python module (import tritrace): Debian's Python headers, pybind11 and NumPy; pytest runs
   # its tests.
   python3-dev pybind11-dev python3-numpy python3-pytest
+  # Distributed rendering (docs/DISTRIBUTED.md): Open MPI for the optional --mpi mode
+  # (TRITRACE_WITH_MPI), and a single-node Slurm with munge for the job-array test.
+  libopenmpi-dev openmpi-bin slurmctld slurmd slurm-client munge
   # The sanitizer runtimes for make test-asan / test-tsan (g++ pulls them in; named for clarity).
   libasan8 libubsan1 libtsan2
 )

@@ -30,7 +30,8 @@ std::string simd() {
 }
 
 bool have_mpi() {
-#if defined(TRITRACE_HAVE_MPI)
+// apps/tritrace/CMakeLists.txt defines TRITRACE_HAVE_MPI as 1 or 0.
+#if TRITRACE_HAVE_MPI
   return true;
 #else
   return false;

@@ -3,6 +3,7 @@
 
 #include <cstdio>
 
+#include "tritrace/dist/partial_film.h"
 #include "tritrace/scene/io/scene_loader.h"
 
 namespace tritrace::cli {
@@ -18,14 +19,24 @@ std::string vec(glm::vec3 v) {
 
 CLI::App* add_info_command(CLI::App& app, InfoArgs& args) {
   CLI::App* sub = app.add_subcommand(
-      "info", "Load a scene (.json) or mesh file as render would and print what it holds");
-  sub->add_option("FILE", args.file,
-                  "Scene (.json) or mesh file (any format assimp reads); default: built-in cornell")
+      "info",
+      "Load a scene (.json) or mesh file as render would and print what it holds; for a partial "
+      "film (.exr from render --spp-range / --tile) print its render and part");
+  sub->add_option(
+         "FILE", args.file,
+         "Scene (.json), mesh file (any format assimp reads) or partial film (.exr); default: "
+         "built-in cornell")
       ->type_name("FILE");
   return sub;
 }
 
 int run_info(const InfoArgs& args) {
+  // A partial film (render --spp-range / --tile) prints its metadata: which render, which part.
+  if (args.file.size() > 4 && args.file.compare(args.file.size() - 4, 4, ".exr") == 0) {
+    const PartInfo info = read_part_info(args.file);
+    std::printf("file: %s\n%s", args.file.c_str(), describe_part(info).c_str());
+    return 0;
+  }
   const LoadedScene loaded =
       args.file.empty() ? load_builtin_scene("cornell") : load_scene(args.file);
   const Scene& s = loaded.scene;

@@ -15,6 +15,7 @@
 #include "build_info.h"
 #include "flags/flag_values.h"
 #include "info_command.h"
+#include "merge_command.h"
 #include "render_command.h"
 #include "tritrace/error.h"
 
@@ -26,11 +27,11 @@ std::string usage_message(const CLI::ParseError& e, int argc, char** argv) {
   if (dynamic_cast<const CLI::RequiredError*>(&e) && msg.find("subcommand") != std::string::npos) {
     if (argc > 1 && argv[1][0] != '-') {
       return std::string(argv[1]) +
-             ": unknown command (use 'tritrace render', 'tritrace view', 'tritrace info' or "
-             "'tritrace bench'; see --help)";
+             ": unknown command (use 'tritrace render', 'tritrace view', 'tritrace info', "
+             "'tritrace merge' or 'tritrace bench'; see --help)";
     }
-    return "missing command: use 'tritrace render', 'tritrace view', 'tritrace info' or "
-           "'tritrace bench' (see --help)";
+    return "missing command: use 'tritrace render', 'tritrace view', 'tritrace info', "
+           "'tritrace merge' or 'tritrace bench' (see --help)";
   }
   return tritrace::cli::one_line_usage_message(e);
 }
@@ -75,6 +76,8 @@ int main(int argc, char** argv) {
   CLI::App* bench = tritrace::cli::add_bench_command(app, bench_args);
   tritrace::cli::InfoArgs info_args;
   CLI::App* info = tritrace::cli::add_info_command(app, info_args);
+  tritrace::cli::MergeArgs merge_args;
+  CLI::App* merge = tritrace::cli::add_merge_command(app, merge_args);
 
   try {
     app.parse(argc, argv);
@@ -93,6 +96,7 @@ int main(int argc, char** argv) {
     if (render->parsed()) return tritrace::cli::run_render(render_args);
     if (bench->parsed()) return tritrace::cli::run_bench(bench_args);
     if (info->parsed()) return tritrace::cli::run_info(info_args);
+    if (merge->parsed()) return tritrace::cli::run_merge(merge_args);
   } catch (const tritrace::Error& e) {
     std::fprintf(stderr, "tritrace: %s\n", e.what());
     return static_cast<int>(e.exit_code());

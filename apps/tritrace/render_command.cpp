@@ -8,10 +8,12 @@
 #include <filesystem>
 #include <optional>
 #include <string_view>
+#include <utility>
 
 #include "flags/flag_values.h"
 #include "progress.h"
 #include "tritrace/accel/make_accel.h"
+#include "tritrace/dist/partial_film.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/image/image_io.h"
@@ -89,6 +91,69 @@ void check_output_options(const RenderArgs& args, const std::string& output) {
   }
 }
 
+// "A:B" or "I/N": two unsigned integers; nullopt when the text is not of that form.
+std::optional<std::pair<long long, long long>> parse_two(const std::string& text, char sep) {
+  const size_t at = text.find(sep);
+  if (at == std::string::npos) return std::nullopt;
+  const std::optional<long long> a = parse_integer(text.substr(0, at));
+  const std::optional<long long> b = parse_integer(text.substr(at + 1));
+  if (!a || !b || *a < 0 || *b < 0) return std::nullopt;
+  return std::pair{*a, *b};
+}
+
+// The part --spp-range and --tile ask for, checked against the render's spp and image size.
+PartRange part_range(const RenderArgs& args, bool path, uint32_t spp, int width, int height) {
+  PartRange range{0, path ? spp : 1, 0, 1};
+  if (!args.spp_range.empty()) {
+    if (!path) {
+      throw Error("--spp-range",
+                  "the lab integrator takes one sample per pixel; split its image with --tile",
+                  ExitCode::kUsage);
+    }
+    const auto ab = parse_two(args.spp_range, ':');
+    if (!ab) {
+      throw Error("--spp-range", "expected A:B (two whole numbers), got '" + args.spp_range + "'",
+                  ExitCode::kUsage);
+    }
+    const auto [a, b] = *ab;
+    if (a >= b || b > static_cast<long long>(spp)) {
+      throw Error("--spp-range",
+                  args.spp_range + " is not a range A < B <= " + std::to_string(spp) + " (the spp)",
+                  ExitCode::kUsage);
+    }
+    if (a % kSampleBlock != 0 || (b % kSampleBlock != 0 && b != static_cast<long long>(spp))) {
+      throw Error("--spp-range",
+                  args.spp_range + " is not split at multiples of " + std::to_string(kSampleBlock) +
+                      ": parts merge bit for bit only at whole blocks of 8 samples (B may also be "
+                      "the spp, " +
+                      std::to_string(spp) + ")",
+                  ExitCode::kUsage);
+    }
+    range.first = static_cast<uint32_t>(a);
+    range.end = static_cast<uint32_t>(b);
+  }
+  if (!args.tile.empty()) {
+    const auto in = parse_two(args.tile, '/');
+    if (!in || in->second < 1 || in->first >= in->second) {
+      throw Error("--tile", "expected I/N with 0 <= I < N, got '" + args.tile + "'",
+                  ExitCode::kUsage);
+    }
+    const long long tiles = static_cast<long long>((width + kPartTileSize - 1) / kPartTileSize) *
+                            ((height + kPartTileSize - 1) / kPartTileSize);
+    if (in->second > tiles) {
+      throw Error("--tile",
+                  std::to_string(in->second) + " parts, but the " + std::to_string(width) + "x" +
+                      std::to_string(height) + " image has only " + std::to_string(tiles) +
+                      " tiles of " + std::to_string(kPartTileSize) + " x " +
+                      std::to_string(kPartTileSize),
+                  ExitCode::kUsage);
+    }
+    range.tile = static_cast<int>(in->first);
+    range.tiles = static_cast<int>(in->second);
+  }
+  return range;
+}
+
 }  // namespace
 
 CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
@@ -121,11 +186,43 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
       ->check(checked([](std::string& s) {
         return parse_float(s) ? std::string() : "must be a finite number, got '" + s + "'";
       }));
+  sub->add_option("--spp-range", args.spp_range,
+                  "Render only samples [A, B) of every pixel of the path tracer's spp and write a "
+                  "partial film (.exr) for `tritrace merge`; A and B multiples of 8 (B may be "
+                  "the spp)")
+      ->type_name("A:B");
+  sub->add_option("--tile", args.tile,
+                  "Render only the I-th of N tile parts (16 x 16 tiles t with t % N == I, "
+                  "interleaved to balance the work) and write a partial film (.exr) for "
+                  "`tritrace merge`")
+      ->type_name("I/N");
+  sub->add_flag("--mpi", args.mpi,
+                "Render across the ranks of an MPI job (mpirun -np N tritrace render --mpi ...): "
+                "rank 0 hands out tiles x sample blocks, gathers and writes the image once");
   sub->add_flag("-q,--quiet", args.quiet, "Print nothing on success: no summary, no progress bar");
   return sub;
 }
 
 int run_render(const RenderArgs& args) {
+  const bool partial = !args.spp_range.empty() || !args.tile.empty();
+  if (args.mpi) {
+    if (partial) {
+      throw Error("--mpi", "renders the whole image; it does not take --spp-range or --tile",
+                  ExitCode::kUsage);
+    }
+    return run_render_mpi(args);
+  }
+  if (partial) {
+    const char* flag = !args.spp_range.empty() ? "--spp-range" : "--tile";
+    if (!args.output_given || *image_format_for(args.output) != ImageFormat::kExr) {
+      throw Error(flag, "writes a partial film, an OpenEXR file: give -o PART.exr",
+                  ExitCode::kUsage);
+    }
+    if (args.exr_half) {
+      throw Error("--exr-half", "partial films keep 32-bit float sums (merging needs every bit)",
+                  ExitCode::kUsage);
+    }
+  }
   // Flag values are checked before anything is loaded or rendered, so a bad output path costs no
   // time and leaves no file.
   if (args.output_given) {
@@ -192,6 +289,36 @@ int run_render(const RenderArgs& args) {
   RenderStats stats;
   std::string aov_error;
   const AovSet aovs = args.aovs.empty() ? AovSet{} : *parse_aovs(args.aovs, &aov_error);
+  if (partial) {
+    const PartRange range =
+        part_range(args, path, spec.spp, scene.camera.width(), scene.camera.height());
+    render_options.first_sample = range.first;
+    render_options.spp = range.end - range.first;
+    render_options.tile_part = range.tile;
+    render_options.tile_parts = range.tiles;
+    RenderOptions whole = render_options;
+    whole.spp = spec.spp;
+    const PartInfo info{
+        render_identity(scene, spec, whole, accel_name(accel_kind), kernel_name(kernel), aovs),
+        range};
+    if (path) {
+      // The part's share of the paths (tile parts hold about 1/N of the pixels each).
+      bar.show_paths(static_cast<uint64_t>(scene.camera.width()) * scene.camera.height() *
+                         render_options.spp / static_cast<uint64_t>(range.tiles),
+                     render_options.spp);
+    }
+    Film film(scene.camera.width(), scene.camera.height(), aovs);
+    render_to_film(scene, *accel, *integrator, film, render_options, &stats);
+    bar.finish();
+    write_file_atomic(output, encode_partial_film(film, info));
+    if (!args.quiet) {
+      std::printf("rendered %s of %dx%d, %u spp in %.1f ms (%.3g Mrays/s, %d thread%s) to %s\n",
+                  range.describe().c_str(), scene.camera.width(), scene.camera.height(), spec.spp,
+                  stats.milliseconds, stats.mrays_per_second(), stats.threads,
+                  stats.threads == 1 ? "" : "s", output.c_str());
+    }
+    return 0;
+  }
   Image image;
   AovImages aov_images;  // empty images for the AOVs not asked for
   if (aovs.any()) {

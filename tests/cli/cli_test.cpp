@@ -1510,4 +1510,171 @@ TEST_F(CliTest, BruteForceDefaultsToTheWatertightKernel) {
   EXPECT_FALSE(by_default.empty());
 }
 
+// Distributed rendering (docs/DISTRIBUTED.md): partial films of sample ranges and tile parts merge
+// into the bytes of the one-process image; merge names what is missing, overlapping or foreign.
+class DistributedCliTest : public CliTest {
+ protected:
+  // cornell-area at 40 x 40 (9 tiles of 16 x 16), 20 spp: two whole blocks of 8 and a partial one.
+  std::vector<std::string> Scene(std::vector<std::string> extra = {}) const {
+    std::vector<std::string> args = {"render",  "--scene", "cornell-area", "--spp", "20",
+                                     "--width", "40",      "--height",     "40",    "-q"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  }
+  void RenderPart(const std::string& name, std::vector<std::string> flags) {
+    flags.insert(flags.end(), {"-o", name});
+    const RunResult r = Run(Scene(flags));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    ASSERT_EQ(r.err, "");
+  }
+  RunResult Merge(std::vector<std::string> parts, const std::string& output) {
+    std::vector<std::string> args = {"merge"};
+    args.insert(args.end(), parts.begin(), parts.end());
+    args.insert(args.end(), {"-o", output, "-q"});
+    return Run(args);
+  }
+  std::string Whole(const std::string& name, std::vector<std::string> flags = {}) {
+    flags.insert(flags.end(), {"-o", name});
+    const RunResult r = Run(Scene(flags));
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return ReadFile(work_ / name);
+  }
+};
+
+TEST_F(DistributedCliTest, SampleRangesMergeIntoTheOneProcessImageBitForBit) {
+  const std::string whole = Whole("whole.pfm");
+  ASSERT_FALSE(whole.empty());
+  RenderPart("a.exr", {"--spp-range", "0:8"});
+  RenderPart("b.exr", {"--spp-range", "8:16"});
+  RenderPart("c.exr", {"--spp-range", "16:20"});
+  RenderPart("ab.exr", {"--spp-range", "0:16"});
+  RenderPart("bc.exr", {"--spp-range", "8:20"});
+  RenderPart("abc.exr", {"--spp-range", "0:20"});
+  const std::vector<std::vector<std::string>> splits = {{"a.exr", "b.exr", "c.exr"},
+                                                        {"c.exr", "a.exr", "b.exr"},
+                                                        {"ab.exr", "c.exr"},
+                                                        {"a.exr", "bc.exr"},
+                                                        {"abc.exr"}};
+  for (const auto& parts : splits) {
+    const RunResult r = Merge(parts, "merged.pfm");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_TRUE(ReadFile(work_ / "merged.pfm") == whole) << "parts " << parts[0] << "...";
+  }
+  // The 8-bit output too, through the same curve as render.
+  const std::string png = Whole("whole.png");
+  ASSERT_EQ(Merge({"a.exr", "bc.exr"}, "merged.png").exit_code, 0);
+  EXPECT_TRUE(ReadFile(work_ / "merged.png") == png);
+}
+
+TEST_F(DistributedCliTest, TilePartsAndRangesOfTilesMergeBitForBit) {
+  const std::string whole = Whole("whole.pfm");
+  std::vector<std::string> tiles, mixed;
+  for (const char* i : {"0", "1", "2", "3"}) {
+    const std::string name = std::string("t") + i + ".exr";
+    RenderPart(name, {"--tile", std::string(i) + "/4"});
+    tiles.push_back(name);
+  }
+  ASSERT_EQ(Merge(tiles, "tiles.pfm").exit_code, 0);
+  EXPECT_TRUE(ReadFile(work_ / "tiles.pfm") == whole);
+  // Each of 3 tile parts split into its own sample ranges, differently per tile.
+  const std::vector<std::vector<std::string>> parts = {{"0/3", "0:8", "m0a.exr"},
+                                                       {"0/3", "8:20", "m0b.exr"},
+                                                       {"1/3", "0:16", "m1a.exr"},
+                                                       {"1/3", "16:20", "m1b.exr"},
+                                                       {"2/3", "0:20", "m2.exr"}};
+  for (const std::vector<std::string>& p : parts) {
+    RenderPart(p[2], {"--tile", p[0], "--spp-range", p[1]});
+    mixed.push_back(p[2]);
+  }
+  const RunResult r = Merge(mixed, "mixed.pfm");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(ReadFile(work_ / "mixed.pfm") == whole);
+}
+
+TEST_F(DistributedCliTest, AovsAndTheLabImageMergeBitForBit) {
+  const std::string whole = Whole("whole.exr", {"--aovs", "albedo,normal,depth"});
+  RenderPart("a.exr", {"--aovs", "albedo,normal,depth", "--spp-range", "0:8"});
+  RenderPart("b.exr", {"--aovs", "albedo,normal,depth", "--spp-range", "8:20"});
+  ASSERT_EQ(Merge({"a.exr", "b.exr"}, "merged.exr").exit_code, 0);
+  EXPECT_TRUE(ReadFile(work_ / "merged.exr") == whole) << "radiance and every AOV";
+
+  const std::vector<std::string> lab = {"render", "--width", "40", "--height", "40", "-q"};
+  auto run_lab = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = lab;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return Run(args);
+  };
+  ASSERT_EQ(run_lab({"-o", "lab.png"}).exit_code, 0);
+  ASSERT_EQ(run_lab({"--tile", "0/2", "-o", "l0.exr"}).exit_code, 0);
+  ASSERT_EQ(run_lab({"--tile", "1/2", "-o", "l1.exr"}).exit_code, 0);
+  ASSERT_EQ(Merge({"l1.exr", "l0.exr"}, "lab_merged.png").exit_code, 0);
+  EXPECT_TRUE(ReadFile(work_ / "lab_merged.png") == ReadFile(work_ / "lab.png"));
+  const RunResult r = run_lab({"--spp-range", "0:1", "-o", "x.exr"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--tile"), std::string::npos) << r.err;
+}
+
+TEST_F(DistributedCliTest, MergeNamesMissingOverlappingAndForeignParts) {
+  RenderPart("a.exr", {"--spp-range", "0:8"});
+  RenderPart("b.exr", {"--spp-range", "8:16"});
+  RenderPart("c.exr", {"--spp-range", "16:20"});
+  RenderPart("bc.exr", {"--spp-range", "8:20"});
+  RenderPart("seed.exr", {"--spp-range", "16:20", "--seed", "3"});
+  RenderPart("t1.exr", {"--tile", "1/2"});
+  auto expect_error = [&](std::vector<std::string> parts, const std::vector<std::string>& words) {
+    const RunResult r = Merge(parts, "out.png");
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_EQ(CountLines(r.err), 1u) << r.err;
+    EXPECT_EQ(r.err.rfind("tritrace: ", 0), 0u) << r.err;
+    for (const std::string& w : words) EXPECT_NE(r.err.find(w), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(work_ / "out.png")) << "no output on error";
+  };
+  expect_error({"a.exr", "c.exr"}, {"missing", "samples [8, 16)"});
+  expect_error({"a.exr", "b.exr"}, {"missing", "samples [16, 20)"});
+  expect_error({"a.exr", "b.exr", "bc.exr"}, {"bc.exr", "overlaps b.exr", "samples [8, 16)"});
+  expect_error({"a.exr", "a.exr", "bc.exr"}, {"overlaps", "samples [0, 8)"});
+  expect_error({"a.exr", "b.exr", "seed.exr"}, {"seed.exr", "foreign part", "seed=3"});
+  expect_error({"a.exr", "t1.exr"}, {"t1.exr", "tile"});
+  expect_error({"t1.exr"}, {"missing", "tile 0/2"});
+  // Not a partial film at all: the merged output of another merge, or a missing file.
+  ASSERT_EQ(Merge({"a.exr", "bc.exr"}, "whole.exr").exit_code, 0);
+  expect_error({"whole.exr"}, {"whole.exr", "not a tritrace partial film"});
+  expect_error({"nope.exr"}, {"nope.exr"});
+}
+
+TEST_F(DistributedCliTest, BadSplitsAreRefusedBeforeRendering) {
+  auto expect_usage = [&](std::vector<std::string> flags, const std::string& flag,
+                          const std::string& words) {
+    const RunResult r = Run(Scene(flags));
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(CountLines(r.err), 1u) << r.err;
+    EXPECT_EQ(r.err.rfind("tritrace: " + flag + ": ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+    EXPECT_TRUE(ListFolder(work_).empty()) << "no file written";
+  };
+  expect_usage({"--spp-range", "4:16", "-o", "p.exr"}, "--spp-range", "multiples of 8");
+  expect_usage({"--spp-range", "0:12", "-o", "p.exr"}, "--spp-range", "multiples of 8");
+  expect_usage({"--spp-range", "8:8", "-o", "p.exr"}, "--spp-range", "not a range");
+  expect_usage({"--spp-range", "0:24", "-o", "p.exr"}, "--spp-range", "not a range");
+  expect_usage({"--spp-range", "x", "-o", "p.exr"}, "--spp-range", "A:B");
+  expect_usage({"--spp-range", "0:8", "-o", "p.png"}, "--spp-range", "OpenEXR");
+  expect_usage({"--tile", "4/4", "-o", "p.exr"}, "--tile", "I/N");
+  expect_usage({"--tile", "0/10", "-o", "p.exr"}, "--tile", "only 9 tiles");
+  expect_usage({"--tile", "0/2", "--exr-half", "-o", "p.exr"}, "--exr-half", "32-bit");
+}
+
+TEST_F(DistributedCliTest, InfoPrintsAPartsMetadata) {
+  RenderPart("p.exr", {"--spp-range", "8:20", "--tile", "1/3", "--seed", "5"});
+  const RunResult r = Run({"info", "p.exr"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const std::string line :
+       {"file: p.exr\n", "partial film: samples [8, 20) of tile 1/3 of 20 spp\n",
+        "integrator: path\n", "seed: 5\n", "spp: 20\n", "size: 40x40\n", "samples: 8:20\n",
+        "tile: 1/3\n", "aovs: none\n"}) {
+    EXPECT_NE(r.out.find(line), std::string::npos) << line << " in\n" << r.out;
+  }
+  EXPECT_TRUE(std::regex_search(r.out, std::regex("render: [0-9a-f]{16}\n"))) << r.out;
+  EXPECT_NE(r.out.find("settings: integrator=path spp=20 "), std::string::npos) << r.out;
+}
+
 }  // namespace

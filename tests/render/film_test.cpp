@@ -5,10 +5,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "../math/chi_square.h"
+#include "tritrace/error.h"
+#include "tritrace/math/random.h"
+#include "tritrace/render/sample_blocks.h"
 #include "tritrace/render/sampler.h"
 
 namespace tritrace {
@@ -16,8 +21,9 @@ namespace {
 
 TEST(Film, ResolvesWeightedMeans) {
   Film film(2, 1, AovSet{.albedo = true, .depth = true});
-  film.add(0, 0, {.radiance = glm::vec3(1.0f), .albedo = glm::vec3(0.5f), .depth = 2.0f}, 1.0f);
-  film.add(0, 0, {.radiance = glm::vec3(4.0f), .albedo = glm::vec3(1.0f), .depth = 4.0f}, 3.0f);
+  film.set_layout(0, 2, {});  // one partial block
+  film.sums(0)[0] = glm::vec4(1.0f + 3.0f * 4.0f, 1.0f + 3.0f * 4.0f, 13.0f, 4.0f);
+  film.aov_sums(0)[0] = {.albedo = glm::vec3(0.5f + 3.0f), .depth = 2.0f + 12.0f};
   const Image image = film.resolve();
   EXPECT_EQ(image.at(0, 0), glm::vec3(13.0f / 4.0f));
   EXPECT_EQ(image.at(1, 0), glm::vec3(0.0f)) << "no sample: black, not NaN";
@@ -28,9 +34,123 @@ TEST(Film, ResolvesWeightedMeans) {
 
 TEST(Film, OneUnitSampleResolvesToItselfBitForBit) {
   Film film(1, 1);
+  film.set_layout(0, 1, {});
   const glm::vec3 v(0.1f, 1.0f / 3.0f, 7e-30f);
-  film.add(0, 0, {.radiance = v}, 1.0f);
+  film.sums(0)[0] = glm::vec4(v, 1.0f);
   EXPECT_EQ(film.resolve().at(0, 0), v);
+}
+
+TEST(Film, LayersAreAddedFromTheRight) {
+  // 3 complete blocks and a partial one: nodes (1, 0) and (0, 2), then the partial block 3.
+  Film film(1, 1);
+  film.set_layout(0, 28, {{1, 0}, {0, 2}});
+  ASSERT_EQ(film.layer_count(), 3u);
+  // Values chosen so that the association matters in float: 1 + (2^-24 + 2^-24) = 1 + 2^-23,
+  // while (1 + 2^-24) + 2^-24 rounds to 1 twice.
+  const float tiny = std::ldexp(1.0f, -24);
+  film.sums(0)[0] = glm::vec4(1.0f, 0.0f, 0.0f, 1.0f);
+  film.sums(1)[0] = glm::vec4(tiny, 0.0f, 0.0f, 0.0f);
+  film.sums(2)[0] = glm::vec4(tiny, 0.0f, 0.0f, 0.0f);
+  EXPECT_EQ(film.radiance_sum(0, 0).x, 1.0f + std::ldexp(1.0f, -23));
+  EXPECT_NE((1.0f + tiny) + tiny, 1.0f + std::ldexp(1.0f, -23)) << "the test's premise";
+}
+
+TEST(Film, LayoutMustBeTheBlockCountersNodes) {
+  Film film(1, 1);
+  EXPECT_THROW(film.set_layout(4, 16, {}), Error) << "not at a multiple of 8";
+  EXPECT_THROW(film.set_layout(0, 24, {{0, 0}, {0, 1}, {0, 2}}), Error) << "blocks 0, 1 pair";
+  EXPECT_NO_THROW(film.set_layout(0, 24, {{1, 0}, {0, 2}}));
+  EXPECT_NO_THROW(film.set_layout(8, 40, {{0, 1}, {1, 1}, {0, 4}}));
+}
+
+// The counter's nodes for blocks [a, b), by an independent rule: the canonical decomposition of
+// [a, b) into maximal aligned power-of-two runs that a segment tree would give, where a run is
+// combined with a left sibling only if that sibling lies inside [a, b) too.
+std::vector<BlockNode> decomposition(uint64_t a, uint64_t b) {
+  std::vector<BlockNode> nodes;
+  uint64_t p = a;
+  while (p < b) {
+    uint32_t level = 0;
+    // Grow while the parent starts at p (p aligned to it) and ends within b.
+    while ((p % (uint64_t{2} << level)) == 0 && p + (uint64_t{2} << level) <= b) ++level;
+    nodes.push_back({level, p >> level});
+    p += uint64_t{1} << level;
+  }
+  // Pairs straddling two of those runs never form: a run starting at p is aligned to its size,
+  // and everything left of it is at least as large, so the list is already final.
+  return nodes;
+}
+
+TEST(BlockCounter, LeavesTheAlignedRunsOfTheRange) {
+  for (uint64_t a = 0; a < 40; ++a) {
+    for (uint64_t b = a; b < 80; ++b) {
+      BlockCounter one_by_one;
+      for (uint64_t k = a; k < b; ++k) one_by_one.push({0, k});
+      const std::vector<BlockNode> want = decomposition(a, b);
+      ASSERT_TRUE(std::equal(want.begin(), want.end(), one_by_one.nodes().begin(),
+                             one_by_one.nodes().end()))
+          << "[" << a << ", " << b << ")";
+      BlockCounter runs;
+      runs.push_blocks(a, b);
+      ASSERT_TRUE(std::equal(want.begin(), want.end(), runs.nodes().begin(), runs.nodes().end()))
+          << "[" << a << ", " << b << ")";
+    }
+  }
+}
+
+// The sum of blocks [0, n) by the documented rule written as a recursion over the tree: node
+// (L, i) = node(L-1, 2i) + node(L-1, 2i+1); the nodes of n's binary digits are added from the
+// right. Exact integers cannot tell orders apart, so the blocks hold floats whose sums round.
+float tree_sum(const std::vector<float>& blocks, uint32_t level, uint64_t index) {
+  if (level == 0) return blocks[index];
+  return tree_sum(blocks, level - 1, 2 * index) + tree_sum(blocks, level - 1, 2 * index + 1);
+}
+float documented_sum(const std::vector<float>& blocks) {
+  std::vector<float> digits;
+  uint64_t p = 0;
+  for (int level = 62; level >= 0; --level) {
+    if (blocks.size() & (uint64_t{1} << level)) {
+      digits.push_back(tree_sum(blocks, static_cast<uint32_t>(level), p >> level));
+      p += uint64_t{1} << level;
+    }
+  }
+  float sum = digits.back();
+  for (size_t k = digits.size() - 1; k-- > 0;) sum = digits[k] + sum;
+  return sum;
+}
+
+TEST(BlockCounter, AnySplitMergesToTheSameBits) {
+  Pcg32 rng(7, 3);
+  for (size_t n = 1; n <= 70; ++n) {
+    std::vector<float> blocks(n);
+    for (float& b : blocks)
+      b = std::ldexp(rng.next_float() + 0.5f, static_cast<int>(rng.next_u32() % 40) - 20);
+    const float want = documented_sum(blocks);
+    // Split [0, n) at every pair of points: three parts, each counted on its own, then merged by
+    // pushing the parts' nodes in order.
+    for (size_t s1 = 0; s1 <= n; ++s1) {
+      for (size_t s2 = s1; s2 <= n; ++s2) {
+        BlockCounter merged;
+        std::vector<float> merged_values;
+        for (auto [a, b] : {std::pair{size_t{0}, s1}, std::pair{s1, s2}, std::pair{s2, n}}) {
+          BlockCounter part;
+          std::vector<float> values;
+          for (size_t k = a; k < b; ++k) {
+            values.push_back(blocks[k]);
+            const int m = part.push({0, k});
+            values.resize(merge_last(values.data(), values.size(), m));
+          }
+          for (size_t j = 0; j < part.size(); ++j) {
+            merged_values.push_back(values[j]);
+            const int m = merged.push(part.nodes()[j]);
+            merged_values.resize(merge_last(merged_values.data(), merged_values.size(), m));
+          }
+        }
+        ASSERT_EQ(fold_from_right(merged_values.data(), merged_values.size()), want)
+            << "n " << n << " split " << s1 << ", " << s2;
+      }
+    }
+  }
 }
 
 TEST(PixelFilter, BoxIsTheSampleItselfWithUnitWeight) {

@@ -15,6 +15,7 @@
 
 #include "tritrace/accel/brute_force.h"
 #include "tritrace/accel/bvh/bvh_accel.h"
+#include "tritrace/error.h"
 #include "tritrace/math/sampling.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/cornell_box.h"
@@ -385,15 +386,17 @@ TEST(PathRender, BitIdenticalForAnyThreadCountAndTileSize) {
   const Scene scene = make_cornell_area({.width = 40, .height = 24});
   const BvhAccel accel(scene.mesh, kDefaultKernel);
   const PathIntegrator pt(scene);
-  const Image want = render(scene, accel, pt, {.threads = 1, .tile_size = 16, .spp = 4});
+  // 20 spp: two whole blocks of 8, which pair, and a partial block added from the right.
+  const Image want = render(scene, accel, pt, {.threads = 1, .tile_size = 16, .spp = 20});
   for (int threads : {1, 2, 5}) {
     for (int tile : {16, 7, 5, 1}) {
-      const Image got = render(scene, accel, pt, {.threads = threads, .tile_size = tile, .spp = 4});
+      const Image got =
+          render(scene, accel, pt, {.threads = threads, .tile_size = tile, .spp = 20});
       EXPECT_TRUE(same_bits(want, got)) << threads << " threads, tile " << tile;
     }
   }
   const BruteForceAccel brute(scene.mesh, kDefaultKernel);
-  EXPECT_TRUE(same_bits(want, render(scene, brute, pt, {.spp = 4})))
+  EXPECT_TRUE(same_bits(want, render(scene, brute, pt, {.spp = 20})))
       << "brute force and the BVH return the same hits, so the same image";
 }
 
@@ -402,14 +405,60 @@ TEST(PathRender, SampleRangesAddUpToTheWholeRender) {
   const BvhAccel accel(scene.mesh, kDefaultKernel);
   const PathIntegrator pt(scene);
   Film whole(24, 24), parts(24, 24);
-  render_to_film(scene, accel, pt, whole, {.spp = 6, .seed = 5});
-  render_to_film(scene, accel, pt, parts, {.spp = 2, .first_sample = 0, .seed = 5});
-  render_to_film(scene, accel, pt, parts, {.spp = 1, .first_sample = 2, .seed = 5});
-  render_to_film(scene, accel, pt, parts, {.spp = 3, .first_sample = 3, .seed = 5});
+  render_to_film(scene, accel, pt, whole, {.spp = 37, .seed = 5});
+  // Frames as the viewer takes them: any lengths, crossing blocks of 8 and their pairings.
+  uint32_t at = 0;
+  for (uint32_t n : {2u, 1u, 3u, 10u, 5u, 16u}) {
+    render_to_film(scene, accel, pt, parts, {.spp = n, .first_sample = at, .seed = 5});
+    at += n;
+  }
+  ASSERT_EQ(at, 37u);
   EXPECT_TRUE(same_bits(whole.resolve(), parts.resolve()));
+  EXPECT_TRUE(same_bits(whole.resolve(), render(scene, accel, pt, {.spp = 37, .seed = 5})))
+      << "render() folds the same layers without a film";
   Film other_seed(24, 24);
-  render_to_film(scene, accel, pt, other_seed, {.spp = 6, .seed = 6});
+  render_to_film(scene, accel, pt, other_seed, {.spp = 37, .seed = 6});
   EXPECT_FALSE(same_bits(whole.resolve(), other_seed.resolve()));
+}
+
+TEST(PathRender, FilmsStartAtAMultipleOf8AndContinueAtTheirEnd) {
+  const Scene scene = make_cornell_area({.width = 8, .height = 8});
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator pt(scene);
+  Film film(8, 8);
+  EXPECT_THROW(render_to_film(scene, accel, pt, film, {.spp = 4, .first_sample = 4}), Error);
+  EXPECT_THROW((void)render(scene, accel, pt, {.spp = 4, .first_sample = 12}), Error);
+  render_to_film(scene, accel, pt, film, {.spp = 4, .first_sample = 8});
+  EXPECT_EQ(film.first_sample(), 8u);
+  EXPECT_EQ(film.end_sample(), 12u);
+  EXPECT_THROW(render_to_film(scene, accel, pt, film, {.spp = 4, .first_sample = 16}), Error)
+      << "a gap";
+  EXPECT_THROW(render_to_film(scene, accel, pt, film, {.spp = 4, .first_sample = 8}), Error)
+      << "an overlap";
+}
+
+TEST(PathRender, TilePartsCoverTheImageOnceAndMatchTheWholeRender) {
+  const Scene scene = make_cornell_area({.width = 50, .height = 34});  // 4 x 3 tiles of 16
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator pt(scene);
+  const Image want = render(scene, accel, pt, {.spp = 9});
+  Image sum(50, 34);
+  for (int part = 0; part < 5; ++part) {
+    const Image got = render(scene, accel, pt, {.spp = 9, .tile_part = part, .tile_parts = 5});
+    for (int y = 0; y < 34; ++y) {
+      for (int x = 0; x < 50; ++x) {
+        const int tile = (y / 16) * 4 + x / 16;
+        // Tile t belongs to part t % 5; the other parts leave the pixel black.
+        if (tile % 5 == part) {
+          EXPECT_EQ(std::memcmp(&got.at(x, y), &want.at(x, y), sizeof(glm::vec3)), 0);
+          sum.at(x, y) = got.at(x, y);
+        } else {
+          EXPECT_EQ(got.at(x, y), glm::vec3(0.0f));
+        }
+      }
+    }
+  }
+  EXPECT_TRUE(same_bits(want, sum));
 }
 
 }  // namespace

@@ -17,33 +17,12 @@
 #include <utility>
 
 #include "tritrace/error.h"
+#include "tritrace/image/exr_memory_stream.h"
 
 namespace tritrace {
 namespace {
 
 static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "slices step over packed float RGB pixels");
-
-// An Imf::OStream over a growing byte vector. OpenEXR seeks back to fill in the table of scanline
-// offsets once the pixels are written, so writes may land inside what is already there.
-class MemoryStream final : public Imf::OStream {
- public:
-  MemoryStream() : Imf::OStream("(in memory)") {}
-
-  void write(const char c[], int n) override {
-    const size_t end = pos_ + static_cast<size_t>(n);
-    if (end > bytes_.size()) bytes_.resize(end);
-    std::memcpy(bytes_.data() + pos_, c, static_cast<size_t>(n));
-    pos_ = end;
-  }
-  uint64_t tellp() override { return pos_; }
-  void seekp(uint64_t pos) override { pos_ = static_cast<size_t>(pos); }
-
-  std::vector<uint8_t> take() { return std::move(bytes_); }
-
- private:
-  std::vector<uint8_t> bytes_;
-  size_t pos_ = 0;
-};
 
 struct Channel {
   std::string name;
@@ -118,7 +97,7 @@ std::vector<uint8_t> encode_exr(const Image& image, const AovImages& aovs, ExrPi
     }
   }
 
-  MemoryStream stream;
+  ExrMemoryStream stream;
   try {
     // The OutputFile writes the offset table when it is destroyed, so it lives only in this scope.
     Imf::OutputFile file(stream, header);

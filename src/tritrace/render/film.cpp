@@ -1,48 +1,93 @@
-// Film resolution and the pixel filters (box, Gaussian, Blackman-Harris) with their sampling.
+// Film layouts, resolution (the block tree's layers added from the right) and the pixel filters
+// (box, Gaussian, Blackman-Harris) with their sampling.
 #include "tritrace/render/film.h"
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
+
+#include "tritrace/error.h"
 
 namespace tritrace {
 
-Film::Film(int width, int height, AovSet aovs) : width_(width), height_(height), aovs_(aovs) {
-  const size_t n = static_cast<size_t>(width) * static_cast<size_t>(height);
-  radiance_.assign(n, glm::vec3(0.0f));
-  weight_.assign(n, 0.0f);
-  if (aovs.albedo) albedo_.assign(n, glm::vec3(0.0f));
-  if (aovs.normal) normal_.assign(n, glm::vec3(0.0f));
-  if (aovs.depth) depth_.assign(n, 0.0f);
+Film::Film(int width, int height, AovSet aovs) : width_(width), height_(height), aovs_(aovs) {}
+
+void Film::reserve_layers(size_t count) {
+  const size_t n = static_cast<size_t>(width_) * static_cast<size_t>(height_);
+  while (layers_.size() < count) {
+    layers_.emplace_back(n, glm::vec4(0.0f));
+    if (aovs_.any()) aov_layers_.emplace_back(n);
+  }
 }
 
-Image Film::resolve_sums(const std::vector<glm::vec3>& sums) const {
-  if (sums.empty()) return {};
-  Image image(width_, height_);
-  for (int y = 0; y < height_; ++y) {
-    for (int x = 0; x < width_; ++x) {
-      const size_t i = index(x, y);
-      // A weight of exactly 1 (one unit sample: the lab) divides to the sum bit for bit.
-      image.at(x, y) = weight_[i] != 0.0f ? sums[i] / weight_[i] : glm::vec3(0.0f);
-    }
+void Film::set_layout(uint32_t first, uint32_t end, std::vector<BlockNode> nodes) {
+  if (first % kSampleBlock != 0 || end < first) {
+    throw Error("film", "samples [" + std::to_string(first) + ", " + std::to_string(end) +
+                            ") do not start at a multiple of " + std::to_string(kSampleBlock));
   }
-  return image;
+  BlockCounter counter;
+  counter.push_blocks(first / kSampleBlock, end / kSampleBlock);
+  if (!std::equal(nodes.begin(), nodes.end(), counter.nodes().begin(), counter.nodes().end())) {
+    throw Error("film", "the block sums do not match samples [" + std::to_string(first) + ", " +
+                            std::to_string(end) + ")");
+  }
+  first_ = first;
+  end_ = end;
+  nodes_ = std::move(nodes);
+  const size_t count = layer_count();
+  reserve_layers(count);
+  layers_.resize(count);
+  if (aovs_.any()) aov_layers_.resize(count);
+}
+
+glm::vec4 Film::pixel_sums(int x, int y) const {
+  const size_t n = layers_.size();
+  if (n == 0) return glm::vec4(0.0f);
+  const size_t i = index(x, y);
+  glm::vec4 sum = layers_[n - 1][i];
+  for (size_t k = n - 1; k-- > 0;) sum = layers_[k][i] + sum;
+  return sum;
+}
+
+AovSums Film::pixel_aov_sums(int x, int y) const {
+  const size_t n = aov_layers_.size();
+  if (n == 0) return {};
+  const size_t i = index(x, y);
+  AovSums sum = aov_layers_[n - 1][i];
+  for (size_t k = n - 1; k-- > 0;) sum = aov_layers_[k][i] + sum;
+  return sum;
 }
 
 Image Film::resolve() const {
-  return resolve_sums(radiance_);
+  Image image(width_, height_);
+  for (int y = 0; y < height_; ++y) {
+    for (int x = 0; x < width_; ++x) image.at(x, y) = resolve_pixel(pixel_sums(x, y));
+  }
+  return image;
 }
 
-Image Film::resolve_depth() const {
-  if (depth_.empty()) return {};
+template <typename Pick>
+Image Film::resolve_aov(bool kept, Pick&& pick) const {
+  if (!kept) return {};
   Image image(width_, height_);
   for (int y = 0; y < height_; ++y) {
     for (int x = 0; x < width_; ++x) {
-      const size_t i = index(x, y);
-      image.at(x, y) = glm::vec3(weight_[i] != 0.0f ? depth_[i] / weight_[i] : 0.0f);
+      const float w = pixel_sums(x, y).w;
+      image.at(x, y) = w != 0.0f ? pick(pixel_aov_sums(x, y)) / w : glm::vec3(0.0f);
     }
   }
   return image;
+}
+
+Image Film::resolve_albedo() const {
+  return resolve_aov(aovs_.albedo, [](const AovSums& s) { return s.albedo; });
+}
+Image Film::resolve_normal() const {
+  return resolve_aov(aovs_.normal, [](const AovSums& s) { return s.normal; });
+}
+Image Film::resolve_depth() const {
+  return resolve_aov(aovs_.depth, [](const AovSums& s) { return glm::vec3(s.depth); });
 }
 
 std::string_view filter_name(FilterKind kind) {

@@ -1,16 +1,19 @@
 // Film: per pixel, the sums of weighted radiance and of weights over the samples taken, plus the
 // same sums of the first hit's albedo, normal and depth (AOVs, the inputs of denoisers). The image
 // is the film resolved (sum / weight), never the other way round. Sums are kept unnormalised and
-// added in sample order, so films of sample ranges or tiles rendered apart can be combined later.
+// added in the fixed order of render/sample_blocks.h, so that films of sample ranges or tiles
+// rendered apart combine into exactly the film of one render.
 #pragma once
 
 #include <cstdint>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 #include <optional>
 #include <string_view>
 #include <vector>
 
 #include "tritrace/image/image.h"
+#include "tritrace/render/sample_blocks.h"
 
 namespace tritrace {
 
@@ -30,6 +33,12 @@ struct FilmSample {
   float depth = 0.0f;
 };
 
+// The samples [first_sample(), end_sample()) of every pixel it holds, as the sums of the block tree
+// (render/sample_blocks.h): one layer per node that is not yet paired, in sample order, plus a last
+// layer for a partial block when end_sample() is not a multiple of 8. Each layer holds per pixel
+// (sum of weight x radiance, sum of weights) and, when kept, the AOV sums. A one-process render,
+// a viewer's frames and a merge of parts all build films this way, so their resolves agree bit for
+// bit. first_sample() is a multiple of 8; samples are only ever appended at end_sample().
 class Film {
  public:
   Film() = default;
@@ -39,40 +48,63 @@ class Film {
   int height() const { return height_; }
   const AovSet& aovs() const { return aovs_; }
 
-  // Adds weight * sample to pixel (x, y)'s sums and weight to its weight. One thread per pixel at a
-  // time (the renderer's tiles are disjoint).
-  void add(int x, int y, const FilmSample& sample, float weight) {
-    const size_t i = index(x, y);
-    radiance_[i] += weight * sample.radiance;
-    weight_[i] += weight;
-    if (aovs_.albedo) albedo_[i] += weight * sample.albedo;
-    if (aovs_.normal) normal_[i] += weight * sample.normal;
-    if (aovs_.depth) depth_[i] += weight * sample.depth;
+  uint32_t first_sample() const { return first_; }
+  uint32_t end_sample() const { return end_; }
+  const std::vector<BlockNode>& nodes() const { return nodes_; }
+  bool has_partial_block() const { return end_ % kSampleBlock != 0; }
+  size_t layer_count() const { return nodes_.size() + (has_partial_block() ? 1 : 0); }
+
+  // Sets the samples held and the nodes left unpaired (which must be what a BlockCounter leaves
+  // for [first, end), checked), keeping the values of the first min(old, new) layers and zeroing
+  // the others. Throws Error("film", ...) when first is not a multiple of 8 or the nodes do not
+  // match.
+  void set_layout(uint32_t first, uint32_t end, std::vector<BlockNode> nodes);
+  // Makes sure at least `count` layers are allocated (a renderer writes the new layout's layers
+  // while reading the old one's); the layout itself is unchanged.
+  void reserve_layers(size_t count);
+
+  // Layer k's sums, width x height pixels row by row; aov_sums is null when no AOV is kept.
+  glm::vec4* sums(size_t layer) { return layers_[layer].data(); }
+  const glm::vec4* sums(size_t layer) const { return layers_[layer].data(); }
+  AovSums* aov_sums(size_t layer) { return aovs_.any() ? aov_layers_[layer].data() : nullptr; }
+  const AovSums* aov_sums(size_t layer) const {
+    return aovs_.any() ? aov_layers_[layer].data() : nullptr;
   }
 
-  glm::vec3 radiance_sum(int x, int y) const { return radiance_[index(x, y)]; }
-  float weight_sum(int x, int y) const { return weight_[index(x, y)]; }
+  // Pixel (x, y)'s total: its layers added from the right (zero when the film holds no sample).
+  glm::vec4 pixel_sums(int x, int y) const;
+  AovSums pixel_aov_sums(int x, int y) const;
+  glm::vec3 radiance_sum(int x, int y) const { return glm::vec3(pixel_sums(x, y)); }
+  float weight_sum(int x, int y) const { return pixel_sums(x, y).w; }
 
   // The mean radiance per pixel (sum / weight; black where no sample landed).
   Image resolve() const;
   // The mean of an AOV per pixel, as an RGB image (depth in all three channels); empty when the
   // film does not keep it.
-  Image resolve_albedo() const { return resolve_sums(albedo_); }
-  Image resolve_normal() const { return resolve_sums(normal_); }
+  Image resolve_albedo() const;
+  Image resolve_normal() const;
   Image resolve_depth() const;
 
  private:
   size_t index(int x, int y) const { return static_cast<size_t>(y) * width_ + x; }
-  Image resolve_sums(const std::vector<glm::vec3>& sums) const;
+  template <typename Pick>
+  Image resolve_aov(bool kept, Pick&& pick) const;
 
   int width_ = 0;
   int height_ = 0;
   AovSet aovs_;
-  std::vector<glm::vec3> radiance_;
-  std::vector<float> weight_;
-  std::vector<glm::vec3> albedo_, normal_;
-  std::vector<float> depth_;
+  uint32_t first_ = 0;
+  uint32_t end_ = 0;
+  std::vector<BlockNode> nodes_;
+  std::vector<std::vector<glm::vec4>> layers_;
+  std::vector<std::vector<AovSums>> aov_layers_;
 };
+
+// The resolved pixel of a (radiance sum, weight sum): sum / weight, black for no weight. A weight
+// of exactly 1 (one unit sample: the lab) divides to the sum bit for bit.
+inline glm::vec3 resolve_pixel(glm::vec4 sums) {
+  return sums.w != 0.0f ? glm::vec3(sums) / sums.w : glm::vec3(0.0f);
+}
 
 // The pixel filter, sampled rather than splatted (as pbrt-v4's film does): each sample lands in its
 // own pixel at an offset drawn from the filter's distribution, weighted by filter / pdf. Tiles then

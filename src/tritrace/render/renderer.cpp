@@ -11,8 +11,10 @@
 #include <cassert>
 #include <chrono>
 #include <optional>
+#include <string>
 #include <vector>
 
+#include "tritrace/error.h"
 #include "tritrace/parallel.h"
 
 namespace tritrace {
@@ -39,29 +41,53 @@ int default_thread_count() {
 
 namespace {
 
-// Renders every tile of the image once per sample index of options' range and hands each sample
-// to sink(x, y, sample, weight), from the thread that owns the sample's tile: tiles are disjoint,
-// so a sink may write its pixel without locking. Samples of a pixel arrive in sample order.
-template <typename Sink>
+// A thread's sums for the pixels of the tile it renders: slot k of pixel i (in the batch's block
+// order) is the value of the tile's BlockCounter node k, and the slot after the last node the
+// block being summed.
+struct TileSlots {
+  static constexpr size_t kSlots = BlockCounter::kMaxNodes + 1;
+  std::vector<glm::vec4> sums;
+  std::vector<AovSums> aovs;
+
+  void reserve(bool with_aovs) {
+    if (sums.empty()) sums.resize(kSlots * kMaxBatch);
+    if (with_aovs && aovs.empty()) aovs.resize(kSlots * kMaxBatch);
+  }
+  glm::vec4* slot(size_t k) { return sums.data() + k * kMaxBatch; }
+  AovSums* aov_slot(size_t k) { return aovs.data() + k * kMaxBatch; }
+};
+
+// Renders every tile of options' part of the image once per sample index of [first, first + spp)
+// and sums the samples of each pixel by the block tree (render/sample_blocks.h), starting from the
+// counter `nodes_before` (the nodes a film already holds; the partial block too when first is not a
+// multiple of 8). target.load(x0, y0, x1, y1, slots) fills a tile's slots before its samples,
+// target.store(x0, y0, x1, y1, slots, layers) takes them after, from the thread that owns the
+// tile: tiles are disjoint, so neither needs a lock.
+template <typename Target>
 void render_tiles(const Scene& scene, const Accel& accel, const Integrator& integrator,
-                  const RenderOptions& options, const AovSet& aovs, Sink&& sink,
+                  const RenderOptions& options, const AovSet& aovs,
+                  const BlockCounter& nodes_before, uint32_t first, uint32_t spp, Target& target,
                   RenderStats* stats) {
   const Camera& camera = scene.camera;
   const int width = camera.width();
   const int height = camera.height();
-  const int tile = std::clamp(options.tile_size, 1, 16);
+  const bool tile_part = options.tile_parts > 1;
+  const int tile = tile_part ? kPartTileSize : std::clamp(options.tile_size, 1, 16);
   static_assert(size_t{16} * 16 <= kMaxBatch);
   const int tiles_x = (width + tile - 1) / tile;
   const int tiles_y = (height + tile - 1) / tile;
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
   const bool corner = integrator.pixel_corner_only();
-  const uint32_t first = corner ? 0 : options.first_sample;
-  const uint32_t spp = corner ? 1 : options.spp;
+  const uint32_t end = first + spp;
   const PixelFilter filter(options.filter);
-
+  // A part renders tiles part, part + parts, ...: neighbouring tiles cost about the same, so
+  // interleaving them balances the parts' work whatever the scene.
+  const int part = tile_part ? options.tile_part : 0;
+  const int stride = tile_part ? options.tile_parts : 1;
   std::atomic<uint64_t> rays{0};
   std::atomic<int> tiles_done{0};
-  const int tiles_total = tiles_x * tiles_y;
+  const int tiles_all = tiles_x * tiles_y;
+  const int tiles_total = tiles_all > part ? (tiles_all - part + stride - 1) / stride : 0;
   const auto start = std::chrono::steady_clock::now();
 
   // One task per thread, each taking tiles from a shared counter until none are left: tiles go to
@@ -75,15 +101,25 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
     // Per thread, reused by every tile: Ray and Sampler initialise their members.
     thread_local std::array<Ray, kMaxBatch> batch;
     thread_local std::array<Sampler, kMaxBatch> samplers;
+    thread_local TileSlots slots;
+    slots.reserve(aovs.any());
     std::array<glm::vec3, kMaxBatch> radiance, albedo, normal;
     std::array<float, kMaxBatch> depth, weight;
     uint64_t traced = 0;
     bool rendered = false;
-    for (int t = next_tile.fetch_add(1, std::memory_order_relaxed); t < tiles_total;
-         t = next_tile.fetch_add(1, std::memory_order_relaxed)) {
+    for (int k = next_tile.fetch_add(1, std::memory_order_relaxed); k < tiles_total;
+         k = next_tile.fetch_add(1, std::memory_order_relaxed)) {
+      const int t = part + k * stride;
       const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
       const int x1 = std::min(x0 + tile, width), y1 = std::min(y0 + tile, height);
-      for (uint32_t s = first; s < first + spp; ++s) {
+      const size_t pixels = static_cast<size_t>((x1 - x0) * (y1 - y0));
+      BlockCounter counter = nodes_before;
+      target.load(x0, y0, x1, y1, slots);
+      if (first % kSampleBlock == 0) {
+        std::fill_n(slots.slot(counter.size()), pixels, glm::vec4(0.0f));
+        if (aovs.any()) std::fill_n(slots.aov_slot(counter.size()), pixels, AovSums{});
+      }
+      for (uint32_t s = first; s < end; ++s) {
         size_t n = 0;
         if (corner) {
           for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
@@ -118,21 +154,46 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
             aovs.normal ? std::span(normal).first(count) : std::span<glm::vec3>(),
             aovs.depth ? std::span(depth).first(count) : std::span<float>()};
         traced += integrator.radiance(in, out, scene, accel);
-        // The same block order as the rays: sample i of the batch is pixel (x, y).
-        size_t i = 0;
-        for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
-          for (int y = by; y < ey; ++y) {
-            for (int x = bx; x < ex; ++x, ++i) {
-              FilmSample sample;
-              sample.radiance = radiance[i];
-              if (aovs.albedo) sample.albedo = albedo[i];
-              if (aovs.normal) sample.normal = normal[i];
-              if (aovs.depth) sample.depth = depth[i];
-              sink(x, y, sample, corner ? 1.0f : weight[i]);
+        // The same block order as the rays: sample i of the batch is slot i.
+        glm::vec4* open = slots.slot(counter.size());
+        if (corner) {
+          // The lab's one unit-weight sample is the pixel: kept as it is, not added to zero.
+          for (size_t i = 0; i < count; ++i) open[i] = glm::vec4(radiance[i], 1.0f);
+        } else {
+          for (size_t i = 0; i < count; ++i) {
+            open[i] += glm::vec4(weight[i] * radiance[i], weight[i]);
+          }
+        }
+        if (aovs.any()) {
+          AovSums* open_aovs = slots.aov_slot(counter.size());
+          const float* w = corner ? nullptr : weight.data();
+          for (size_t i = 0; i < count; ++i) {
+            const float wi = w ? w[i] : 1.0f;
+            if (aovs.albedo) open_aovs[i].albedo += wi * albedo[i];
+            if (aovs.normal) open_aovs[i].normal += wi * normal[i];
+            if (aovs.depth) open_aovs[i].depth += wi * depth[i];
+          }
+        }
+        if ((s + 1) % kSampleBlock == 0) {
+          // The block is complete: it becomes a node, and pairs of siblings merge.
+          const int merges = counter.push(BlockNode{0, s / kSampleBlock});
+          size_t n = counter.size() + static_cast<size_t>(merges);
+          for (int m = 0; m < merges; ++m, --n) {
+            glm::vec4* left = slots.slot(n - 2);
+            const glm::vec4* right = slots.slot(n - 1);
+            for (size_t i = 0; i < count; ++i) left[i] = left[i] + right[i];
+            if (aovs.any()) {
+              AovSums* left_aovs = slots.aov_slot(n - 2);
+              const AovSums* right_aovs = slots.aov_slot(n - 1);
+              for (size_t i = 0; i < count; ++i) left_aovs[i] = left_aovs[i] + right_aovs[i];
             }
           }
-        });
+          std::fill_n(slots.slot(counter.size()), pixels, glm::vec4(0.0f));
+          if (aovs.any()) std::fill_n(slots.aov_slot(counter.size()), pixels, AovSums{});
+        }
       }
+      const size_t layers = counter.size() + (end % kSampleBlock != 0 ? 1 : 0);
+      target.store(x0, y0, x1, y1, slots, layers);
       rendered = true;
       if (options.progress) {
         options.progress->tiles_done(tiles_done.fetch_add(1, std::memory_order_relaxed) + 1,
@@ -167,7 +228,14 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
   if (stats) {
     stats->milliseconds = std::chrono::duration<double, std::milli>(stop - start).count();
     stats->rays = rays.load();
-    stats->samples = static_cast<uint64_t>(width) * static_cast<uint64_t>(height) * spp;
+    uint64_t pixels = 0;
+    for (int k = 0; k < tiles_total; ++k) {
+      const int t = part + k * stride;
+      const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
+      pixels += static_cast<uint64_t>(std::min(tile, width - x0)) *
+                static_cast<uint64_t>(std::min(tile, height - y0));
+    }
+    stats->samples = pixels * spp;
     stats->spp = spp;
     stats->threads = static_cast<int>(std::count_if(
         slot_rendered.begin(), slot_rendered.end(),
@@ -177,29 +245,111 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
 
 }  // namespace
 
+namespace {
+
+// Visits the pixels of [x0, x1) x [y0, y1) in the batch's block order: fn(slot, film index).
+template <typename Fn>
+void for_each_slot(int x0, int y0, int x1, int y1, int width, Fn&& fn) {
+  size_t i = 0;
+  for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
+    for (int y = by; y < ey; ++y) {
+      for (int x = bx; x < ex; ++x, ++i) {
+        fn(i, static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x));
+      }
+    }
+  });
+}
+
+// Tiles whose sums continue a film's layers (read from the old layout) and replace them (written
+// in the new one, whose layers the film has already allocated).
+struct FilmTarget {
+  Film& film;
+  size_t old_layers;
+
+  void load(int x0, int y0, int x1, int y1, TileSlots& slots) const {
+    for (size_t k = 0; k < old_layers; ++k) {
+      const glm::vec4* sums = film.sums(k);
+      glm::vec4* slot = slots.slot(k);
+      for_each_slot(x0, y0, x1, y1, film.width(), [&](size_t i, size_t p) { slot[i] = sums[p]; });
+      if (const AovSums* aovs = film.aov_sums(k)) {
+        AovSums* aov_slot = slots.aov_slot(k);
+        for_each_slot(x0, y0, x1, y1, film.width(),
+                      [&](size_t i, size_t p) { aov_slot[i] = aovs[p]; });
+      }
+    }
+  }
+  void store(int x0, int y0, int x1, int y1, TileSlots& slots, size_t layers) const {
+    for (size_t k = 0; k < layers; ++k) {
+      glm::vec4* sums = film.sums(k);
+      const glm::vec4* slot = slots.slot(k);
+      for_each_slot(x0, y0, x1, y1, film.width(), [&](size_t i, size_t p) { sums[p] = slot[i]; });
+      if (AovSums* aovs = film.aov_sums(k)) {
+        const AovSums* aov_slot = slots.aov_slot(k);
+        for_each_slot(x0, y0, x1, y1, film.width(),
+                      [&](size_t i, size_t p) { aovs[p] = aov_slot[i]; });
+      }
+    }
+  }
+};
+
+// Tiles resolved straight into an image: each pixel's layers added from the right, divided by the
+// weight (what a film of the same samples resolves to, bit for bit, without its memory).
+struct ImageTarget {
+  Image& image;
+
+  void load(int, int, int, int, TileSlots&) const {}
+  void store(int x0, int y0, int x1, int y1, TileSlots& slots, size_t layers) const {
+    size_t i = 0;
+    for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
+      for (int y = by; y < ey; ++y) {
+        for (int x = bx; x < ex; ++x, ++i) {
+          image.at(x, y) = resolve_pixel(fold_from_right(slots.sums.data() + i, layers, kMaxBatch));
+        }
+      }
+    });
+  }
+};
+
+}  // namespace
+
 void render_to_film(const Scene& scene, const Accel& accel, const Integrator& integrator,
                     Film& film, const RenderOptions& options, RenderStats* stats) {
-  render_tiles(
-      scene, accel, integrator, options, film.aovs(),
-      [&](int x, int y, const FilmSample& sample, float weight) { film.add(x, y, sample, weight); },
-      stats);
+  const bool corner = integrator.pixel_corner_only();
+  const uint32_t first = corner ? 0 : options.first_sample;
+  const uint32_t spp = corner ? 1 : options.spp;
+  const bool empty = film.first_sample() == film.end_sample();
+  if (empty ? first % kSampleBlock != 0 : first != film.end_sample()) {
+    throw Error("film", empty
+                            ? "samples must start at a multiple of " +
+                                  std::to_string(kSampleBlock) + ", got " + std::to_string(first)
+                            : "the film holds samples up to " + std::to_string(film.end_sample()) +
+                                  ", not " + std::to_string(first));
+  }
+  if (empty) film.set_layout(first, first, {});
+  const BlockCounter start(film.nodes());
+  BlockCounter after = start;
+  after.push_blocks(film.end_sample() / kSampleBlock, (first + spp) / kSampleBlock);
+  const size_t old_layers = film.layer_count();
+  film.reserve_layers(after.size() + 1);
+  FilmTarget target{film, old_layers};
+  render_tiles(scene, accel, integrator, options, film.aovs(), start, first, spp, target, stats);
+  film.set_layout(film.first_sample(), first + spp,
+                  std::vector<BlockNode>(after.nodes().begin(), after.nodes().end()));
 }
 
 Image render(const Scene& scene, const Accel& accel, const Integrator& integrator,
              const RenderOptions& options, RenderStats* stats) {
-  if (integrator.pixel_corner_only()) {
-    // One unit-weight sample per pixel: the pixel is the sample, written straight to the image
-    // (what a film would resolve to, bit for bit, without its sums).
-    Image image(scene.camera.width(), scene.camera.height());
-    render_tiles(
-        scene, accel, integrator, options, AovSet{},
-        [&](int x, int y, const FilmSample& sample, float) { image.at(x, y) = sample.radiance; },
-        stats);
-    return image;
+  const bool corner = integrator.pixel_corner_only();
+  const uint32_t first = corner ? 0 : options.first_sample;
+  if (first % kSampleBlock != 0) {
+    throw Error("render", "samples must start at a multiple of " + std::to_string(kSampleBlock) +
+                              ", got " + std::to_string(first));
   }
-  Film film(scene.camera.width(), scene.camera.height());
-  render_to_film(scene, accel, integrator, film, options, stats);
-  return film.resolve();
+  Image image(scene.camera.width(), scene.camera.height());
+  ImageTarget target{image};
+  render_tiles(scene, accel, integrator, options, AovSet{}, BlockCounter(), first,
+               corner ? 1 : options.spp, target, stats);
+  return image;
 }
 
 }  // namespace tritrace

@@ -33,7 +33,16 @@ struct RenderOptions {
   uint64_t seed = 0;                          // the Sampler's seed
   SamplerKind sampler = SamplerKind::kSobol;  // and its kind
   FilterKind filter = FilterKind::kBox;       // where in the pixel samples land, and their weights
+  // Part tile_part of tile_parts (`--tile I/N`): only the 16 x 16 tiles t (row-major) with
+  // t % tile_parts == tile_part are rendered (tile_size is then 16); the other pixels get no
+  // samples. Interleaved tiles balance the parts' work, since neighbouring tiles cost about the
+  // same.
+  int tile_part = 0;
+  int tile_parts = 1;
 };
+
+// The tile size of --tile parts.
+inline constexpr int kPartTileSize = 16;
 
 struct RenderStats {
   double milliseconds = 0.0;
@@ -55,12 +64,15 @@ struct RenderStats {
 // The number of threads "all cores" means on this machine.
 int default_thread_count();
 
-// The image of `scene`: the film of options' samples, resolved.
+// The image of `scene`: the film of options' samples, resolved (bit for bit, without the film's
+// memory). options.first_sample must be a multiple of 8 (throws Error otherwise).
 Image render(const Scene& scene, const Accel& accel, const Integrator& integrator,
              const RenderOptions& options = {}, RenderStats* stats = nullptr);
 
 // Adds options' samples of every pixel to `film` (the camera's size), with the film's AOVs: how the
-// viewer accumulates frame after frame, and how sample ranges are rendered apart.
+// viewer accumulates frame after frame, and how sample ranges are rendered apart. An empty film
+// starts at options.first_sample, which must be a multiple of 8; a film that holds samples is
+// continued at its end_sample() only. Throws Error("film", ...) otherwise.
 void render_to_film(const Scene& scene, const Accel& accel, const Integrator& integrator,
                     Film& film, const RenderOptions& options = {}, RenderStats* stats = nullptr);
 
