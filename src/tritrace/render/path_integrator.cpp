@@ -90,9 +90,22 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       const Hit& hit = scratch.hits[k];
       const uint16_t i = path[k];
       if (!hit.found()) {
-        // Escaped into the environment, found by BSDF sampling only (light sampling does not
-        // choose it), so with weight 1.
-        out.radiance[i] += throughput[i] * scene.environment;
+        if (const EnvironmentLight* env = lights_.environment()) {
+          // The map is a light too: after a non-delta bounce, weighted against light sampling's
+          // density for this direction (or left to light sampling alone under kLightOnly).
+          const glm::vec3 dir = glm::normalize(scratch.rays[k].dir);
+          float weight = 1.0f;
+          if (depth > 0 && !std::isinf(bsdf_pdf[i])) {
+            weight = !bsdf_finds_lights ? 0.0f
+                     : mis ? power_heuristic(1.0f, bsdf_pdf[i], 1.0f, lights_.pdf_environment(dir))
+                           : 1.0f;
+          }
+          if (weight > 0.0f) out.radiance[i] += throughput[i] * env->radiance(dir) * weight;
+        } else {
+          // A constant environment, found by BSDF sampling only (light sampling does not choose
+          // it), so with weight 1.
+          out.radiance[i] += throughput[i] * scene.environment;
+        }
         continue;
       }
       Sampler& sampler = batch.samplers[i];
@@ -136,7 +149,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
           const glm::vec3 to_light = ls.point - x;
           const float dist2 = glm::dot(to_light, to_light);
           const float dist = std::sqrt(dist2);
-          const glm::vec3 wi = to_light * (1.0f / dist);
+          const glm::vec3 wi = ls.infinite ? ls.wi : to_light * (1.0f / dist);
           const glm::vec3 wi_local = frame.to_local(wi);
           const glm::vec3 f = dist > 0.0f ? bsdf.eval(wo_local, wi_local) : glm::vec3(0.0f);
           const float cos_theta = std::abs(wi_local.z);
@@ -149,6 +162,11 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
               contribution = throughput[i] * f * ls.radiance * (cos_theta / (dist2 * ls.pdf));
               end = offset_ray_origin(ls.point, -wi,
                                       triangle_extent(mesh.e1()[prim], mesh.e2()[prim]), offset_);
+            } else if (ls.infinite) {
+              const float weight =
+                  mis ? power_heuristic(1.0f, ls.pdf, 1.0f, bsdf.pdf(wo_local, wi_local)) : 1.0f;
+              contribution = throughput[i] * f * ls.radiance * (cos_theta * weight / ls.pdf);
+              end = from + wi;  // only its direction is used: the ray runs to kRayTMax
             } else {
               const float weight =
                   mis ? power_heuristic(1.0f, ls.pdf, 1.0f, bsdf.pdf(wo_local, wi_local)) : 1.0f;
@@ -159,11 +177,11 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
                                       offset_);
             }
             const glm::vec3 segment = end - from;
-            const float length = std::sqrt(glm::dot(segment, segment));
+            const float length = ls.infinite ? kRayTMax : std::sqrt(glm::dot(segment, segment));
             if (length > 0.0f && glm::dot(segment, wi) > 0.0f) {
               Ray& r = scratch.shadow_rays[shadows];
               r.origin = from;
-              r.dir = segment * (1.0f / length);
+              r.dir = ls.infinite ? wi : segment * (1.0f / length);
               r.tmin = 0.0f;
               r.tmax = length;
               shadow_owner[shadows] = i;
@@ -207,7 +225,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
         const glm::vec3 to_light = ls.point - x;
         const float dist2 = glm::dot(to_light, to_light);
         const float dist = std::sqrt(dist2);
-        const glm::vec3 wi = to_light * (1.0f / dist);
+        const glm::vec3 wi = ls.infinite ? ls.wi : to_light * (1.0f / dist);
         const float cos_theta = glm::dot(n, wi);
         if (ls.pdf > 0.0f && dist > 0.0f && cos_theta > 0.0f && max_component(ls.radiance) > 0.0f) {
           glm::vec3 contribution;
@@ -217,6 +235,11 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
             contribution = throughput[i] * f * ls.radiance * (cos_theta / (dist2 * ls.pdf));
             end = offset_ray_origin(ls.point, -wi,
                                     triangle_extent(mesh.e1()[prim], mesh.e2()[prim]), offset_);
+          } else if (ls.infinite) {
+            const float weight =
+                mis ? power_heuristic(1.0f, ls.pdf, 1.0f, cosine_hemisphere_pdf(cos_theta)) : 1.0f;
+            contribution = throughput[i] * f * ls.radiance * (cos_theta * weight / ls.pdf);
+            end = start + wi;  // only its direction is used: the ray runs to kRayTMax
           } else {
             const float weight =
                 mis ? power_heuristic(1.0f, ls.pdf, 1.0f, cosine_hemisphere_pdf(cos_theta)) : 1.0f;
@@ -227,11 +250,11 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
                                   triangle_extent(mesh.e1()[ls.prim], mesh.e2()[ls.prim]), offset_);
           }
           const glm::vec3 segment = end - start;
-          const float length = std::sqrt(glm::dot(segment, segment));
+          const float length = ls.infinite ? kRayTMax : std::sqrt(glm::dot(segment, segment));
           if (length > 0.0f && glm::dot(segment, wi) > 0.0f) {
             Ray& r = scratch.shadow_rays[shadows];
             r.origin = start;
-            r.dir = segment * (1.0f / length);
+            r.dir = ls.infinite ? wi : segment * (1.0f / length);
             r.tmin = 0.0f;
             r.tmax = length;
             shadow_owner[shadows] = i;

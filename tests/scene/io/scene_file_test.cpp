@@ -265,6 +265,37 @@ TEST(SceneFileMaterials, ReadsTypesAndTheirKeys) {
   EXPECT_EQ(p.transmission, 0.25f);
 }
 
+TEST(SceneFileMaterials, ConductorTakesAComplexIndex) {
+  const LoadedScene s = parse(R"({"materials": [{"name": "gold", "type": "conductor",
+      "eta": [0.18, 0.42, 1.37], "k": [3.4, 2.35, 1.85], "roughness": 0.2}], )" +
+                              std::string(kOneTriangle) + "}");
+  const Material& gold = s.scene.materials[0];
+  EXPECT_EQ(gold.type, MaterialType::kConductor);
+  EXPECT_TRUE(gold.has_complex_ior());
+  EXPECT_EQ(gold.conductor_eta, glm::vec3(0.18f, 0.42f, 1.37f));
+  EXPECT_EQ(gold.conductor_k, glm::vec3(3.4f, 2.35f, 1.85f));
+  // albedo becomes the reflectance at normal incidence: ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
+  EXPECT_NEAR(gold.albedo.x, (0.82 * 0.82 + 3.4 * 3.4) / (1.18 * 1.18 + 3.4 * 3.4), 1e-6);
+  const auto with = [&](const std::string& material) {
+    return error_of(R"({"materials": [)" + material + "], " + std::string(kOneTriangle) + "}");
+  };
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "eta": [1, 1, 1]})"),
+            "/materials/0: missing \"k\" (a complex index needs both eta and k)");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "k": [1, 1, 1]})"),
+            "/materials/0: missing \"eta\" (a complex index needs both eta and k)");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "albedo": [1, 1, 1], "eta": [1, 1, 1],
+                     "k": [1, 1, 1]})"),
+            "/materials/0/albedo: a conductor takes albedo or eta and k, not both");
+  EXPECT_EQ(with(R"({"name": "m", "albedo": [1, 1, 1], "eta": [1, 1, 1], "k": [1, 1, 1]})"),
+            "/materials/0/eta: only conductor materials have it");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "eta": [0, 1, 1], "k": [1, 1, 1]})"),
+            "/materials/0/eta/0: must be from 0.01 to 10, got 0");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "eta": [1, 1, 1], "k": [1, -1, 1]})"),
+            "/materials/0/k/1: must not be negative");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "eta": [1, 1, 1], "k": [1, 1, 200]})"),
+            "/materials/0/k/2: must be from 0 to 100, got 200");
+}
+
 TEST(SceneFileMaterials, EachRuleHasItsMessage) {
   const std::string tri = kOneTriangle;
   const auto with = [&](const std::string& material) {

@@ -37,7 +37,7 @@ float microfacet_reflection(const Ggx& ggx, glm::vec3 wo, glm::vec3 wi, glm::vec
 }
 
 glm::vec3 fresnel_of(const Lobe& lobe, float cos_i) {
-  return lobe.kind == Lobe::Kind::kConductor ? fresnel_schlick(lobe.colour, cos_i)
+  return lobe.kind == Lobe::Kind::kConductor ? lobe.conductor_fresnel(cos_i)
                                              : glm::vec3(fresnel_dielectric(cos_i, lobe.eta));
 }
 
@@ -165,6 +165,10 @@ Bsdf::Bsdf(const Material& m, glm::vec3 albedo) {
       break;
     case MaterialType::kConductor:
       add(Lobe::Kind::kConductor, albedo, 1.0f, 0.0f);
+      if (m.has_complex_ior()) {
+        lobes_[0].eta_rgb = m.conductor_eta;
+        lobes_[0].k_rgb = m.conductor_k;
+      }
       break;
     case MaterialType::kDielectric:
       add(Lobe::Kind::kDielectric, albedo, 1.0f, m.ior);
@@ -199,7 +203,7 @@ std::array<float, Bsdf::kMaxLobes> Bsdf::choice(glm::vec3 wo) const {
             (l.eta > 0.0f ? 1.0f - fresnel_dielectric(wo.z, l.eta) : 1.0f);
         break;
       case Lobe::Kind::kConductor:
-        e = max_component(fresnel_schlick(l.colour, wo.z));
+        e = max_component(l.conductor_fresnel(wo.z));
         break;
       case Lobe::Kind::kDielectric: {
         const float f = fresnel_dielectric(wo.z, l.eta);

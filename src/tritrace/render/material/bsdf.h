@@ -24,7 +24,8 @@ struct BsdfSample {
 struct Lobe {
   enum class Kind : uint8_t {
     kLambert,     // colour / pi, times (1 - F(cos_o)) (1 - F(cos_i)) when eta > 0 (under a coat)
-    kConductor,   // GGX reflection with Schlick's Fresnel from F0 = colour
+    kConductor,   // GGX reflection with Schlick's Fresnel from F0 = colour, or the exact Fresnel
+                  // of the complex index eta_rgb + i k_rgb when eta_rgb.x > 0
     kDielectric,  // GGX reflection (exact Fresnel) and transmission tinted by colour
     kCoat,        // GGX reflection with exact Fresnel only (the varnish over a coated diffuse)
   };
@@ -33,8 +34,14 @@ struct Lobe {
   float weight = 1.0f;  // the lobe's share of the mix
   float alpha = 0.0f;   // GGX width
   float eta = 0.0f;     // relative index of the inside; 0 for no Fresnel factor on Lambert
+  glm::vec3 eta_rgb{0.0f}, k_rgb{0.0f};  // a conductor's complex index (unused when eta_rgb.x = 0)
 
   bool delta() const { return kind != Kind::kLambert && alpha < kSmoothAlpha; }
+  // A conductor's reflectance at cos_i (from outside).
+  glm::vec3 conductor_fresnel(float cos_i) const {
+    return eta_rgb.x > 0.0f ? fresnel_conductor(cos_i, eta_rgb, k_rgb)
+                            : fresnel_schlick(colour, cos_i);
+  }
 };
 
 // Directions are in the local shading frame (z = the surface's lab normal, pointing outside). Every

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
@@ -32,6 +33,32 @@ inline float fresnel_dielectric(float cos_i, float eta) {
   const float r_parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
   const float r_perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
   return 0.5f * (r_parallel * r_parallel + r_perpendicular * r_perpendicular);
+}
+
+// Unpolarised Fresnel reflectance of a conductor of complex relative index eta + i k, for light
+// arriving from outside at cos_i: Fresnel's equations with a complex index (Born and Wolf,
+// "Principles of Optics", section 14.2), r_s = (cos_i - n cos_t) / (cos_i + n cos_t) and
+// r_p = (n cos_i - cos_t) / (n cos_i + cos_t) with n cos_t = sqrt(n^2 - sin^2_i) (the root with a
+// non-negative imaginary part, so that the wave decays inside). With k = 0 it is
+// fresnel_dielectric; at normal incidence ((eta - 1)^2 + k^2) / ((eta + 1)^2 + k^2).
+inline float fresnel_complex(float cos_i, float eta, float k) {
+  using C = std::complex<double>;
+  const double c = std::clamp(static_cast<double>(cos_i), 0.0, 1.0);
+  const double sin2 = 1.0 - c * c;
+  const C n(eta, k);
+  C n_cos_t = std::sqrt(n * n - sin2);
+  if (n_cos_t.imag() < 0.0) n_cos_t = -n_cos_t;
+  const C rs = (c - n_cos_t) / (c + n_cos_t);
+  // r_p with n cos_t written as n^2 cos_t / n, so that no division by n is needed: multiply the
+  // numerator and denominator of (n c - cos_t) / (n c + cos_t) by n.
+  const C rp = (n * n * c - n_cos_t) / (n * n * c + n_cos_t);
+  const double r = 0.5 * (std::norm(rs) + std::norm(rp));
+  return static_cast<float>(std::isfinite(r) ? std::min(r, 1.0) : 1.0);
+}
+
+inline glm::vec3 fresnel_conductor(float cos_i, glm::vec3 eta, glm::vec3 k) {
+  return {fresnel_complex(cos_i, eta.x, k.x), fresnel_complex(cos_i, eta.y, k.y),
+          fresnel_complex(cos_i, eta.z, k.z)};
 }
 
 // Schlick's approximation ("An Inexpensive BRDF Model for Physically-based Rendering", 1994) from
