@@ -2,23 +2,31 @@
 // everywhere has radiance Le / (1 - a) at every point), direct light from the lab's point light at
 // hand-computed pixels, agreement of its three ways of finding emitters (MIS, light sampling only,
 // BSDF sampling only), the solid angle density of light sampling against the analytic solid angle
-// of a triangle, and images independent of threads, tiles and how samples are split into calls.
+// of a triangle, and images independent of threads, tiles and how samples are split into calls;
+// the same for environment maps (a furnace from a map file, strategies, rotate and scale).
 #include "tritrace/render/path_integrator.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <functional>
+#include <memory>
 #include <numbers>
 #include <vector>
 
 #include "tritrace/accel/brute_force.h"
 #include "tritrace/accel/bvh/bvh_accel.h"
 #include "tritrace/error.h"
+#include "tritrace/image/image_io.h"
 #include "tritrace/math/sampling.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/io/scene_file.h"
+#include "tritrace/scene/io/scene_loader.h"
 
 namespace tritrace {
 namespace {
@@ -264,6 +272,58 @@ TEST(PathStrategies, MisAndLightSamplingAgreeToHalfAPercent) {
   EXPECT_LT(4.5 * image_se, 0.005 * mis.mean.back()) << "the test resolves half a percent";
 }
 
+// The same agreement with glossy surfaces, where the strategies' weights come from the Bsdf's eval
+// and pdf: a wrong density or a lobe counted twice shows as a disagreement. Walls principled
+// (varnished diffuse), blocks a rough metal; the light stays diffuse and emissive.
+TEST(PathStrategies, AgreeWithGlossyMaterials) {
+  Scene scene = cornell_area_below_the_light();
+  for (Material& m : scene.materials) {
+    if (m.emits()) continue;
+    const glm::vec3 albedo = m.albedo;
+    m = Material{.albedo = albedo, .type = MaterialType::kPrincipled, .roughness = 0.5f};
+  }
+  // The blocks are the last triangles of the box: give them their own rough gold material.
+  scene.materials.push_back(Material{
+      .albedo = glm::vec3(1.0f, 0.8f, 0.35f), .type = MaterialType::kConductor, .roughness = 0.4f});
+  TriangleMesh mesh;
+  const uint32_t gold = static_cast<uint32_t>(scene.materials.size() - 1);
+  for (size_t k = 0; k < scene.mesh.size(); ++k) {
+    const uint32_t m = scene.mesh.material()[k];
+    const bool block = k >= 10 && !scene.materials[m].emits();
+    mesh.add(scene.mesh.vertex(k, 0), scene.mesh.vertex(k, 1), scene.mesh.vertex(k, 2),
+             block ? gold : m);
+  }
+  scene.mesh = std::move(mesh);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const BlockMeans mis =
+      block_means(scene, accel, {.max_depth = 3, .strategy = Strategy::kMis}, 600, 16);
+  const BlockMeans light =
+      block_means(scene, accel, {.max_depth = 3, .strategy = Strategy::kLightOnly}, 700, 16);
+  const BlockMeans bsdf =
+      block_means(scene, accel, {.max_depth = 3, .strategy = Strategy::kBsdfOnly}, 800, 16);
+  EXPECT_GT(expect_agree(mis, light, "glossy: mis vs light only"), 16);
+  EXPECT_GT(expect_agree(mis, bsdf, "glossy: mis vs bsdf only"), 16);
+}
+
+// A pane of "glass" with index 1 and a clear tint changes nothing: light passes straight through
+// (F = 0, no bending, no 1/eta^2). Its image must agree with the scene without it.
+TEST(PathDielectric, IndexOneIsInvisible) {
+  Scene plain = cornell_area_below_the_light();
+  Scene with_pane = plain;
+  with_pane.materials.push_back(
+      Material{.albedo = glm::vec3(1.0f), .type = MaterialType::kDielectric, .ior = 1.0f});
+  const uint32_t pane = static_cast<uint32_t>(with_pane.materials.size() - 1);
+  // Across the room between the camera and the blocks.
+  with_pane.mesh.add({-0.9f, -0.9f, -0.5f}, {0.9f, -0.9f, -0.5f}, {0.9f, 0.9f, -0.5f}, pane);
+  with_pane.mesh.add({-0.9f, -0.9f, -0.5f}, {0.9f, 0.9f, -0.5f}, {-0.9f, 0.9f, -0.5f}, pane);
+  const BvhAccel a(plain.mesh, kDefaultKernel), b(with_pane.mesh, kDefaultKernel);
+  // Default depth: Russian roulette, not a vertex count, ends paths, so crossing the pane (a
+  // vertex) does not change what is estimated.
+  const BlockMeans without = block_means(plain, a, {}, 900, 16);
+  const BlockMeans through = block_means(with_pane, b, {}, 901, 16);
+  EXPECT_GT(expect_agree(without, through, "pane of index 1"), 8);
+}
+
 // The solid angle a triangle subtends from x: Van Oosterom and Strackee, "The Solid Angle of a
 // Plane Triangle", IEEE Trans. Biomed. Eng. 30(2), 1983, in double.
 double solid_angle(glm::dvec3 x, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) {
@@ -405,6 +465,253 @@ TEST(PathRender, TilePartsCoverTheImageOnceAndMatchTheWholeRender) {
     }
   }
   EXPECT_TRUE(same_bits(want, sum));
+}
+
+}  // namespace
+}  // namespace tritrace
+
+namespace tritrace {
+namespace {
+
+// The white furnace per BSDF: a sphere (scenes/models/sphere.obj, 1280 facets) of one material in
+// a uniform environment of radiance 1 and nothing else. A surface that conserves energy (diffuse
+// albedo 1, a smooth mirror of F0 = 1, smooth glass, whose radiance scaling by 1/eta^2 going in
+// and eta^2 going out cancels) returns 1 from every pixel; rough lobes lose energy between
+// microfacets and so never exceed 1.
+Scene sphere_in_furnace(const std::string& material_json) {
+  const std::string text = R"({"camera": {"position": [0, 0, -3], "look_at": [0, 0, 0],
+      "up": [0, -1, 0], "vertical_fov": 30, "width": 24, "height": 24},
+      "environment": {"color": [1, 1, 1]},
+      "materials": [)" + material_json +
+                           R"(], "meshes": [{"file": "sphere.obj", "material": "m"}]})";
+  LoadedScene loaded =
+      parse_scene_json(text, std::string(TRITRACE_SOURCE_DIR) + "/scenes/models/furnace.json");
+  apply_overrides(loaded, {});
+  return std::move(loaded.scene);
+}
+
+struct FurnaceCase {
+  std::string name;
+  std::string material;
+  bool exact;  // conserves energy: every pixel 1; otherwise at most 1
+  double pixel_tolerance = 0.0;
+};
+
+class SphereFurnace : public ::testing::TestWithParam<FurnaceCase> {};
+
+TEST_P(SphereFurnace, ReturnsOneOrLessAtEveryPixel) {
+  const FurnaceCase& c = GetParam();
+  const Scene scene = sphere_in_furnace(c.material);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator integrator(scene);
+  const Image image = render(scene, accel, integrator, {.spp = 64, .seed = 3});
+  const PixelStats s = stats_against(image, 1.0);
+  const double se = s.pixel_sd / std::sqrt(static_cast<double>(image.pixels().size()));
+  ::testing::Test::RecordProperty("mean", std::to_string(s.mean));
+  if (c.exact) {
+    EXPECT_LT(std::abs(s.mean - 1.0), 4.0 * se + 1e-5) << "mean " << s.mean << " se " << se;
+    // Diffuse and the mirror reflect exactly 1 at every bounce: no noise at all. Glass scatters
+    // with weight 1/eta^2 in, eta^2 out, and Russian roulette adds noise; a tolerance of a quarter
+    // still catches a pixel that loses or gains a factor (1/eta^2 = 0.44, eta^2 = 2.25).
+    for (const glm::vec3& p : image.pixels()) {
+      EXPECT_NEAR((p.x + p.y + p.z) / 3.0, 1.0, c.pixel_tolerance);
+    }
+  } else {
+    EXPECT_LT(s.mean, 1.0 + 4.0 * se) << "mean " << s.mean << " se " << se;
+    EXPECT_GT(s.mean, 0.5);  // lost energy, but not most of it
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Materials, SphereFurnace,
+    ::testing::Values(
+        FurnaceCase{"diffuse", R"({"name": "m", "albedo": [1, 1, 1]})", true, 1e-5},
+        FurnaceCase{"mirror", R"({"name": "m", "type": "conductor", "albedo": [1, 1, 1]})", true,
+                    1e-5},
+        FurnaceCase{"glass", R"({"name": "m", "type": "dielectric", "ior": 1.5})", true, 0.25},
+        FurnaceCase{"rough_metal",
+                    R"({"name": "m", "type": "conductor", "albedo": [1, 1, 1], "roughness": 0.6})",
+                    false},
+        FurnaceCase{"rough_glass", R"({"name": "m", "type": "dielectric", "roughness": 0.5})",
+                    false},
+        FurnaceCase{"principled",
+                    R"({"name": "m", "type": "principled", "albedo": [1, 1, 1], "roughness": 0.5,
+                        "metallic": 0.3, "transmission": 0.3})",
+                    false}),
+    [](const auto& info) { return info.param.name; });
+
+// The environment is what escaping rays see: an empty view is its colour exactly.
+TEST(PathEnvironment, CameraRaysThatMissSeeTheEnvironment) {
+  Scene scene = sphere_in_furnace(R"({"name": "m", "albedo": [0, 0, 0]})");
+  scene.environment = glm::vec3(0.25f, 0.5f, 2.0f);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator integrator(scene);
+  const Image image = render(scene, accel, integrator, {.spp = 4, .seed = 1});
+  EXPECT_EQ(image.at(0, 0), glm::vec3(0.25f, 0.5f, 2.0f));  // a corner: no sphere there
+  EXPECT_EQ(image.at(12, 12), glm::vec3(0.0f));             // the black sphere's centre
+}
+
+// Environment maps (issue 12): a map is a light, sampled by its luminance and combined with the
+// BSDFs' sampling by MIS; the same tests as for emissive triangles, under a map.
+std::shared_ptr<EnvironmentMap> environment_map(int w, int h,
+                                                const std::function<glm::vec3(int, int)>& texel) {
+  auto m = std::make_shared<EnvironmentMap>();
+  m->width = w;
+  m->height = h;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) m->texels.push_back(texel(x, y));
+  }
+  return m;
+}
+
+Scene sphere_under_map(const std::string& material_json, std::shared_ptr<EnvironmentMap> map) {
+  Scene scene = sphere_in_furnace(material_json);
+  scene.environment = glm::vec3(0.0f);
+  scene.environment_map = std::move(map);
+  return scene;
+}
+
+// A white furnace through the scene file: a map FILE of constant radiance 0.5 (written here as
+// Radiance HDR and as OpenEXR) around a diffuse sphere of albedo 1 gives 0.5 at every pixel. Light
+// sampling of the map takes part (MIS), so pixels are noisy: the worst was 0.0063 off at 256 spp;
+// a tolerance of 0.05 leaves room and still catches a strategy lost or counted twice (0.25 on
+// every sphere pixel), and the image mean is held to 4 standard errors.
+class PathEnvironmentFiles : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(PathEnvironmentFiles, ConstantMapFileIsAFurnace) {
+  namespace fs = std::filesystem;
+  std::string pattern = (fs::temp_directory_path() / "tritrace-env-furnace-XXXXXX").string();
+  ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
+  const fs::path dir = pattern;
+  Image constant(8, 4);
+  for (int y = 0; y < 4; ++y) {
+    for (int x = 0; x < 8; ++x) constant.at(x, y) = glm::vec3(0.5f);
+  }
+  const std::string file = (dir / ("sky." + GetParam())).string();
+  if (GetParam() == "hdr") {
+    write_radiance_hdr(constant, file);
+  } else {
+    write_exr(constant, file);
+  }
+  const std::string text = R"({"camera": {"position": [0, 0, -3], "look_at": [0, 0, 0],
+      "up": [0, -1, 0], "vertical_fov": 30, "width": 24, "height": 24},
+      "environment": {"file": ")" +
+                           file + R"("},
+      "materials": [{"name": "m", "albedo": [1, 1, 1]}],
+      "meshes": [{"file": ")" +
+                           std::string(TRITRACE_SOURCE_DIR) +
+                           R"(/scenes/models/sphere.obj", "material": "m"}]})";
+  LoadedScene loaded = parse_scene_json(text, (dir / "scene.json").string());
+  apply_overrides(loaded, {});
+  fs::remove_all(dir);
+  const Scene& scene = loaded.scene;
+  ASSERT_TRUE(scene.environment_map);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator integrator(scene);
+  const Image image = render(scene, accel, integrator, {.spp = 256, .seed = 4});
+  const PixelStats s = stats_against(image, 0.5);
+  const double se = s.pixel_sd / std::sqrt(static_cast<double>(image.pixels().size()));
+  EXPECT_LT(std::abs(s.mean - 0.5), 4.0 * se + 1e-5) << "mean " << s.mean << " se " << se;
+  double worst = 0.0;
+  for (const glm::vec3& p : image.pixels()) {
+    worst = std::max(worst, std::abs((p.x + p.y + p.z) / 3.0 - 0.5));
+  }
+  ::testing::Test::RecordProperty("worst_pixel_error", std::to_string(worst));
+  EXPECT_LT(worst, 0.05);
+}
+
+INSTANTIATE_TEST_SUITE_P(Formats, PathEnvironmentFiles, ::testing::Values("hdr", "exr"));
+
+// A map with a gradient and a bright patch: MIS, light sampling alone and BSDF sampling alone
+// agree for every material type, the rough lobes included.
+class PathEnvironmentStrategies : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(PathEnvironmentStrategies, MisLightOnlyAndBsdfOnlyAgree) {
+  const auto map = environment_map(32, 16, [](int x, int y) {
+    if (x >= 20 && x < 24 && y >= 4 && y < 7) return glm::vec3(12.0f, 10.0f, 8.0f);
+    return glm::vec3(0.1f + 0.02f * x, 0.2f + 0.05f * y, 0.4f);
+  });
+  const Scene scene = sphere_under_map(GetParam(), map);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const BlockMeans mis = block_means(scene, accel, {.strategy = Strategy::kMis}, 900, 16);
+  const BlockMeans light = block_means(scene, accel, {.strategy = Strategy::kLightOnly}, 1000, 16);
+  const BlockMeans bsdf = block_means(scene, accel, {.strategy = Strategy::kBsdfOnly}, 1100, 16);
+  EXPECT_GT(expect_agree(mis, light, "map: mis vs light only"), 5);
+  EXPECT_GT(expect_agree(mis, bsdf, "map: mis vs bsdf only"), 5);
+}
+
+constexpr const char* kEnvironmentMaterialNames[] = {"diffuse", "rough_metal", "rough_glass",
+                                                     "principled"};
+
+INSTANTIATE_TEST_SUITE_P(
+    Materials, PathEnvironmentStrategies,
+    ::testing::Values(
+        R"({"name": "m", "albedo": [0.8, 0.8, 0.8]})",
+        R"({"name": "m", "type": "conductor", "albedo": [1, 0.8, 0.4], "roughness": 0.4})",
+        R"({"name": "m", "type": "dielectric", "roughness": 0.5})",
+        R"({"name": "m", "type": "principled", "albedo": [0.6, 0.3, 0.2], "roughness": 0.5,
+            "metallic": 0.3, "transmission": 0.3})"),
+    [](const auto& info) { return std::string(kEnvironmentMaterialNames[info.index]); });
+
+// The mean of the sphere's left and right halves of the image (the sphere covers the middle).
+std::pair<double, double> left_and_right(const Image& image) {
+  double left = 0.0, right = 0.0;
+  const int w = image.width(), h = image.height();
+  for (int y = h / 4; y < 3 * h / 4; ++y) {
+    for (int x = w / 4; x < 3 * w / 4; ++x) {
+      const glm::vec3 p = image.at(x, y);
+      (x < w / 2 ? left : right) += (p.x + p.y + p.z) / 3.0;
+    }
+  }
+  return {left, right};
+}
+
+// A bright spot in the map's centre column (+z: behind the sphere, seen from the camera at -z):
+// rotated by 90 degrees it moves to +x and lights the sphere's right side (image x grows along
+// +x), by -90 degrees to -x, the left side. Scale multiplies the image, exactly for a power of 2.
+TEST(PathEnvironmentMap, RotateAndScaleDoWhatTheDocsSay) {
+  const auto spot = [](float rotate, float scale) {
+    auto m = environment_map(32, 16, [](int x, int y) {
+      return x >= 15 && x < 17 && y >= 7 && y < 9 ? glm::vec3(50.0f) : glm::vec3(0.0f);
+    });
+    m->rotate_degrees = rotate;
+    m->scale = scale;
+    return m;
+  };
+  const auto image_of = [](const std::shared_ptr<EnvironmentMap>& map) {
+    const Scene scene = sphere_under_map(R"({"name": "m", "albedo": [0.8, 0.8, 0.8]})", map);
+    const BvhAccel accel(scene.mesh, kDefaultKernel);
+    const PathIntegrator integrator(scene);
+    return render(scene, accel, integrator, {.spp = 16, .seed = 5});
+  };
+  const auto [l90, r90] = left_and_right(image_of(spot(90.0f, 1.0f)));
+  const auto [lm90, rm90] = left_and_right(image_of(spot(-90.0f, 1.0f)));
+  EXPECT_GT(r90, 5.0 * l90);
+  EXPECT_GT(lm90, 5.0 * rm90);
+  const Image once = image_of(spot(90.0f, 1.0f));
+  const Image twice = image_of(spot(90.0f, 2.0f));
+  for (size_t i = 0; i < once.pixels().size(); ++i) {
+    EXPECT_EQ(twice.pixels()[i], 2.0f * once.pixels()[i]) << "pixel " << i;
+  }
+}
+
+// Camera rays that miss see the map at their direction: the view's corner pixels lie towards the
+// map's columns around +z.
+TEST(PathEnvironmentMap, CameraRaysThatMissSeeTheMap) {
+  const auto map = environment_map(
+      4, 2, [](int x, int y) { return glm::vec3(float(x + 1), float(y + 1), 0.5f); });
+  Scene scene = sphere_under_map(R"({"name": "m", "albedo": [0, 0, 0]})", map);
+  // A 60 degree view, so that the corner pixels miss the sphere entirely.
+  scene.camera = Camera::look_at(24, 24, {0.0f, 0.0f, -3.0f}, {0.0f, 0.0f, 0.0f},
+                                 {0.0f, -1.0f, 0.0f}, Camera::focal_for_vertical_fov(24, 60.0));
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator integrator(scene);
+  const Image image = render(scene, accel, integrator, {.spp = 4, .seed = 1});
+  // Top left: above the horizon (row 0), left of +z (u < 0.5: column 1); bottom right: below the
+  // horizon (row 1), right of +z (column 2).
+  EXPECT_EQ(image.at(0, 0), glm::vec3(2.0f, 1.0f, 0.5f));
+  EXPECT_EQ(image.at(23, 23), glm::vec3(3.0f, 2.0f, 0.5f));
+  EXPECT_EQ(image.at(12, 12), glm::vec3(0.0f));
 }
 
 }  // namespace

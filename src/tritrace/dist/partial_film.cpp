@@ -255,12 +255,27 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
     h.add_value(mat.albedo);
     h.add_value(mat.emission);
     h.add_value(static_cast<uint8_t>(mat.two_sided));
+    h.add_value(static_cast<uint8_t>(mat.type));
+    h.add_value(mat.roughness);
+    h.add_value(mat.ior);
+    h.add_value(mat.metallic);
+    h.add_value(mat.transmission);
+    h.add_value(mat.conductor_eta);
+    h.add_value(mat.conductor_k);
   }
   for (const PointLight& l : scene.lights) {
     h.add_value(l.position);
     h.add_value(l.power);
   }
   h.add_value(scene.ambient);
+  h.add_value(scene.environment);
+  if (const EnvironmentMap* env = scene.environment_map.get()) {
+    h.add_value(env->width);
+    h.add_value(env->height);
+    h.add_vector(env->texels);
+    h.add_value(env->scale);
+    h.add_value(env->rotate_degrees);
+  }
   const Camera& c = scene.camera;
   for (glm::vec3 v : {c.position(), c.right(), c.down(), c.forward()}) h.add_value(v);
   h.add_value(c.focal_px());

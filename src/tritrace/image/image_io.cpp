@@ -8,6 +8,12 @@
 #include <filesystem>
 #include <string>
 
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <cmath>
+
 #include "stb_image.h"
 #include "stb_image_write.h"
 #include "tritrace/error.h"
@@ -119,6 +125,104 @@ Rgb8Image read_image_rgb8(const std::string& path) {
   Rgb8Image image{w, h, std::vector<uint8_t>(data, data + static_cast<size_t>(w) * h * 3)};
   stbi_image_free(data);
   return image;
+}
+
+namespace {
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
+
+Image read_hdr(const std::string& path) {
+  int w = 0, h = 0, channels = 0;
+  float* data = stbi_loadf(path.c_str(), &w, &h, &channels, 3);
+  if (!data) throw Error(path, std::string("cannot read image: ") + stbi_failure_reason());
+  Image image(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const float* p = data + (static_cast<size_t>(y) * static_cast<size_t>(w) + x) * 3;
+      image.at(x, y) = glm::vec3(p[0], p[1], p[2]);
+    }
+  }
+  stbi_image_free(data);
+  return image;
+}
+
+Image read_exr(const std::string& path) {
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i window = file.header().dataWindow();
+    const int w = window.max.x - window.min.x + 1, h = window.max.y - window.min.y + 1;
+    if (w <= 0 || h <= 0) throw Error(path, "EXR image without pixels");
+    const Imf::ChannelList& channels = file.header().channels();
+    const bool luminance_only = !channels.findChannel("R") && !channels.findChannel("G") &&
+                                !channels.findChannel("B") && channels.findChannel("Y");
+    std::vector<float> rgb(static_cast<size_t>(w) * static_cast<size_t>(h) * 3, 0.0f);
+    Imf::FrameBuffer frame;
+    // The slices' base is placed so that the data window's first pixel lands on rgb[0].
+    const ptrdiff_t origin = static_cast<ptrdiff_t>(window.min.y) * w + window.min.x;
+    const char* names[3] = {"R", "G", "B"};
+    for (int c = 0; c < (luminance_only ? 1 : 3); ++c) {
+      char* base = reinterpret_cast<char*>(rgb.data() + c - origin * 3);
+      frame.insert(luminance_only ? "Y" : names[c], Imf::Slice(Imf::FLOAT, base, sizeof(float) * 3,
+                                                               sizeof(float) * 3 * w, 1, 1, 0.0));
+    }
+    file.setFrameBuffer(frame);
+    file.readPixels(window.min.y, window.max.y);
+    Image image(w, h);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const float* p = rgb.data() + (static_cast<size_t>(y) * static_cast<size_t>(w) + x) * 3;
+        image.at(x, y) = luminance_only ? glm::vec3(p[0]) : glm::vec3(p[0], p[1], p[2]);
+      }
+    }
+    return image;
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    std::string reason = e.what();
+    std::replace(reason.begin(), reason.end(), '\n', ' ');
+    throw Error(path, "cannot read image: " + reason);
+  }
+}
+
+}  // namespace
+
+Image read_image_float(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  if (ext != ".hdr" && ext != ".exr") {
+    throw Error(path, "unknown image extension '" + ext + "' (use " +
+                          std::string(kFloatImageExtensions) + ")");
+  }
+  if (!std::filesystem::is_regular_file(path)) throw Error(path, "cannot read image: no such file");
+  Image image = ext == ".hdr" ? read_hdr(path) : read_exr(path);
+  for (const glm::vec3& c : image.pixels()) {
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(c[k]) || c[k] < 0.0f) {
+        throw Error(path, "image with a non-finite or negative value");
+      }
+    }
+  }
+  return image;
+}
+
+void write_radiance_hdr(const Image& image, const std::string& path) {
+  std::vector<float> rgb;
+  rgb.reserve(image.pixels().size() * 3);
+  for (const glm::vec3& c : image.pixels()) rgb.insert(rgb.end(), {c.x, c.y, c.z});
+  std::vector<uint8_t> out;
+  auto append = [](void* context, void* data, int size) {
+    auto* dst = static_cast<std::vector<uint8_t>*>(context);
+    const auto* src = static_cast<const uint8_t*>(data);
+    dst->insert(dst->end(), src, src + size);
+  };
+  if (!stbi_write_hdr_to_func(append, &out, image.width(), image.height(), 3, rgb.data())) {
+    throw Error(path, "cannot encode a Radiance HDR image");
+  }
+  write_file_atomic(path, out);
 }
 
 }  // namespace tritrace

@@ -59,4 +59,16 @@ struct Rgb8Image {
 // Reads an 8-bit RGB file back (PNG or PPM, through stb_image); for tests and tools.
 Rgb8Image read_image_rgb8(const std::string& path);
 
+// Reads linear float RGB, chosen by the extension (case-insensitively): Radiance HDR (.hdr, through
+// stb_image) or OpenEXR (.exr: its R, G and B channels as 32-bit floats, a missing one as 0, or Y
+// for all three when it has only luminance). Throws Error(path, reason) for another extension, an
+// unreadable file, or a non-finite or negative value.
+Image read_image_float(const std::string& path);
+
+// The extensions read_image_float knows, as error messages list them.
+inline constexpr std::string_view kFloatImageExtensions = ".hdr or .exr";
+
+// Writes a Radiance HDR file (RGBE, run-length encoded, through stb_image_write), atomically.
+void write_radiance_hdr(const Image& image, const std::string& path);
+
 }  // namespace tritrace

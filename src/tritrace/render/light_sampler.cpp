@@ -62,13 +62,28 @@ LightSampler::LightSampler(const Scene& scene) {
     power.push_back(p);
     emissive_prims_.push_back(prim);
   }
+  if (scene.environment_map) {
+    environment_ = EnvironmentLight(*scene.environment_map);
+    has_environment_ = !environment_.black();
+  }
+  if (has_environment_) {
+    // A light at infinity has no finite power to compare with the others' (pbrt estimates it over
+    // the scene's bounding disk, which a ground plane or a far point light makes arbitrary): it is
+    // chosen half the time when the scene has other lights, always when it has none.
+    double others = 0.0;
+    for (float p : power) others += static_cast<double>(p);
+    Light light{};
+    light.environment = true;
+    lights_.push_back(light);
+    power.push_back(others > 0.0 ? static_cast<float>(others) : 1.0f);
+  }
   table_ = AliasTable(power);
-  const size_t first_triangle = lights_.size() - emissive_prims_.size();
+  if (has_environment_) environment_pmf_ = table_.pmf(static_cast<uint32_t>(lights_.size() - 1));
   for (size_t k = 0; k < lights_.size(); ++k) {
     Light& light = lights_[k];
-    const float pmf = table_.pmf(static_cast<uint32_t>(k));
-    if (!light.point) light.pmf_over_area = pmf / triangle_area(mesh, light.index);
-    if (k >= first_triangle) emissive_pmf_over_area_.push_back(light.pmf_over_area);
+    if (light.point || light.environment) continue;
+    light.pmf_over_area = table_.pmf(static_cast<uint32_t>(k)) / triangle_area(mesh, light.index);
+    emissive_pmf_over_area_.push_back(light.pmf_over_area);
   }
 }
 
@@ -78,6 +93,15 @@ LightSample LightSampler::sample(const Scene& /*scene*/, glm::vec3 x, float u_se
   if (table_.empty()) return out;
   const AliasTable::Sample pick = table_.sample(u_select);
   const Light& light = lights_[pick.index];
+  if (light.environment) {
+    const EnvironmentLight::Sample e = environment_.sample(u_point);
+    out.infinite = true;
+    out.wi = e.wi;
+    out.point = x + e.wi;
+    out.radiance = e.radiance;
+    out.pdf = pick.pmf * e.pdf;
+    return out;
+  }
   if (light.point) {
     out.point = light.p0;
     out.radiance = light.radiance;  // intensity

@@ -1,6 +1,7 @@
-// LightSampler: every emitter of a scene (point lights and emissive triangles) in one list, chosen
-// in proportion to its power through an alias table, with the densities that next-event estimation
-// and multiple importance sampling need. Built once per scene, then read-only.
+// LightSampler: every emitter of a scene (point lights, emissive triangles and an environment map)
+// in one list, chosen in proportion to its power through an alias table, with the densities that
+// next-event estimation and multiple importance sampling need. Built once per scene, then
+// read-only.
 #pragma once
 
 #include <cstdint>
@@ -8,6 +9,7 @@
 #include <vector>
 
 #include "tritrace/math/sampling.h"
+#include "tritrace/render/environment_light.h"
 #include "tritrace/scene/scene.h"
 
 namespace tritrace {
@@ -18,6 +20,8 @@ struct LightSample {
   glm::vec3 radiance{0.0f};  // Le towards the shading point, or intensity for a point light
   float pdf = 0.0f;          // solid angle density at the shading point; inf for a point light
   bool delta = false;        // a point light: no other strategy can sample it
+  bool infinite = false;     // the environment map: `wi` is the direction, `point` is unused
+  glm::vec3 wi{0.0f};        // towards the environment (infinite only)
   uint32_t prim = 0;         // the emissive triangle (unused for a point light)
   float extent = 0.0f;       // the triangle's largest edge component (for the shadow ray's end)
 };
@@ -38,8 +42,15 @@ class LightSampler {
   float pdf_triangle(const Scene& scene, uint32_t prim, glm::vec3 x, glm::vec3 y) const;
 
   // The probability of choosing light i (point lights first, then emissive triangles in mesh
-  // order), for tests.
+  // order, then the environment map), for tests.
   float pmf(size_t i) const { return table_.pmf(static_cast<uint32_t>(i)); }
+
+  // The scene's environment map (empty when it has none), and the solid-angle density with which
+  // sample() picks direction `dir` of it (for the MIS weight of a BSDF-sampled ray that escaped).
+  const EnvironmentLight* environment() const { return has_environment_ ? &environment_ : nullptr; }
+  float pdf_environment(glm::vec3 dir) const {
+    return has_environment_ ? environment_pmf_ * environment_.pdf(dir) : 0.0f;
+  }
 
  private:
   // What sampling a light reads, in one place (no trips through the scene's arrays): for a point
@@ -47,6 +58,7 @@ class LightSampler {
   struct Light {
     uint32_t index;  // into scene.lights for a point light, else the triangle's prim
     bool point;
+    bool environment;
     bool two_sided;
     glm::vec3 p0, e1, e2, normal;
     glm::vec3 radiance;   // Le, or a point light's intensity P / (4 pi)
@@ -57,6 +69,9 @@ class LightSampler {
   std::vector<uint32_t> emissive_prims_;       // sorted, for pdf_triangle
   std::vector<float> emissive_pmf_over_area_;  // parallel to emissive_prims_
   AliasTable table_;
+  EnvironmentLight environment_;
+  bool has_environment_ = false;  // a map that is not black
+  float environment_pmf_ = 0.0f;
 };
 
 // The radiance an emissive material sends from a triangle with lab normal `n` along `w` (pointing

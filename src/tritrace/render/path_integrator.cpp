@@ -9,6 +9,7 @@
 #include <glm/geometric.hpp>
 
 #include "tritrace/math/sampling.h"
+#include "tritrace/render/material/bsdf.h"
 
 namespace tritrace {
 namespace {
@@ -87,8 +88,26 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
     size_t shadows = 0, next = 0;
     for (size_t k = 0; k < active; ++k) {
       const Hit& hit = scratch.hits[k];
-      if (!hit.found()) continue;  // escaped: no environment light yet
       const uint16_t i = path[k];
+      if (!hit.found()) {
+        if (const EnvironmentLight* env = lights_.environment()) {
+          // The map is a light too: after a non-delta bounce, weighted against light sampling's
+          // density for this direction (or left to light sampling alone under kLightOnly).
+          const glm::vec3 dir = glm::normalize(scratch.rays[k].dir);
+          float weight = 1.0f;
+          if (depth > 0 && !std::isinf(bsdf_pdf[i])) {
+            weight = !bsdf_finds_lights ? 0.0f
+                     : mis ? power_heuristic(1.0f, bsdf_pdf[i], 1.0f, lights_.pdf_environment(dir))
+                           : 1.0f;
+          }
+          if (weight > 0.0f) out.radiance[i] += throughput[i] * env->radiance(dir) * weight;
+        } else {
+          // A constant environment, found by BSDF sampling only (light sampling does not choose
+          // it), so with weight 1.
+          out.radiance[i] += throughput[i] * scene.environment;
+        }
+        continue;
+      }
       Sampler& sampler = batch.samplers[i];
       // A fixed number of dimensions per vertex, whichever branches are taken, in three 2-D groups
       // (each stratified over a pixel's samples by the Sobol sampler): the light's choice with the
@@ -118,6 +137,84 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       }
       if (depth == settings_.max_depth) continue;
 
+      if (!material.is_diffuse()) {
+        // Glossy and transparent surfaces, through their Bsdf. The lobe choice reuses the light's
+        // choice number: light sampling adds its term and the bounce continues the path, so the
+        // estimate's expectation is the sum of two expectations, each over a uniform number, and
+        // stays unbiased (unlike the roulette's coin, which multiplies the same path's weight).
+        const Bsdf bsdf(material);
+        const Frame frame = Frame::from_normal(n_lab);
+        const glm::vec3 wo_local = frame.to_local(wo);
+        if (!lights_.empty() && !bsdf.all_delta()) {
+          LightSample ls = lights_.sample(scene, x, u_light, u_light_point);
+          if (!ls.delta && !light_finds_triangles) ls.pdf = 0.0f;
+          const glm::vec3 to_light = ls.point - x;
+          const float dist2 = glm::dot(to_light, to_light);
+          const float dist = std::sqrt(dist2);
+          const glm::vec3 wi = ls.infinite ? ls.wi : to_light * (1.0f / dist);
+          const glm::vec3 wi_local = frame.to_local(wi);
+          const glm::vec3 f = dist > 0.0f ? bsdf.eval(wo_local, wi_local) : glm::vec3(0.0f);
+          const float cos_theta = std::abs(wi_local.z);
+          if (ls.pdf > 0.0f && max_component(f) > 0.0f && max_component(ls.radiance) > 0.0f) {
+            const glm::vec3 side = wi_local.z >= 0.0f ? n_lab : -n_lab;
+            const glm::vec3 from = leave_surface(tri, x, side, offset_);
+            glm::vec3 contribution;
+            glm::vec3 end;
+            if (ls.delta) {
+              contribution = throughput[i] * f * ls.radiance * (cos_theta / (dist2 * ls.pdf));
+              end = offset_ray_origin(ls.point, -wi, triangle_extent(tri.e1, tri.e2), offset_);
+            } else if (ls.infinite) {
+              const float weight =
+                  mis ? power_heuristic(1.0f, ls.pdf, 1.0f, bsdf.pdf(wo_local, wi_local)) : 1.0f;
+              contribution = throughput[i] * f * ls.radiance * (cos_theta * weight / ls.pdf);
+              end = from + wi;  // only its direction is used: the ray runs to kRayTMax
+            } else {
+              const float weight =
+                  mis ? power_heuristic(1.0f, ls.pdf, 1.0f, bsdf.pdf(wo_local, wi_local)) : 1.0f;
+              contribution = throughput[i] * f * ls.radiance * (cos_theta * weight / ls.pdf);
+              const glm::vec3 light_side = glm::dot(ls.normal, wi) < 0.0f ? ls.normal : -ls.normal;
+              end = offset_ray_origin(ls.point, light_side,
+                                      triangle_extent(mesh.e1()[ls.prim], mesh.e2()[ls.prim]),
+                                      offset_);
+            }
+            const glm::vec3 segment = end - from;
+            const float length = ls.infinite ? kRayTMax : std::sqrt(glm::dot(segment, segment));
+            if (length > 0.0f && glm::dot(segment, wi) > 0.0f) {
+              Ray& r = scratch.shadow_rays[shadows];
+              r.origin = from;
+              r.dir = ls.infinite ? wi : segment * (1.0f / length);
+              r.tmin = 0.0f;
+              r.tmax = length;
+              shadow_owner[shadows] = i;
+              shadow_contribution[shadows] = contribution;
+              ++shadows;
+            } else {
+              out.radiance[i] += contribution;
+            }
+          }
+        }
+        const BsdfSample bs = bsdf.sample(wo_local, u_light, u_bsdf);
+        if (!bs.valid()) continue;
+        glm::vec3 t = throughput[i] * bs.weight;
+        if (depth + 1 >= settings_.roulette_depth) {
+          const float survive = std::min(1.0f, std::sqrt(max_component(t)));
+          if (!(u_roulette < survive)) continue;
+          t *= 1.0f / survive;
+        }
+        if (!(max_component(t) > 0.0f)) continue;
+        throughput[i] = t;
+        bsdf_pdf[i] = bs.pdf;  // infinite for a delta lobe: emission found by it gets weight 1
+        origin_point[i] = x;
+        Ray& r = scratch.rays[next];
+        r.origin = leave_surface(tri, x, bs.wi.z >= 0.0f ? n_lab : -n_lab, offset_);
+        r.dir = frame.to_world(bs.wi);
+        r.tmin = 0.0f;
+        r.tmax = kRayTMax;
+        path[next] = i;
+        ++next;
+        continue;
+      }
+
       // The side the path arrived from: the two-sided surface reflects there, and both the shadow
       // ray and the bounce leave from that side.
       const glm::vec3 n = glm::dot(n_lab, wo) >= 0.0f ? n_lab : -n_lab;
@@ -129,7 +226,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
         const glm::vec3 to_light = ls.point - x;
         const float dist2 = glm::dot(to_light, to_light);
         const float dist = std::sqrt(dist2);
-        const glm::vec3 wi = to_light * (1.0f / dist);
+        const glm::vec3 wi = ls.infinite ? ls.wi : to_light * (1.0f / dist);
         const float cos_theta = glm::dot(n, wi);
         if (ls.pdf > 0.0f && dist > 0.0f && cos_theta > 0.0f && max_component(ls.radiance) > 0.0f) {
           glm::vec3 contribution;
@@ -138,6 +235,11 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
             // Intensity / r^2 is the irradiance normal to the light's direction.
             contribution = throughput[i] * f * ls.radiance * (cos_theta / (dist2 * ls.pdf));
             end = offset_ray_origin(ls.point, -wi, triangle_extent(tri.e1, tri.e2), offset_);
+          } else if (ls.infinite) {
+            const float weight =
+                mis ? power_heuristic(1.0f, ls.pdf, 1.0f, cosine_hemisphere_pdf(cos_theta)) : 1.0f;
+            contribution = throughput[i] * f * ls.radiance * (cos_theta * weight / ls.pdf);
+            end = start + wi;  // only its direction is used: the ray runs to kRayTMax
           } else {
             const float weight =
                 mis ? power_heuristic(1.0f, ls.pdf, 1.0f, cosine_hemisphere_pdf(cos_theta)) : 1.0f;
@@ -148,11 +250,11 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
                                   triangle_extent(mesh.e1()[ls.prim], mesh.e2()[ls.prim]), offset_);
           }
           const glm::vec3 segment = end - start;
-          const float length = std::sqrt(glm::dot(segment, segment));
+          const float length = ls.infinite ? kRayTMax : std::sqrt(glm::dot(segment, segment));
           if (length > 0.0f && glm::dot(segment, wi) > 0.0f) {
             Ray& r = scratch.shadow_rays[shadows];
             r.origin = start;
-            r.dir = segment * (1.0f / length);
+            r.dir = ls.infinite ? wi : segment * (1.0f / length);
             r.tmin = 0.0f;
             r.tmax = length;
             shadow_owner[shadows] = i;

@@ -1,8 +1,9 @@
-// PathIntegrator: unbiased path tracing of diffuse scenes lit by point lights and emissive
-// triangles. At every vertex: next-event estimation (one light chosen by power, one shadow ray) and
-// a cosine-sampled bounce, the two combined by multiple importance sampling with the power
-// heuristic (Veach 1997) where both can find the light; Russian roulette after a few bounces. No
-// clamping. The paths of a batch advance together, one bounce at a time, so each bounce is one
+// PathIntegrator: unbiased path tracing of scenes lit by point lights, emissive triangles and an
+// environment (a constant colour, or a map sampled as a light). At every vertex: next-event
+// estimation (one light chosen by power, one shadow ray) and a bounce sampled from the surface's
+// BSDF (cosine-sampled for diffuse), the two combined by multiple importance sampling with the
+// power heuristic (Veach 1997) where both can find the light; Russian roulette after a few bounces.
+// No clamping. The paths of a batch advance together, one bounce at a time, so each bounce is one
 // batch query to the accel (traced ray by ray: bounce rays are incoherent).
 #pragma once
 

@@ -285,6 +285,93 @@ TEST(SceneFileErrors, InstancesRulesHaveTheirMessages) {
             "/meshes/0/instances/1/translate: must be an array of 3 numbers, got 2 elements");
   EXPECT_EQ(error_of(mesh + R"([{"scale": 1e-39}]}]})"),
             "/meshes/0/instances/0: the transform is not invertible");
+TEST(SceneFileMaterials, ReadsTypesAndTheirKeys) {
+  const std::string tri = kOneTriangle;
+  const LoadedScene s = parse(R"({"materials": [
+      {"name": "d", "albedo": [0.5, 0.5, 0.5]},
+      {"name": "gold", "type": "conductor", "albedo": [1, 0.8, 0.3], "roughness": 0.25},
+      {"name": "glass", "type": "dielectric", "ior": 1.33},
+      {"name": "p", "type": "principled", "albedo": [0.2, 0.3, 0.4], "metallic": 0.5,
+       "roughness": 0.7, "ior": 1.45, "transmission": 0.25}], )" +
+                              tri + "}");
+  ASSERT_GE(s.scene.materials.size(), 4u);  // then the inline mesh's default grey
+  const Material& d = s.scene.materials[0];
+  EXPECT_EQ(d.type, MaterialType::kDiffuse);
+  const Material& gold = s.scene.materials[1];
+  EXPECT_EQ(gold.type, MaterialType::kConductor);
+  EXPECT_EQ(gold.albedo, glm::vec3(1.0f, 0.8f, 0.3f));
+  EXPECT_EQ(gold.roughness, 0.25f);
+  const Material& glass = s.scene.materials[2];
+  EXPECT_EQ(glass.type, MaterialType::kDielectric);
+  EXPECT_EQ(glass.ior, 1.33f);
+  EXPECT_EQ(glass.albedo, glm::vec3(1.0f));  // clear by default
+  EXPECT_EQ(glass.roughness, 0.0f);
+  const Material& p = s.scene.materials[3];
+  EXPECT_EQ(p.type, MaterialType::kPrincipled);
+  EXPECT_EQ(p.metallic, 0.5f);
+  EXPECT_EQ(p.roughness, 0.7f);
+  EXPECT_EQ(p.ior, 1.45f);
+  EXPECT_EQ(p.transmission, 0.25f);
+}
+
+TEST(SceneFileMaterials, ConductorTakesAComplexIndex) {
+  const LoadedScene s = parse(R"({"materials": [{"name": "gold", "type": "conductor",
+      "eta": [0.18, 0.42, 1.37], "k": [3.4, 2.35, 1.85], "roughness": 0.2}], )" +
+                              std::string(kOneTriangle) + "}");
+  const Material& gold = s.scene.materials[0];
+  EXPECT_EQ(gold.type, MaterialType::kConductor);
+  EXPECT_TRUE(gold.has_complex_ior());
+  EXPECT_EQ(gold.conductor_eta, glm::vec3(0.18f, 0.42f, 1.37f));
+  EXPECT_EQ(gold.conductor_k, glm::vec3(3.4f, 2.35f, 1.85f));
+  // albedo becomes the reflectance at normal incidence: ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
+  EXPECT_NEAR(gold.albedo.x, (0.82 * 0.82 + 3.4 * 3.4) / (1.18 * 1.18 + 3.4 * 3.4), 1e-6);
+  const auto with = [&](const std::string& material) {
+    return error_of(R"({"materials": [)" + material + "], " + std::string(kOneTriangle) + "}");
+  };
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "eta": [1, 1, 1]})"),
+            "/materials/0: missing \"k\" (a complex index needs both eta and k)");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "k": [1, 1, 1]})"),
+            "/materials/0: missing \"eta\" (a complex index needs both eta and k)");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "albedo": [1, 1, 1], "eta": [1, 1, 1],
+                     "k": [1, 1, 1]})"),
+            "/materials/0/albedo: a conductor takes albedo or eta and k, not both");
+  EXPECT_EQ(with(R"({"name": "m", "albedo": [1, 1, 1], "eta": [1, 1, 1], "k": [1, 1, 1]})"),
+            "/materials/0/eta: only conductor materials have it");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "eta": [0, 1, 1], "k": [1, 1, 1]})"),
+            "/materials/0/eta/0: must be from 0.01 to 10, got 0");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "eta": [1, 1, 1], "k": [1, -1, 1]})"),
+            "/materials/0/k/1: must not be negative");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "eta": [1, 1, 1], "k": [1, 1, 200]})"),
+            "/materials/0/k/2: must be from 0 to 100, got 200");
+}
+
+TEST(SceneFileMaterials, EachRuleHasItsMessage) {
+  const std::string tri = kOneTriangle;
+  const auto with = [&](const std::string& material) {
+    return error_of(R"({"materials": [)" + material + "], " + tri + "}");
+  };
+  EXPECT_EQ(with(R"({"name": "m", "type": "metal", "albedo": [1,1,1]})"),
+            "/materials/0/type: unknown material type 'metal' (use diffuse, conductor, dielectric "
+            "or principled)");
+  EXPECT_EQ(with(R"({"name": "m", "type": 3, "albedo": [1,1,1]})"),
+            "/materials/0/type: must be a string, got 3");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor"})"), "/materials/0: missing \"albedo\"");
+  EXPECT_EQ(with(R"({"name": "m", "albedo": [1,1,1], "roughness": 0.5})"),
+            "/materials/0/roughness: only conductor, dielectric and principled materials have it");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "albedo": [1,1,1], "ior": 1.5})"),
+            "/materials/0/ior: only dielectric and principled materials have it");
+  EXPECT_EQ(with(R"({"name": "m", "type": "dielectric", "metallic": 1})"),
+            "/materials/0/metallic: only principled materials have it");
+  EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "albedo": [1,1,1], "roughness": 1.5})"),
+            "/materials/0/roughness: must be from 0 to 1, got 1.5");
+  EXPECT_EQ(with(R"({"name": "m", "type": "principled", "albedo": [1,1,1], "metallic": -0.1})"),
+            "/materials/0/metallic: must be from 0 to 1, got -0.1");
+  EXPECT_EQ(with(R"({"name": "m", "type": "dielectric", "ior": 0})"),
+            "/materials/0/ior: must be from 0.1 to 10, got 0");
+  EXPECT_EQ(with(R"({"name": "m", "type": "dielectric", "ior": "glass"})"),
+            "/materials/0/ior: must be a number, got 'glass'");
+  EXPECT_EQ(with(R"({"name": "m", "type": "dielectric", "albedo": [1, 2, 1]})"),
+            "/materials/0/albedo/1: must be at most 1");
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <glm/mat3x3.hpp>
 #include <limits>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
@@ -27,6 +28,8 @@ using Json = nlohmann::json;
 namespace fs = std::filesystem;
 
 constexpr size_t kMaxShownChars = 60;
+// Indices of refraction beyond any real material's (diamond 2.4, germanium 4) or their inverse.
+constexpr float kMaxIor = 10.0f;
 
 // A user's string made safe for a one-line message: control characters become '?', long text is
 // cut.
@@ -119,8 +122,8 @@ class Parser {
     const Json doc = parse_text(text_, path_);
     if (!doc.is_object()) fail("", "a scene must be a JSON object, got " + describe(doc));
     check_keys(doc, "",
-               {"description", "camera", "lights", "ambient", "materials", "meshes", "output",
-                "integrator"});
+               {"description", "camera", "lights", "ambient", "environment", "materials", "meshes",
+                "output", "integrator"});
     if (doc.contains("description") && !doc["description"].is_string()) {
       fail("/description", "must be a string, got " + describe(doc["description"]));
     }
@@ -130,6 +133,7 @@ class Parser {
     if (doc.contains("ambient")) {
       out_.scene.ambient = non_negative_vec3(doc["ambient"], "/ambient");
     }
+    if (doc.contains("environment")) parse_environment(doc["environment"]);
     if (doc.contains("materials")) parse_materials(doc["materials"]);
     if (!doc.contains("meshes")) fail("", "no geometry: the scene has no \"meshes\"");
     parse_meshes(doc["meshes"]);
@@ -214,6 +218,63 @@ class Parser {
     return v;
   }
 
+  // {"color": [r, g, b]} or {"file": "sky.hdr" | "sky.exr", "scale": s, "rotate": degrees}.
+  void parse_environment(const Json& j) {
+    const Json& env = object(j, "/environment");
+    check_keys(env, "/environment", {"color", "file", "scale", "rotate"});
+    const bool has_file = env.contains("file");
+    if (env.contains("color") && has_file) {
+      fail("/environment", "has both \"color\" and \"file\"; give one");
+    }
+    if (!env.contains("color") && !has_file) fail("/environment", "missing \"color\" or \"file\"");
+    if (!has_file) {
+      for (const char* key : {"scale", "rotate"}) {
+        if (env.contains(key))
+          fail("/environment/" + std::string(key), "applies to a \"file\" only");
+      }
+      out_.scene.environment = non_negative_vec3(env["color"], "/environment/color");
+      return;
+    }
+    auto map = std::make_shared<EnvironmentMap>();
+    if (env.contains("scale")) {
+      map->scale = single(env["scale"], "/environment/scale");
+      if (map->scale < 0.0f)
+        fail("/environment/scale", "must not be negative, got " + describe(env["scale"]));
+    }
+    if (env.contains("rotate")) map->rotate_degrees = single(env["rotate"], "/environment/rotate");
+    const std::string name = string(env["file"], "/environment/file");
+    if (name.empty()) fail("/environment/file", "must name an image file");
+    const fs::path resolved =
+        fs::path(name).is_absolute() ? fs::path(name) : fs::path(path_).parent_path() / name;
+    Image image;
+    try {
+      image = read_image_float(resolved.string());
+    } catch (const Error& e) {
+      fail("/environment/file", "'" + shown(name) + "': " + e.reason());
+    }
+    map->width = image.width();
+    map->height = image.height();
+    map->texels = image.pixels();
+    map->path = resolved.string();
+    out_.scene.environment_map = std::move(map);
+  }
+
+  float unit(const Json& j, const std::string& where) const {
+    const float v = single(j, where);
+    if (!(v >= 0.0f && v <= 1.0f)) fail(where, "must be from 0 to 1, got " + describe(j));
+    return v;
+  }
+
+  MaterialType material_type(const Json& j, const std::string& where) const {
+    const std::string t = string(j, where);
+    if (t == "diffuse") return MaterialType::kDiffuse;
+    if (t == "conductor") return MaterialType::kConductor;
+    if (t == "dielectric") return MaterialType::kDielectric;
+    if (t == "principled") return MaterialType::kPrincipled;
+    fail(where, "unknown material type '" + shown(t) +
+                    "' (use diffuse, conductor, dielectric or principled)");
+  }
+
   std::string string(const Json& j, const std::string& where) const {
     if (!j.is_string()) fail(where, "must be a string, got " + describe(j));
     return j.get<std::string>();
@@ -275,15 +336,79 @@ class Parser {
     for (size_t i = 0; i < j.size(); ++i) {
       const std::string where = "/materials/" + std::to_string(i);
       object(j[i], where);
-      check_keys(j[i], where, {"name", "albedo", "emission", "two_sided"});
+      check_keys(j[i], where,
+                 {"name", "type", "albedo", "emission", "two_sided", "roughness", "ior", "metallic",
+                  "transmission", "eta", "k"});
       if (!j[i].contains("name")) fail(where, "missing \"name\"");
-      if (!j[i].contains("albedo")) fail(where, "missing \"albedo\"");
       const std::string name = string(j[i]["name"], where + "/name");
       if (name.empty()) fail(where + "/name", "must not be empty");
       Material m;
-      m.albedo = non_negative_vec3(j[i]["albedo"], where + "/albedo");
-      for (int k = 0; k < 3; ++k) {
-        if (m.albedo[k] > 1.0f) fail(where + "/albedo/" + std::to_string(k), "must be at most 1");
+      if (j[i].contains("type")) m.type = material_type(j[i]["type"], where + "/type");
+      // A dielectric's albedo tints what it transmits and is clear (1) by default; a conductor
+      // takes its colour from albedo (F0) or from a complex index (eta and k); every other type
+      // needs its colour.
+      const bool complex_ior = j[i].contains("eta") || j[i].contains("k");
+      if (complex_ior) {
+        if (m.type != MaterialType::kConductor) {
+          fail(where + "/" + (j[i].contains("eta") ? "eta" : "k"),
+               "only conductor materials have it");
+        }
+        if (!j[i].contains("eta") || !j[i].contains("k")) {
+          fail(where, std::string("missing \"") + (j[i].contains("eta") ? "k" : "eta") +
+                          "\" (a complex index needs both eta and k)");
+        }
+        if (j[i].contains("albedo")) {
+          fail(where + "/albedo", "a conductor takes albedo or eta and k, not both");
+        }
+        m.conductor_eta = non_negative_vec3(j[i]["eta"], where + "/eta");
+        m.conductor_k = non_negative_vec3(j[i]["k"], where + "/k");
+        for (int k = 0; k < 3; ++k) {
+          const std::string at = std::to_string(k);
+          if (!(m.conductor_eta[k] >= 0.01f && m.conductor_eta[k] <= kMaxIor)) {
+            fail(where + "/eta/" + at, "must be from 0.01 to 10, got " + describe(j[i]["eta"][k]));
+          }
+          if (!(m.conductor_k[k] <= 100.0f)) {
+            fail(where + "/k/" + at, "must be from 0 to 100, got " + describe(j[i]["k"][k]));
+          }
+        }
+        // The reflectance at normal incidence, for what reads albedo (the lab integrator, AOVs).
+        for (int k = 0; k < 3; ++k) {
+          const float n = m.conductor_eta[k], kk = m.conductor_k[k];
+          m.albedo[k] = ((n - 1) * (n - 1) + kk * kk) / ((n + 1) * (n + 1) + kk * kk);
+        }
+      } else if (m.type == MaterialType::kDielectric) {
+        m.albedo = glm::vec3(1.0f);
+      } else if (!j[i].contains("albedo")) {
+        fail(where, "missing \"albedo\"");
+      }
+      if (j[i].contains("albedo")) {
+        m.albedo = non_negative_vec3(j[i]["albedo"], where + "/albedo");
+        for (int k = 0; k < 3; ++k) {
+          if (m.albedo[k] > 1.0f) fail(where + "/albedo/" + std::to_string(k), "must be at most 1");
+        }
+      }
+      const bool diffuse = m.type == MaterialType::kDiffuse;
+      const bool principled = m.type == MaterialType::kPrincipled;
+      const auto only_for = [&](const char* key, bool allowed, const char* types) {
+        if (j[i].contains(key) && !allowed) {
+          fail(where + "/" + key, std::string("only ") + types + " materials have it");
+        }
+      };
+      only_for("roughness", !diffuse, "conductor, dielectric and principled");
+      only_for("ior", m.type == MaterialType::kDielectric || principled,
+               "dielectric and principled");
+      only_for("metallic", principled, "principled");
+      only_for("transmission", principled, "principled");
+      if (j[i].contains("roughness")) m.roughness = unit(j[i]["roughness"], where + "/roughness");
+      if (j[i].contains("metallic")) m.metallic = unit(j[i]["metallic"], where + "/metallic");
+      if (j[i].contains("transmission")) {
+        m.transmission = unit(j[i]["transmission"], where + "/transmission");
+      }
+      if (j[i].contains("ior")) {
+        m.ior = single(j[i]["ior"], where + "/ior");
+        if (!(m.ior >= 1.0f / kMaxIor && m.ior <= kMaxIor)) {
+          fail(where + "/ior", "must be from 0.1 to 10, got " + describe(j[i]["ior"]));
+        }
       }
       if (j[i].contains("emission")) {
         m.emission = non_negative_vec3(j[i]["emission"], where + "/emission");

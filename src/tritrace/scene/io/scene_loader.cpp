@@ -105,6 +105,7 @@ LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& over
                         std::to_string(loaded.stats.dropped_non_finite) + " non-finite)");
   }
   scene.ambient = kLabAmbient;
+  scene.environment = glm::vec3(kDefaultEnvironmentRadiance);
 
   // Frame the bounding sphere in the vertical field of view, seen from the front (+z) and a
   // little above, with y up.

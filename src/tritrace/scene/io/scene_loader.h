@@ -14,6 +14,11 @@ inline constexpr double kFramingFovDegrees = 40.0;
 // The framed mesh's nearest surface receives about this much direct light (before the cosine),
 // so that with the lab's ambient 0.5 and a grey albedo the image is neither black nor clipped.
 inline constexpr float kFramingIrradiance = 0.8f;
+// A framed mesh's environment under the path integrator: uniform grey radiance, a soft fill that
+// gives an unoccluded surface irradiance pi * 0.25 = 0.79, about the key light's, so that shadows
+// are soft and no side is black (a product shot, not a model in the void). The lab integrator
+// ignores it and keeps the lab's ambient term.
+inline constexpr float kDefaultEnvironmentRadiance = 0.25f;
 
 // Builds scene.camera from the camera description with `overrides` applied, and moves the first
 // light (adding one with the lab's power if there is none). loaded.camera is left as it was, so
