@@ -285,6 +285,8 @@ TEST(SceneFileErrors, InstancesRulesHaveTheirMessages) {
             "/meshes/0/instances/1/translate: must be an array of 3 numbers, got 2 elements");
   EXPECT_EQ(error_of(mesh + R"([{"scale": 1e-39}]}]})"),
             "/meshes/0/instances/0: the transform is not invertible");
+}
+
 TEST(SceneFileMaterials, ReadsTypesAndTheirKeys) {
   const std::string tri = kOneTriangle;
   const LoadedScene s = parse(R"({"materials": [
