@@ -239,16 +239,23 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
   h.add_vector(m.v1());
   h.add_vector(m.v2());
   h.add_vector(m.material());
+  h.add_vector(m.corner_normals());
   for (const Material& mat : scene.materials) {
     h.add_value(mat.albedo);
     h.add_value(mat.emission);
     h.add_value(static_cast<uint8_t>(mat.two_sided));
+    h.add_value(static_cast<uint8_t>(mat.type));
+    h.add_value(mat.roughness);
+    h.add_value(mat.ior);
+    h.add_value(mat.metallic);
+    h.add_value(mat.transmission);
   }
   for (const PointLight& l : scene.lights) {
     h.add_value(l.position);
     h.add_value(l.power);
   }
   h.add_value(scene.ambient);
+  h.add_value(scene.environment);
   const Camera& c = scene.camera;
   for (glm::vec3 v : {c.position(), c.right(), c.down(), c.forward()}) h.add_value(v);
   h.add_value(c.focal_px());

@@ -48,21 +48,37 @@ float unit_channel(float c) {
   return std::isfinite(c) ? std::clamp(c, 0.0f, 1.0f) : kNeutralGrey.x;
 }
 
+// Imported materials are two-sided (emission too): a file's winding says nothing about which side
+// should glow, and under `path` every type already reflects on both sides.
 Material convert_material(const aiMaterial& m) {
+  Material out{kNeutralGrey};
+  out.two_sided = true;
   aiColor4D colour;
   if (m.Get(AI_MATKEY_BASE_COLOR, colour) == AI_SUCCESS ||
       m.Get(AI_MATKEY_COLOR_DIFFUSE, colour) == AI_SUCCESS) {
-    return {glm::vec3(unit_channel(colour.r), unit_channel(colour.g), unit_channel(colour.b))};
+    out.albedo = glm::vec3(unit_channel(colour.r), unit_channel(colour.g), unit_channel(colour.b));
   }
-  return {kNeutralGrey};
+  aiColor4D emissive;
+  if (m.Get(AI_MATKEY_COLOR_EMISSIVE, emissive) == AI_SUCCESS) {
+    auto channel = [](float x) { return std::isfinite(x) ? std::max(x, 0.0f) : 0.0f; };
+    out.emission = glm::vec3(channel(emissive.r), channel(emissive.g), channel(emissive.b));
+  }
+  return out;
 }
 
 void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t material,
                  const std::string& subject, ImportedMesh& out) {
+  // Normals move with the inverse transpose of the transform's linear part (which keeps them
+  // perpendicular to the surface under non-uniform scales); they are normalised later.
+  aiMatrix3x3 normal_transform(transform);
+  normal_transform.Inverse().Transpose();
+  // Earlier meshes without normals get zero vectors (add_checked makes them geometric normals).
+  const bool normals = mesh.HasNormals() || !out.normals.empty();
+  if (normals) out.normals.resize(out.corners.size());
   for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
     const aiFace& face = mesh.mFaces[f];
     if (face.mNumIndices != 3) continue;  // points and lines carry no surface
-    glm::vec3 corner[3];
+    glm::vec3 corner[3], normal[3] = {};
     for (int k = 0; k < 3; ++k) {
       const unsigned index = face.mIndices[k];
       if (index >= mesh.mNumVertices) {
@@ -71,6 +87,10 @@ void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t mate
       }
       const aiVector3D v = transform * mesh.mVertices[index];
       corner[k] = glm::vec3(v.x, v.y, v.z);
+      if (mesh.HasNormals()) {
+        const aiVector3D n = normal_transform * mesh.mNormals[index];
+        normal[k] = glm::vec3(n.x, n.y, n.z);
+      }
     }
     if (out.triangles() >= kMaxSceneTriangles) {
       throw Error(subject, "has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
@@ -78,6 +98,7 @@ void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t mate
     // Model files wind front faces counter-clockwise (outward normal e1 x e2); the lab's normal is
     // cross(e2, e1), so the second and third corners swap to keep the lit side outside.
     out.corners.insert(out.corners.end(), {corner[0], corner[2], corner[1]});
+    if (normals) out.normals.insert(out.normals.end(), {normal[0], normal[2], normal[1]});
     out.material.push_back(material);
   }
 }
@@ -90,6 +111,7 @@ ImportedMesh convert_scene(const aiScene& scene, const std::string& subject) {
   }
   if (out.materials.empty()) {
     out.materials.push_back({kNeutralGrey});
+    out.materials.back().two_sided = true;
     out.material_names.emplace_back("default");
   }
   if (scene.mRootNode == nullptr) throw Error(subject, "has no scene graph (no root node)");
@@ -230,6 +252,7 @@ std::vector<uint8_t> to_bytes(const ImportedMesh& mesh) {
   for (const std::string& name : mesh.material_names)
     b.put_array(std::vector<char>(name.begin(), name.end()));
   b.put<uint64_t>(mesh.meshes);
+  b.put_array(mesh.normals);
   return std::move(b.out);
 }
 
@@ -246,6 +269,10 @@ ImportedMesh from_bytes(const std::vector<uint8_t>& bytes, const std::string& su
       mesh.material_names.emplace_back(name.begin(), name.end());
     }
     mesh.meshes = static_cast<size_t>(in.get<uint64_t>());
+    mesh.normals = in.get_array<glm::vec3>();
+    if (!mesh.normals.empty() && mesh.normals.size() != mesh.corners.size()) {
+      throw std::runtime_error("normals");
+    }
     return mesh;
   } catch (const std::exception&) {
     throw Error(subject, "cannot import: the importer process returned damaged data");

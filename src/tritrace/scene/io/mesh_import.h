@@ -1,6 +1,6 @@
 // Mesh import through assimp: any format it reads (OBJ, PLY, STL, glTF 2, FBX, Collada, 3DS ...)
 // becomes a flat triangle list in world space (faces triangulated, node transforms applied) with
-// the file's diffuse or base colours, or a neutral grey where it has none.
+// the file's vertex normals and diffuse or base colours, or a neutral grey where it has none.
 #pragma once
 
 #include <cstddef>
@@ -17,7 +17,11 @@ namespace tritrace {
 inline constexpr glm::vec3 kNeutralGrey{0.6f, 0.6f, 0.6f};
 
 struct ImportedMesh {
-  std::vector<glm::vec3> corners;   // three per triangle, node transforms applied
+  std::vector<glm::vec3> corners;  // three per triangle, node transforms applied
+  // The file's vertex normals at those corners (node transforms applied), or empty when no mesh of
+  // the file has normals; a mesh without them among others that have them gets zero vectors, which
+  // add_checked replaces by the geometric normal.
+  std::vector<glm::vec3> normals;
   std::vector<uint32_t> material;   // one per triangle, an index into `materials`
   std::vector<Material> materials;  // the file's, in its order
   std::vector<std::string> material_names;

@@ -110,6 +110,8 @@ struct Transform {
   glm::vec3 scale{1.0f};
 
   glm::vec3 apply(glm::vec3 p) const { return translate + rotate * (scale * p); }
+  // The inverse transpose of rotate * diag(scale) (rotate is orthonormal), unnormalised.
+  glm::vec3 apply_normal(glm::vec3 n) const { return rotate * (n / scale); }
 };
 
 class Parser {
@@ -398,16 +400,22 @@ class Parser {
   }
 
   void add(glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t material,
-           const std::optional<Transform>& t, const std::string& where) {
+           const std::optional<Transform>& t, const std::string& where,
+           const glm::vec3* normals = nullptr) {
     if (out_.scene.mesh.size() >= kMaxSceneTriangles) {
       fail(where, "the scene has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
     }
+    glm::vec3 moved[3];
     if (t) {
       a = t->apply(a);
       b = t->apply(b);
       c = t->apply(c);
+      if (normals != nullptr) {
+        for (int k = 0; k < 3; ++k) moved[k] = t->apply_normal(normals[k]);
+        normals = moved;
+      }
     }
-    add_checked(out_.scene.mesh, a, b, c, material, out_.stats);
+    add_checked(out_.scene.mesh, a, b, c, material, normals, out_.stats);
   }
 
   void parse_meshes(const Json& j) {
@@ -547,7 +555,8 @@ class Parser {
         fail(where, "mesh material index out of range");
       }
       add(imported.corners[3 * k], imported.corners[3 * k + 1], imported.corners[3 * k + 2],
-          material ? *material : offset + imported.material[k], t, where);
+          material ? *material : offset + imported.material[k], t, where,
+          imported.normals.empty() ? nullptr : &imported.normals[3 * k]);
     }
     out_.stats.meshes += imported.meshes > 0 ? imported.meshes - 1 : 0;
   }

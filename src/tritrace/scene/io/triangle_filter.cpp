@@ -27,9 +27,25 @@ TriangleCheck check_triangle(glm::vec3 a, glm::vec3 b, glm::vec3 c) {
 
 bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t material,
                  LoadStats& stats) {
+  return add_checked(mesh, a, b, c, material, nullptr, stats);
+}
+
+bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t material,
+                 const glm::vec3* normals, LoadStats& stats) {
   switch (check_triangle(a, b, c)) {
     case TriangleCheck::kOk:
-      mesh.add(a, b, c, material);
+      if (normals == nullptr) {
+        mesh.add(a, b, c, material);
+      } else {
+        const glm::vec3 geometric = glm::normalize(glm::cross(c - a, b - a));
+        std::array<glm::vec3, 3> unit;
+        for (int k = 0; k < 3; ++k) {
+          const glm::vec3 n = normals[k];
+          const float len = glm::length(n);
+          unit[k] = finite(n) && std::isfinite(len) && len > 0.0f ? n / len : geometric;
+        }
+        mesh.add(a, b, c, material, unit);
+      }
       return true;
     case TriangleCheck::kDegenerate:
       ++stats.dropped_degenerate;
