@@ -240,6 +240,12 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
   h.add_vector(m.v2());
   h.add_vector(m.material());
   h.add_vector(m.corner_normals());
+  h.add_vector(m.corner_uvs());
+  for (const Texture& t : scene.textures) {
+    h.add_value(t.width());
+    h.add_value(t.height());
+    h.add_vector(t.texels());
+  }
   for (const Material& mat : scene.materials) {
     h.add_value(mat.albedo);
     h.add_value(mat.emission);
@@ -249,6 +255,11 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
     h.add_value(mat.ior);
     h.add_value(mat.metallic);
     h.add_value(mat.transmission);
+    for (const TextureRef& r : {mat.albedo_texture, mat.emission_texture}) {
+      h.add_value(r.index);
+      h.add_value(static_cast<uint8_t>(r.wrap_s));
+      h.add_value(static_cast<uint8_t>(r.wrap_t));
+    }
   }
   for (const PointLight& l : scene.lights) {
     h.add_value(l.position);

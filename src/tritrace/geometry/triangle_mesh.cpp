@@ -20,6 +20,29 @@ void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& 
   normal_.push_back(len > 0.0f ? n / len : glm::vec3(0.0f));
   material_.push_back(material);
   if (!corner_normals_.empty()) corner_normals_.insert(corner_normals_.end(), 3, normal_.back());
+  if (!corner_uvs_.empty()) corner_uvs_.insert(corner_uvs_.end(), 3, glm::vec2(0.0f));
+}
+
+void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,
+                       uint32_t material, const std::array<glm::vec3, 3>* normals,
+                       const std::array<glm::vec2, 3>* uvs) {
+  if (uvs != nullptr && corner_uvs_.empty()) corner_uvs_.assign(3 * size(), glm::vec2(0.0f));
+  const size_t before = corner_uvs_.size();
+  if (normals != nullptr) {
+    add(a, b, c, material, *normals);
+  } else {
+    add(a, b, c, material);
+  }
+  if (uvs != nullptr) {
+    corner_uvs_.resize(before);
+    corner_uvs_.insert(corner_uvs_.end(), uvs->begin(), uvs->end());
+  }
+}
+
+glm::vec2 TriangleMesh::uv(size_t tri, float u, float v) const {
+  if (corner_uvs_.empty()) return glm::vec2(0.0f);
+  const glm::vec2* t = &corner_uvs_[3 * tri];
+  return (1.0f - u - v) * t[0] + u * t[1] + v * t[2];
 }
 
 void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,
@@ -46,6 +69,7 @@ void TriangleMesh::reserve(size_t triangles) {
   for (auto* v : {&v0_, &v1_, &v2_, &e1_, &e2_, &normal_}) v->reserve(triangles);
   material_.reserve(triangles);
   if (!corner_normals_.empty()) corner_normals_.reserve(3 * triangles);
+  if (!corner_uvs_.empty()) corner_uvs_.reserve(3 * triangles);
 }
 
 void TriangleMesh::append(const TriangleMesh& other, uint32_t material_offset) {
@@ -56,6 +80,14 @@ void TriangleMesh::append(const TriangleMesh& other, uint32_t material_offset) {
   e2_.insert(e2_.end(), other.e2_.begin(), other.e2_.end());
   normal_.insert(normal_.end(), other.normal_.begin(), other.normal_.end());
   for (uint32_t m : other.material_) material_.push_back(m + material_offset);
+  if (!other.corner_uvs_.empty() || !corner_uvs_.empty()) {
+    corner_uvs_.resize(3 * (size() - other.size()), glm::vec2(0.0f));
+    if (other.corner_uvs_.empty()) {
+      corner_uvs_.resize(3 * size(), glm::vec2(0.0f));
+    } else {
+      corner_uvs_.insert(corner_uvs_.end(), other.corner_uvs_.begin(), other.corner_uvs_.end());
+    }
+  }
   if (other.corner_normals_.empty() && corner_normals_.empty()) return;
   // One of the two has shading normals: the other's triangles get their geometric normals.
   const size_t mine = normal_.size() - other.normal_.size();

@@ -111,8 +111,16 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       const glm::vec3 wo = -scratch.rays[k].dir;
       const glm::vec3 n_lab = mesh.normal()[prim];
 
+      // Texture lookups only where a material has a texture: untextured scenes run as before.
+      glm::vec3 albedo = material.albedo;
+      if (material.albedo_texture.present()) {
+        albedo = textured(scene, material.albedo_texture, albedo, mesh.uv(prim, hit.u, hit.v));
+      }
       if (material.emits()) {
-        const glm::vec3 le = emitted_radiance(material, n_lab, wo);
+        glm::vec3 le = emitted_radiance(material, n_lab, wo);
+        if (material.emission_texture.present()) {
+          le = textured(scene, material.emission_texture, le, mesh.uv(prim, hit.u, hit.v));
+        }
         if (depth == 0) {
           out.radiance[i] += throughput[i] * le;
         } else if (bsdf_finds_lights) {
@@ -130,7 +138,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
         // choice number: light sampling adds its term and the bounce continues the path, so the
         // estimate's expectation is the sum of two expectations, each over a uniform number, and
         // stays unbiased (unlike the roulette's coin, which multiplies the same path's weight).
-        const Bsdf bsdf(material);
+        const Bsdf bsdf(material, albedo);
         // The shading frame, unless wo lies on different sides of the shading and geometric
         // surfaces (then the lobes, which decide inside and outside by wo, would be told wrong).
         glm::vec3 n_shade = n_lab;
@@ -230,7 +238,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       const glm::vec3 start = leave_surface(
           mesh, prim, smooth ? terminator_safe_point(mesh, prim, hit.u, hit.v, x, n) : x, n,
           offset_);
-      const glm::vec3 f = material.albedo * kInvPi;  // Lambert
+      const glm::vec3 f = albedo * kInvPi;  // Lambert
       if (!lights_.empty()) {
         LightSample ls = lights_.sample(scene, x, u_light, u_light_point);
         if (!ls.delta && !light_finds_triangles) ls.pdf = 0.0f;
@@ -276,7 +284,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       const glm::vec3 local = sample_cosine_hemisphere(u_bsdf);
       const float pdf = cosine_hemisphere_pdf(local.z);
       if (!(pdf > 0.0f)) continue;
-      glm::vec3 t = throughput[i] * material.albedo;  // f cos / pdf = albedo for Lambert
+      glm::vec3 t = throughput[i] * albedo;  // f cos / pdf = albedo for Lambert
       if (depth + 1 >= settings_.roulette_depth) {
         // Survival by the square root of the throughput, not the throughput itself: paths live
         // longer (measured on cornell-area: 7% more rays per path, 12% less RMSE at 256 spp, so

@@ -1,5 +1,5 @@
 // Scene: everything a render reads, built once and then read-only: triangles, materials, point
-// lights, the constant indirect (ambient) term and the camera.
+// lights, the constant indirect (ambient) term, the environment, textures and the camera.
 #pragma once
 
 #include <cstdint>
@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "tritrace/geometry/triangle_mesh.h"
+#include "tritrace/image/texture.h"
 #include "tritrace/scene/camera.h"
 
 namespace tritrace {
@@ -18,6 +19,15 @@ enum class MaterialType : uint8_t {
   kConductor,  // metal: GGX microfacets (a mirror at roughness 0), Schlick Fresnel from F0 = albedo
   kDielectric,  // glass: GGX reflection and refraction with exact Fresnel, index `ior` inside
   kPrincipled,  // glTF metallic-roughness: conductor, glass and coated diffuse mixed by weights
+};
+
+// One of Scene::textures, looked up through the mesh's texture coordinates with these wrap modes
+// (a glTF sampler's; repeat by default).
+struct TextureRef {
+  int32_t index = -1;  // none
+  WrapMode wrap_s = WrapMode::kRepeat;
+  WrapMode wrap_t = WrapMode::kRepeat;
+  bool present() const { return index >= 0; }
 };
 
 // A surface material that may also emit light.
@@ -36,6 +46,10 @@ struct Material {
   float ior = 1.5f;
   float metallic = 0.0f;      // principled only: the conductor's weight
   float transmission = 0.0f;  // principled only: the glass lobe's share of the non-metal weight
+  // Multiply albedo and emission where present (glTF's baseColorTexture times baseColorFactor,
+  // emissiveTexture times emissiveFactor). The lab integrator ignores them.
+  TextureRef albedo_texture{};
+  TextureRef emission_texture{};
 
   bool emits() const { return emission.x > 0.0f || emission.y > 0.0f || emission.z > 0.0f; }
   bool is_diffuse() const { return type == MaterialType::kDiffuse; }
@@ -55,7 +69,15 @@ struct Scene {
   // Radiance arriving from every direction that no surface blocks (the path integrator's constant
   // environment light; the lab integrator ignores it).
   glm::vec3 environment{0.0f};
+  std::vector<Texture> textures;  // shared by the materials that refer to them
   Camera camera;
 };
+
+// `factor` times the texture `ref` at texture coordinates uv, or `factor` alone without a texture.
+inline glm::vec3 textured(const Scene& scene, const TextureRef& ref, glm::vec3 factor,
+                          glm::vec2 uv) {
+  if (!ref.present()) return factor;
+  return factor * scene.textures[static_cast<size_t>(ref.index)].lookup(uv, ref.wrap_s, ref.wrap_t);
+}
 
 }  // namespace tritrace
