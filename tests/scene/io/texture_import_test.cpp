@@ -125,6 +125,38 @@ TEST_F(TexturedFiles, ObjQuadShowsItsMapKdTexels) {
   EXPECT_GT(checked, 600);
 }
 
+// An emissive texture (MTL map_Ke) multiplies Ke: seen directly (max_depth 0) each pixel is Ke
+// times the texture, bilinear at the pixel's centre to within its change across the pixel.
+TEST_F(TexturedFiles, EmissionTextureMultipliesKe) {
+  std::vector<uint8_t> rgb;
+  for (int k = 0; k < 16; ++k) {
+    rgb.insert(rgb.end(), {static_cast<uint8_t>(255 - 9 * k), static_cast<uint8_t>(40 + 11 * k),
+                           static_cast<uint8_t>(k % 2 ? 220 : 30)});
+  }
+  file("glow.ppm", ppm(4, 4, rgb));
+  file("quad.mtl", "newmtl m\nKd 0 0 0\nKe 2 2 2\nmap_Ke glow.ppm\n");
+  file("quad.obj", quad_obj("quad.mtl"));
+  const std::string json = R"({"camera": {"position": [0, 0, -2], "look_at": [0, 0, 0],
+      "up": [0, -1, 0], "vertical_fov": 53.13010235415598, "width": 32, "height": 32},
+      "meshes": [{"file": "quad.obj"}]})";
+  LoadedScene loaded = parse_scene_json(json, (dir_ / "scene.json").string());
+  apply_overrides(loaded, {});
+  const Scene& scene = loaded.scene;
+  ASSERT_TRUE(scene.materials[scene.mesh.material()[0]].emission_texture.present());
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator direct(scene, PathSettings{.max_depth = 0});
+  const Image image = render(scene, accel, direct, {.spp = 16, .seed = 1});
+  for (int y = 4; y < 28; y += 3) {
+    for (int x = 4; x < 28; x += 3) {
+      const Ray r = scene.camera.ray_through(x + 0.5f, y + 0.5f);
+      const double t = -static_cast<double>(r.origin.z) / r.dir.z;
+      const double px = r.origin.x + t * r.dir.x, py = r.origin.y + t * r.dir.y;
+      const glm::dvec3 want = 2.0 * bilinear_repeat(rgb, 4, 4, (px + 1) / 2, (py + 1) / 2);
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(image.at(x, y)[c], want[c], 0.04) << x << "," << y;
+    }
+  }
+}
+
 TEST_F(TexturedFiles, MissingTextureIsAnErrorNamingTheFile) {
   file("quad.mtl", "newmtl m\nKd 1 1 1\nmap_Kd missing.ppm\n");
   const std::string obj = file("quad.obj", quad_obj("quad.mtl"));
