@@ -146,6 +146,16 @@ int thread_count(const SceneFlags& flags) {
   return flags.threads.empty() ? 0 : static_cast<int>(*parse_integer(flags.threads));
 }
 
+std::string loading_phase(const SceneFlags& flags) {
+  if (!flags.file.empty()) return "loading " + flags.file;
+  return "making " + (flags.scene.empty() ? std::string("cornell") : flags.scene);
+}
+
+std::string building_phase(AccelKind kind, size_t triangles) {
+  return "building " + std::string(accel_name(kind)) + " over " + std::to_string(triangles) +
+         " triangles";
+}
+
 LoadedScene load_scene_from(const SceneFlags& flags, const SceneOverrides& overrides) {
   if (!flags.file.empty() && !flags.scene.empty()) {
     throw Error("--scene", "give either a FILE or --scene, not both", ExitCode::kUsage);

@@ -45,6 +45,12 @@ int thread_count(const SceneFlags& flags);  // 0: all cores
 IntegratorSpec integrator_spec(const SceneFlags& flags, const LoadedScene& loaded);
 FilterKind filter_choice(const SceneFlags& flags);
 
+// What the CLI's phase line and the viewer's loading window say while the scene loads ("making
+// cornell", "loading model.ply") and while its accel builds ("building bvh over 1000000
+// triangles").
+std::string loading_phase(const SceneFlags& flags);
+std::string building_phase(AccelKind kind, size_t triangles);
+
 // The built-in scene or FILE with `overrides`. Throws Error (usage) when both FILE and --scene are
 // given, and whatever load_scene throws.
 LoadedScene load_scene_from(const SceneFlags& flags, const SceneOverrides& overrides);

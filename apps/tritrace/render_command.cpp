@@ -241,11 +241,7 @@ int run_render(const RenderArgs& args) {
   render_options.threads = thread_count(args.scene);
 
   const bool terminal = !args.quiet && ::isatty(STDERR_FILENO);
-  PhaseLine loading(
-      stderr, terminal,
-      args.scene.file.empty()
-          ? "making " + (args.scene.scene.empty() ? std::string("cornell") : args.scene.scene)
-          : "loading " + args.scene.file);
+  PhaseLine loading(stderr, terminal, loading_phase(args.scene));
   const LoadedScene loaded = load_scene_from(args.scene, overrides);
   loading.done();
   const std::string output =
@@ -274,9 +270,7 @@ int run_render(const RenderArgs& args) {
   render_options.seed = spec.seed;
   render_options.sampler = spec.sampler;
   render_options.filter = filter_choice(args.scene);
-  PhaseLine building(stderr, terminal,
-                     "building " + std::string(accel_name(accel_kind)) + " over " +
-                         std::to_string(scene.mesh.size()) + " triangles");
+  PhaseLine building(stderr, terminal, building_phase(accel_kind, scene.mesh.size()));
   const std::unique_ptr<Accel> accel = make_accel(accel_kind, scene.mesh, kernel);
   building.done();
   const std::unique_ptr<Integrator> integrator = make_integrator(spec, scene);

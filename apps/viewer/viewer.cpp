@@ -8,16 +8,20 @@
 #include <X11/Xlib.h>
 #include <X11/Xproto.h>
 
+#include <atomic>
 #include <chrono>
 #include <clocale>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 #include "flags/flag_values.h"
@@ -47,6 +51,8 @@ using Clock = std::chrono::steady_clock;
 // The render time a resting frame of the path tracer aims at: samples arrive several times a
 // second, and a key pressed meanwhile waits no longer than this for the frame to end.
 constexpr double kFrameBudgetMs = 60.0;
+// The window's size while the scene loads, when no --width/--height is given.
+constexpr int kLoadingWidth = 640, kLoadingHeight = 480;
 
 double seconds_since(Clock::time_point start, Clock::time_point end) {
   return std::chrono::duration<double>(end - start).count();
@@ -181,14 +187,29 @@ class Viewer {
     // The display first: without one, fail at once rather than after loading a large scene.
     video_.emplace();
     const SceneOverrides overrides = cli::scene_overrides(options_.scene);
-    loaded_ = cli::load_scene_from(options_.scene, overrides);
+    // The window opens at once, at the size the flags ask for (the scene's own size once it is
+    // loaded), and shows what is being loaded and built: a ten-million-triangle model takes
+    // seconds, which a blank window that does not answer would hide.
+    window_.reset(SDL_CreateWindow("tritrace", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED,
+                                   overrides.width.value_or(kLoadingWidth),
+                                   overrides.height.value_or(kLoadingHeight),
+                                   SDL_WINDOW_RESIZABLE));
+    if (!window_) throw no_display();
+    renderer_.reset(SDL_CreateRenderer(window_.get(), -1, 0));
+    if (!renderer_) throw Error("SDL", std::string("cannot create a renderer: ") + SDL_GetError());
+    overlay_.emplace(TRITRACE_OVERLAY_FONT);
+
+    if (!load_showing_progress(overrides)) return 0;  // closed while loading
     width_ = loaded_.scene.camera.width();
     height_ = loaded_.scene.camera.height();
+    int shown_width = 0, shown_height = 0;
+    SDL_GetWindowSize(window_.get(), &shown_width, &shown_height);
+    if (shown_width != width_ || shown_height != height_) {
+      SDL_SetWindowSize(window_.get(), width_, height_);
+    }
     start_ = initial_view(options_.scene, loaded_);
     view_ = start_;
     rates_ = MotionRates::for_distance(start_.distance);
-    accel_ = make_accel(cli::accel_kind(options_.scene), loaded_.scene.mesh,
-                        cli::kernel_choice(options_.scene));
     render_options_.threads = cli::thread_count(options_.scene);
     // The integrator `tritrace render` would use with the same flags.
     spec_ = cli::integrator_spec(options_.scene, loaded_);
@@ -197,17 +218,83 @@ class Viewer {
     render_options_.sampler = spec_.sampler;
     render_options_.filter = cli::filter_choice(options_.scene);
     schedule_.emplace(spec_.spp, kFrameBudgetMs);
-
-    window_.reset(SDL_CreateWindow("tritrace", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED,
-                                   width_, height_, SDL_WINDOW_RESIZABLE));
-    if (!window_) throw no_display();
-    renderer_.reset(SDL_CreateRenderer(window_.get(), -1, 0));
-    if (!renderer_) throw Error("SDL", std::string("cannot create a renderer: ") + SDL_GetError());
-    overlay_.emplace(TRITRACE_OVERLAY_FONT);
     return loop();
   }
 
  private:
+  // Loads the scene and builds its accel on a thread of their own, while this one keeps the
+  // window answering and shows the phase (the words of `tritrace render`'s phase line) with its
+  // time in the title and in the window. Returns false when the window was closed (or Esc
+  // pressed) meanwhile: the load cannot be interrupted, so the caller leaves without waiting for
+  // it (see leave_while_loading). Rethrows what the load threw.
+  bool load_showing_progress(const SceneOverrides& overrides) {
+    std::mutex mutex;
+    std::string phase = cli::loading_phase(options_.scene);
+    Clock::time_point phase_start = Clock::now();
+    std::exception_ptr error;
+    std::atomic<bool> done{false};
+    const Uint32 wake = SDL_RegisterEvents(1);
+    std::thread worker([&] {
+      try {
+        loaded_ = cli::load_scene_from(options_.scene, overrides);
+        {
+          const std::lock_guard<std::mutex> lock(mutex);
+          phase = cli::building_phase(cli::accel_kind(options_.scene), loaded_.scene.mesh.size());
+          phase_start = Clock::now();
+        }
+        accel_ = make_accel(cli::accel_kind(options_.scene), loaded_.scene.mesh,
+                            cli::kernel_choice(options_.scene));
+      } catch (...) {
+        error = std::current_exception();
+      }
+      done = true;
+      if (wake != static_cast<Uint32>(-1)) {
+        SDL_Event e{};
+        e.type = wake;
+        SDL_PushEvent(&e);  // thread-safe: ends the wait below at once
+      }
+    });
+    while (!done) {
+      std::string line;
+      {
+        const std::lock_guard<std::mutex> lock(mutex);
+        char seconds[32];
+        std::snprintf(seconds, sizeof seconds, "  %.1f s",
+                      seconds_since(phase_start, Clock::now()));
+        line = phase + seconds;
+      }
+      SDL_SetWindowTitle(window_.get(), ("tritrace \u2014 " + line).c_str());
+      SDL_Renderer* r = renderer_.get();
+      SDL_SetRenderDrawColor(r, 0, 0, 0, 255);
+      SDL_RenderClear(r);
+      overlay_->draw(r, {"tritrace-view", line});
+      SDL_RenderPresent(r);
+      SDL_Event e;
+      if (SDL_WaitEventTimeout(&e, 100) != 0) {
+        do {
+          const bool closed =
+              e.type == SDL_QUIT ||
+              (e.type == SDL_WINDOWEVENT && e.window.event == SDL_WINDOWEVENT_CLOSE) ||
+              (e.type == SDL_KEYDOWN && e.key.keysym.sym == SDLK_ESCAPE);
+          if (closed) leave_while_loading(worker);
+        } while (SDL_PollEvent(&e) != 0);
+      }
+    }
+    worker.join();
+    if (error) std::rethrow_exception(error);
+    return true;
+  }
+
+  // The window was closed while the scene loads: the loading thread cannot be stopped, and
+  // waiting for it would keep a closed window's process running for the rest of the load, so the
+  // process ends here, as its exit status 0 says the user asked. Nothing is lost: the viewer
+  // writes no file but the screenshots, and none can have been taken yet.
+  [[noreturn]] static void leave_while_loading(std::thread& worker) {
+    worker.detach();
+    std::fflush(stdout);
+    std::_Exit(0);
+  }
+
   int loop() {
     bool need_render = true, need_present = false, screenshot = false;
     Clock::time_point last_motion = Clock::now();

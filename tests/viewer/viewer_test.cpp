@@ -637,6 +637,62 @@ TEST_F(ViewerTest, ClosingTheWindowQuitsWithExitZero) {
   EXPECT_EQ(Err(), "");
 }
 
+// A scene that takes a second or more to make and build: the window is there at once, and its
+// title shows the phases (the words of `tritrace render`'s phase line) with their times, then the
+// first frame's title.
+TEST_F(ViewerTest, WindowOpensAtOnceAndShowsTheLoadingPhases) {
+  ASSERT_NO_FATAL_FAILURE(
+      StartViewer({"--scene", "terrain:2m", "--width", "64", "--height", "64", "-q"}));
+  std::vector<std::string> titles;
+  const Clock::time_point end = Clock::now() + 120s;
+  while (Clock::now() < end) {
+    const std::string title = Title();
+    if (titles.empty() || titles.back() != title) titles.push_back(title);
+    if (title.find(" ms") != std::string::npos) break;  // the first frame's "12.3 ms, ..." title
+    ASSERT_FALSE(WaitExit(viewer_, 0ms).has_value()) << "the viewer exited: " << Err();
+    std::this_thread::sleep_for(20ms);
+  }
+  std::string seen;
+  for (const std::string& t : titles) seen += "\n  " + t;
+  const auto shows = [&](const std::string& prefix) {
+    return std::any_of(titles.begin(), titles.end(),
+                       [&](const std::string& t) { return t.rfind(prefix, 0) == 0; });
+  };
+  EXPECT_TRUE(shows("tritrace \u2014 making terrain:2m  ") ||
+              shows("tritrace \u2014 building bvh over 2000000 triangles  "))
+      << "titles seen:" << seen;
+  ASSERT_FALSE(titles.empty());
+  EXPECT_NE(titles.back().find(" ms"), std::string::npos) << "no frame; titles seen:" << seen;
+}
+
+// Closing the window while the scene still loads ends the process at once with exit 0.
+TEST_F(ViewerTest, ClosingWhileLoadingQuitsWithExitZero) {
+  ASSERT_NO_FATAL_FAILURE(
+      StartViewer({"--scene", "terrain:4m", "--width", "64", "--height", "64", "-q"}));
+  const std::string title = Title();
+  Display* x = XOpenDisplay(xvfb_->display().c_str());
+  ASSERT_NE(x, nullptr);
+  XEvent close{};
+  close.xclient.type = ClientMessage;
+  close.xclient.window = static_cast<Window>(std::stoul(window_));
+  close.xclient.message_type = XInternAtom(x, "WM_PROTOCOLS", False);
+  close.xclient.format = 32;
+  close.xclient.data.l[0] = static_cast<long>(XInternAtom(x, "WM_DELETE_WINDOW", False));
+  close.xclient.data.l[1] = CurrentTime;
+  XSendEvent(x, close.xclient.window, False, NoEventMask, &close);
+  XCloseDisplay(x);
+  const Clock::time_point sent = Clock::now();
+  const std::optional<int> code = WaitExit(viewer_, 60s);
+  viewer_ = -1;
+  EXPECT_EQ(code, 0) << Err();
+  EXPECT_EQ(Err(), "");
+  // Closed during a phase (the title said so), it did not wait for the load to end.
+  EXPECT_TRUE(title.rfind("tritrace \u2014 making", 0) == 0 ||
+              title.rfind("tritrace \u2014 building", 0) == 0)
+      << title;
+  EXPECT_LT(std::chrono::duration<double>(Clock::now() - sent).count(), 2.0) << title;
+}
+
 TEST_F(ViewerTest, TerminationIsAQuitWithExitZero) {
   ASSERT_NO_FATAL_FAILURE(StartViewer({"--width", "64", "--height", "64", "-q"}));
   ::kill(viewer_, SIGTERM);  // SDL turns it into SDL_QUIT, as closing the window does

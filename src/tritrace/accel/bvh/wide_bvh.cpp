@@ -265,12 +265,13 @@ WideBvh build_wide_bvh(const TriangleMesh& mesh, const BuildConfig& config) {
       },
       [](float a, float b) { return std::max(a, b); });
   const float pad = magnitude * kBoxPadding;
-  std::vector<Bounds3> bounds(mesh.size());
-  parallel::for_range(tbb::blocked_range<size_t>(0, mesh.size()), [&](const auto& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) bounds[i] = widened_triangle_bounds(mesh, i, pad);
-  });
-  BinaryBvh tree = build_binned_sah(bounds, config);
-  std::vector<Bounds3>().swap(bounds);
+  const BinaryBvh tree = build_binned_sah(
+      mesh.size(),
+      [&](size_t begin, size_t end, Bounds3* out) {
+        for (size_t i = begin; i != end; ++i)
+          out[i - begin] = widened_triangle_bounds(mesh, i, pad);
+      },
+      config);
   return collapse_binary_bvh(tree, mesh);
 }
 
