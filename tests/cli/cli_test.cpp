@@ -1268,6 +1268,23 @@ TEST_F(CliTest, ModelThatCrashesTheImporterIsAnError) {
   ExpectErrorLine(info, 1, "crash.ply", "the importer crashed");
 }
 
+// A texture that is not there: one line naming it, exit 1, no image; for a scene file's
+// albedo_texture and for a model's map_Kd alike.
+TEST_F(CliTest, MissingTextureIsAnError) {
+  std::ofstream(work_ / "scene.json")
+      << R"({"materials": [{"name": "m", "albedo": [1, 1, 1], "albedo_texture": "gone.png"}],
+             "meshes": [{"generator": "cornell", "material": "m"}]})";
+  const RunResult scene = Run({"render", "scene.json", "-o", "s.png"});
+  ExpectErrorLine(scene, 1, "gone.png", "file not found");
+  std::ofstream(work_ / "quad.mtl") << "newmtl m\nKd 1 1 1\nmap_Kd lost.png\n";
+  std::ofstream(work_ / "quad.obj")
+      << "mtllib quad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\n"
+         "f 1/1 2/2 3/3\n";
+  const RunResult model = Run({"render", "quad.obj", "-o", "q.png"});
+  ExpectErrorLine(model, 1, "./lost.png", "cannot read texture: no such file");
+  ExpectOnlyFiles(work_, {"quad.mtl", "quad.obj", "scene.json"});
+}
+
 // With stderr on a terminal, a render that takes more than about a second shows a progress bar
 // with percentage, elapsed time and ETA. `script` (util-linux) gives the command a terminal. The
 // render is sized to take a few seconds: brute force, one thread.

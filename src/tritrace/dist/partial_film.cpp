@@ -251,6 +251,13 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
     for (int c = 0; c < 3; ++c) h.add_value(inst.to_world.linear[c]);
     h.add_value(inst.to_world.translation);
   }
+  h.add_vector(m.corner_normals());
+  h.add_vector(m.corner_uvs());
+  for (const Texture& t : scene.textures) {
+    h.add_value(t.width());
+    h.add_value(t.height());
+    h.add_vector(t.texels());
+  }
   for (const Material& mat : scene.materials) {
     h.add_value(mat.albedo);
     h.add_value(mat.emission);
@@ -262,6 +269,11 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
     h.add_value(mat.transmission);
     h.add_value(mat.conductor_eta);
     h.add_value(mat.conductor_k);
+    for (const TextureRef& r : {mat.albedo_texture, mat.emission_texture}) {
+      h.add_value(r.index);
+      h.add_value(static_cast<uint8_t>(r.wrap_s));
+      h.add_value(static_cast<uint8_t>(r.wrap_t));
+    }
   }
   for (const PointLight& l : scene.lights) {
     h.add_value(l.position);

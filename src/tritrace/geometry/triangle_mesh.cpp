@@ -1,6 +1,7 @@
 // TriangleMesh construction and queries.
 #include "tritrace/geometry/triangle_mesh.h"
 
+#include <cmath>
 #include <glm/glm.hpp>
 
 namespace tritrace {
@@ -18,11 +19,57 @@ void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& 
   e2_.push_back(e2);
   normal_.push_back(len > 0.0f ? n / len : glm::vec3(0.0f));
   material_.push_back(material);
+  if (!corner_normals_.empty()) corner_normals_.insert(corner_normals_.end(), 3, normal_.back());
+  if (!corner_uvs_.empty()) corner_uvs_.insert(corner_uvs_.end(), 3, glm::vec2(0.0f));
+}
+
+void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,
+                       uint32_t material, const std::array<glm::vec3, 3>* normals,
+                       const std::array<glm::vec2, 3>* uvs) {
+  if (uvs != nullptr && corner_uvs_.empty()) corner_uvs_.assign(3 * size(), glm::vec2(0.0f));
+  const size_t before = corner_uvs_.size();
+  if (normals != nullptr) {
+    add(a, b, c, material, *normals);
+  } else {
+    add(a, b, c, material);
+  }
+  if (uvs != nullptr) {
+    corner_uvs_.resize(before);
+    corner_uvs_.insert(corner_uvs_.end(), uvs->begin(), uvs->end());
+  }
+}
+
+glm::vec2 TriangleMesh::uv(size_t tri, float u, float v) const {
+  if (corner_uvs_.empty()) return glm::vec2(0.0f);
+  const glm::vec2* t = &corner_uvs_[3 * tri];
+  return (1.0f - u - v) * t[0] + u * t[1] + v * t[2];
+}
+
+void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,
+                       uint32_t material, const std::array<glm::vec3, 3>& normals) {
+  if (corner_normals_.empty()) {
+    corner_normals_.reserve(3 * normal_.capacity());
+    for (const glm::vec3& n : normal_) corner_normals_.insert(corner_normals_.end(), 3, n);
+  }
+  const size_t before = corner_normals_.size();
+  add(a, b, c, material);
+  corner_normals_.resize(before);
+  corner_normals_.insert(corner_normals_.end(), normals.begin(), normals.end());
+}
+
+glm::vec3 TriangleMesh::shading_normal(size_t tri, float u, float v) const {
+  if (corner_normals_.empty()) return normal_[tri];
+  const glm::vec3* n = &corner_normals_[3 * tri];
+  const glm::vec3 s = (1.0f - u - v) * n[0] + u * n[1] + v * n[2];
+  const float len2 = glm::dot(s, s);
+  return len2 > 0.0f && std::isfinite(len2) ? s * (1.0f / std::sqrt(len2)) : normal_[tri];
 }
 
 void TriangleMesh::reserve(size_t triangles) {
   for (auto* v : {&v0_, &v1_, &v2_, &e1_, &e2_, &normal_}) v->reserve(triangles);
   material_.reserve(triangles);
+  if (!corner_normals_.empty()) corner_normals_.reserve(3 * triangles);
+  if (!corner_uvs_.empty()) corner_uvs_.reserve(3 * triangles);
 }
 
 void TriangleMesh::append(const TriangleMesh& other, uint32_t material_offset) {
@@ -33,6 +80,26 @@ void TriangleMesh::append(const TriangleMesh& other, uint32_t material_offset) {
   e2_.insert(e2_.end(), other.e2_.begin(), other.e2_.end());
   normal_.insert(normal_.end(), other.normal_.begin(), other.normal_.end());
   for (uint32_t m : other.material_) material_.push_back(m + material_offset);
+  if (!other.corner_uvs_.empty() || !corner_uvs_.empty()) {
+    corner_uvs_.resize(3 * (size() - other.size()), glm::vec2(0.0f));
+    if (other.corner_uvs_.empty()) {
+      corner_uvs_.resize(3 * size(), glm::vec2(0.0f));
+    } else {
+      corner_uvs_.insert(corner_uvs_.end(), other.corner_uvs_.begin(), other.corner_uvs_.end());
+    }
+  }
+  if (other.corner_normals_.empty() && corner_normals_.empty()) return;
+  // One of the two has shading normals: the other's triangles get their geometric normals.
+  const size_t mine = normal_.size() - other.normal_.size();
+  if (corner_normals_.empty()) {
+    for (size_t i = 0; i < mine; ++i) corner_normals_.insert(corner_normals_.end(), 3, normal_[i]);
+  }
+  if (other.corner_normals_.empty()) {
+    for (const glm::vec3& n : other.normal_) corner_normals_.insert(corner_normals_.end(), 3, n);
+  } else {
+    corner_normals_.insert(corner_normals_.end(), other.corner_normals_.begin(),
+                           other.corner_normals_.end());
+  }
 }
 
 glm::vec3 TriangleMesh::vertex(size_t tri, int corner) const {

@@ -1,9 +1,12 @@
 // TriangleMesh: triangles stored as structure-of-arrays (v0, e1 = v1 - v0, e2 = v2 - v0, and the
 // vertices v1, v2 themselves for the watertight kernel), the layouts the kernels read, plus the
-// geometric normal and a material id per triangle.
+// geometric normal and a material id per triangle, and optionally per-corner shading normals and
+// texture coordinates.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <vector>
 
@@ -17,6 +20,16 @@ class TriangleMesh {
   // The normal follows the lab's convention, normalize(cross(e2, e1)); a zero-area triangle gets a
   // zero normal (it can never be hit).
   void add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, uint32_t material);
+  // The same with a unit shading normal per corner (a file's vertex normals, for smooth shading).
+  // The first such triangle gives every earlier triangle its geometric normal at each corner, so
+  // that meshes without vertex normals store none (and pay nothing for them).
+  void add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, uint32_t material,
+           const std::array<glm::vec3, 3>& normals);
+  // The same with optional normals and texture coordinates per corner (null: none). Texture
+  // coordinates work as normals do: the first triangle that has them gives every earlier one (0, 0)
+  // at each corner, and so does every later triangle without them.
+  void add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, uint32_t material,
+           const std::array<glm::vec3, 3>* normals, const std::array<glm::vec2, 3>* uvs);
   // Appends `other`'s triangles exactly as stored, adding `material_offset` to their material ids.
   void append(const TriangleMesh& other, uint32_t material_offset);
 
@@ -33,6 +46,18 @@ class TriangleMesh {
   const std::vector<glm::vec3>& e2() const { return e2_; }
   const std::vector<glm::vec3>& normal() const { return normal_; }
   const std::vector<uint32_t>& material() const { return material_; }
+  // Three per triangle (corners in the order given to add()), or empty when no triangle has any.
+  const std::vector<glm::vec3>& corner_normals() const { return corner_normals_; }
+  bool has_shading_normals() const { return !corner_normals_.empty(); }
+  // The corner normals interpolated at barycentrics (u, v) (weights 1 - u - v, u, v for corners
+  // 0, 1, 2, as in v0 + u e1 + v e2) and normalised; the geometric normal when the mesh has no
+  // shading normals or the interpolation vanishes. Not yet turned to any side.
+  glm::vec3 shading_normal(size_t tri, float u, float v) const;
+  // Three per triangle, or empty when no triangle has any.
+  const std::vector<glm::vec2>& corner_uvs() const { return corner_uvs_; }
+  bool has_uvs() const { return !corner_uvs_.empty(); }
+  // The corner texture coordinates interpolated at barycentrics (u, v); (0, 0) without any.
+  glm::vec2 uv(size_t tri, float u, float v) const;
 
   glm::vec3 vertex(size_t tri, int corner) const;  // corner 0, 1 or 2, exactly as added
   Bounds3 bounds() const;                          // of the whole mesh; all zero when empty
@@ -44,6 +69,8 @@ class TriangleMesh {
  private:
   std::vector<glm::vec3> v0_, v1_, v2_, e1_, e2_, normal_;
   std::vector<uint32_t> material_;
+  std::vector<glm::vec3> corner_normals_;
+  std::vector<glm::vec2> corner_uvs_;
 };
 
 }  // namespace tritrace

@@ -87,7 +87,7 @@ LightSampler::LightSampler(const Scene& scene) {
   }
 }
 
-LightSample LightSampler::sample(const Scene& /*scene*/, glm::vec3 x, float u_select,
+LightSample LightSampler::sample(const Scene& scene, glm::vec3 x, float u_select,
                                  glm::vec2 u_point) const {
   LightSample out;
   if (table_.empty()) return out;
@@ -122,6 +122,11 @@ LightSample LightSampler::sample(const Scene& /*scene*/, glm::vec3 x, float u_se
   const float cos_light = std::abs(cos_out) / std::sqrt(dist2);
   if (!(cos_light > 0.0f)) return out;
   out.radiance = light.radiance;
+  const Material& m = scene.materials[scene.mesh.material()[light.index]];
+  if (m.emission_texture.present()) {
+    out.radiance =
+        textured(scene, m.emission_texture, light.radiance, scene.mesh.uv(light.index, b.y, b.z));
+  }
   out.pdf = light.pmf_over_area * dist2 / cos_light;
   return out;
 }

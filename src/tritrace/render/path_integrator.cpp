@@ -10,6 +10,7 @@
 
 #include "tritrace/math/sampling.h"
 #include "tritrace/render/material/bsdf.h"
+#include "tritrace/render/shading_normal.h"
 
 namespace tritrace {
 namespace {
@@ -64,6 +65,10 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
   // Point lights are found by light sampling only, whatever the strategy for emissive triangles.
   const bool light_finds_triangles = settings_.strategy != PathSettings::Strategy::kBsdfOnly;
   const bool bsdf_finds_lights = settings_.strategy != PathSettings::Strategy::kLightOnly;
+  // Meshes without vertex normals take exactly the flat-shading code below (the same images).
+  // Instanced triangles (prim beyond scene.mesh) shade flat and untextured for now: the
+  // prototypes' corner normals and texture coordinates are not moved to world space yet.
+  const bool mesh_smooth = mesh.has_shading_normals();
 
   Scratch& scratch = thread_scratch();
   std::array<glm::vec3, kMaxBatch> throughput, origin_point;
@@ -122,9 +127,20 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       const glm::vec3 x = tri.v0 + hit.u * tri.e1 + hit.v * tri.e2;
       const glm::vec3 wo = -scratch.rays[k].dir;
       const glm::vec3 n_lab = tri.normal;
+      const bool own = prim < mesh.size();  // not an instance's triangle
+      const bool smooth = mesh_smooth && own;
+      const glm::vec2 uv = own ? mesh.uv(prim, hit.u, hit.v) : glm::vec2(0.0f);
 
+      // Texture lookups only where a material has a texture: untextured scenes run as before.
+      glm::vec3 albedo = material.albedo;
+      if (material.albedo_texture.present()) {
+        albedo = textured(scene, material.albedo_texture, albedo, uv);
+      }
       if (material.emits()) {
-        const glm::vec3 le = emitted_radiance(material, n_lab, wo);
+        glm::vec3 le = emitted_radiance(material, n_lab, wo);
+        if (material.emission_texture.present()) {
+          le = textured(scene, material.emission_texture, le, uv);
+        }
         if (depth == 0) {
           out.radiance[i] += throughput[i] * le;
         } else if (bsdf_finds_lights) {
@@ -142,8 +158,15 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
         // choice number: light sampling adds its term and the bounce continues the path, so the
         // estimate's expectation is the sum of two expectations, each over a uniform number, and
         // stays unbiased (unlike the roulette's coin, which multiplies the same path's weight).
-        const Bsdf bsdf(material);
-        const Frame frame = Frame::from_normal(n_lab);
+        const Bsdf bsdf(material, albedo);
+        // The shading frame, unless wo lies on different sides of the shading and geometric
+        // surfaces (then the lobes, which decide inside and outside by wo, would be told wrong).
+        glm::vec3 n_shade = n_lab;
+        if (smooth) {
+          const glm::vec3 ns = oriented_shading_normal(mesh, prim, hit.u, hit.v, n_lab);
+          if ((glm::dot(wo, ns) >= 0.0f) == (glm::dot(wo, n_lab) >= 0.0f)) n_shade = ns;
+        }
+        const Frame frame = Frame::from_normal(n_shade);
         const glm::vec3 wo_local = frame.to_local(wo);
         if (!lights_.empty() && !bsdf.all_delta()) {
           LightSample ls = lights_.sample(scene, x, u_light, u_light_point);
@@ -153,11 +176,16 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
           const float dist = std::sqrt(dist2);
           const glm::vec3 wi = ls.infinite ? ls.wi : to_light * (1.0f / dist);
           const glm::vec3 wi_local = frame.to_local(wi);
-          const glm::vec3 f = dist > 0.0f ? bsdf.eval(wo_local, wi_local) : glm::vec3(0.0f);
+          glm::vec3 f = dist > 0.0f ? bsdf.eval(wo_local, wi_local) : glm::vec3(0.0f);
+          // A direction on one side of the shading surface and the other of the geometric one
+          // is neither a reflection nor a transmission: no light that way (pbrt-v3's rule).
+          if (smooth && (wi_local.z >= 0.0f) != (glm::dot(wi, n_lab) >= 0.0f)) f = glm::vec3(0.0f);
           const float cos_theta = std::abs(wi_local.z);
           if (ls.pdf > 0.0f && max_component(f) > 0.0f && max_component(ls.radiance) > 0.0f) {
             const glm::vec3 side = wi_local.z >= 0.0f ? n_lab : -n_lab;
-            const glm::vec3 from = leave_surface(tri, x, side, offset_);
+            const glm::vec3 from = leave_surface(
+                tri, smooth ? terminator_safe_point(mesh, prim, hit.u, hit.v, x, side) : x,
+                side, offset_);
             glm::vec3 contribution;
             glm::vec3 end;
             if (ls.delta) {
@@ -195,6 +223,8 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
         }
         const BsdfSample bs = bsdf.sample(wo_local, u_light, u_bsdf);
         if (!bs.valid()) continue;
+        const glm::vec3 wi_world = frame.to_world(bs.wi);
+        if (smooth && (bs.wi.z >= 0.0f) != (glm::dot(wi_world, n_lab) >= 0.0f)) continue;
         glm::vec3 t = throughput[i] * bs.weight;
         if (depth + 1 >= settings_.roulette_depth) {
           const float survive = std::min(1.0f, std::sqrt(max_component(t)));
@@ -206,8 +236,11 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
         bsdf_pdf[i] = bs.pdf;  // infinite for a delta lobe: emission found by it gets weight 1
         origin_point[i] = x;
         Ray& r = scratch.rays[next];
-        r.origin = leave_surface(tri, x, bs.wi.z >= 0.0f ? n_lab : -n_lab, offset_);
-        r.dir = frame.to_world(bs.wi);
+        const glm::vec3 side = bs.wi.z >= 0.0f ? n_lab : -n_lab;
+        r.origin = leave_surface(
+            tri, smooth ? terminator_safe_point(mesh, prim, hit.u, hit.v, x, side) : x, side,
+            offset_);
+        r.dir = wi_world;
         r.tmin = 0.0f;
         r.tmax = kRayTMax;
         path[next] = i;
@@ -218,8 +251,18 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       // The side the path arrived from: the two-sided surface reflects there, and both the shadow
       // ray and the bounce leave from that side.
       const glm::vec3 n = glm::dot(n_lab, wo) >= 0.0f ? n_lab : -n_lab;
-      const glm::vec3 start = leave_surface(tri, x, n, offset_);
-      const glm::vec3 f = material.albedo * kInvPi;  // Lambert
+      // With vertex normals: Lambert about the shading normal on that side, over the shading
+      // normal's whole hemisphere (no light lost where it and the geometric one disagree), rays
+      // leaving from the curved surface the normals describe (shading_normal.h), above the facets.
+      glm::vec3 ns = n;
+      if (smooth) {
+        ns = oriented_shading_normal(mesh, prim, hit.u, hit.v, n_lab);
+        if (!(n == n_lab)) ns = -ns;
+      }
+      const glm::vec3 start = leave_surface(
+          tri, smooth ? terminator_safe_point(mesh, prim, hit.u, hit.v, x, n) : x, n,
+          offset_);
+      const glm::vec3 f = albedo * kInvPi;  // Lambert
       if (!lights_.empty()) {
         LightSample ls = lights_.sample(scene, x, u_light, u_light_point);
         if (!ls.delta && !light_finds_triangles) ls.pdf = 0.0f;
@@ -227,7 +270,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
         const float dist2 = glm::dot(to_light, to_light);
         const float dist = std::sqrt(dist2);
         const glm::vec3 wi = ls.infinite ? ls.wi : to_light * (1.0f / dist);
-        const float cos_theta = glm::dot(n, wi);
+        const float cos_theta = glm::dot(ns, wi);
         if (ls.pdf > 0.0f && dist > 0.0f && cos_theta > 0.0f && max_component(ls.radiance) > 0.0f) {
           glm::vec3 contribution;
           glm::vec3 end;
@@ -269,7 +312,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       const glm::vec3 local = sample_cosine_hemisphere(u_bsdf);
       const float pdf = cosine_hemisphere_pdf(local.z);
       if (!(pdf > 0.0f)) continue;
-      glm::vec3 t = throughput[i] * material.albedo;  // f cos / pdf = albedo for Lambert
+      glm::vec3 t = throughput[i] * albedo;  // f cos / pdf = albedo for Lambert
       if (depth + 1 >= settings_.roulette_depth) {
         // Survival by the square root of the throughput, not the throughput itself: paths live
         // longer (measured on cornell-area: 7% more rays per path, 12% less RMSE at 256 spp, so
@@ -284,7 +327,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       origin_point[i] = x;
       Ray& r = scratch.rays[next];  // next <= k: overwrites only rays already consumed
       r.origin = start;
-      r.dir = Frame::from_normal(n).to_world(local);
+      r.dir = Frame::from_normal(ns).to_world(local);
       r.tmin = 0.0f;
       r.tmax = kRayTMax;
       path[next] = i;

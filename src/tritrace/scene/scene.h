@@ -1,5 +1,6 @@
 // Scene: everything a render reads, built once and then read-only: triangles, materials, point
-// lights, the constant indirect (ambient) term and the camera, plus instanced meshes.
+// lights, the constant indirect (ambient) term, the environment, textures and the camera, plus
+// instanced meshes.
 #pragma once
 
 #include <cstdint>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "tritrace/geometry/triangle_mesh.h"
+#include "tritrace/image/texture.h"
 #include "tritrace/scene/camera.h"
 
 namespace tritrace {
@@ -22,6 +24,15 @@ enum class MaterialType : uint8_t {
                // or the exact Fresnel of a complex index (conductor_eta, conductor_k)
   kDielectric,  // glass: GGX reflection and refraction with exact Fresnel, index `ior` inside
   kPrincipled,  // glTF metallic-roughness: conductor, glass and coated diffuse mixed by weights
+};
+
+// One of Scene::textures, looked up through the mesh's texture coordinates with these wrap modes
+// (a glTF sampler's; repeat by default).
+struct TextureRef {
+  int32_t index = -1;  // none
+  WrapMode wrap_s = WrapMode::kRepeat;
+  WrapMode wrap_t = WrapMode::kRepeat;
+  bool present() const { return index >= 0; }
 };
 
 // A surface material that may also emit light.
@@ -45,6 +56,10 @@ struct Material {
   // from `albedo`.
   glm::vec3 conductor_eta{0.0f};
   glm::vec3 conductor_k{0.0f};
+  // Multiply albedo and emission where present (glTF's baseColorTexture times baseColorFactor,
+  // emissiveTexture times emissiveFactor). The lab integrator ignores them.
+  TextureRef albedo_texture{};
+  TextureRef emission_texture{};
 
   bool emits() const { return emission.x > 0.0f || emission.y > 0.0f || emission.z > 0.0f; }
   bool is_diffuse() const { return type == MaterialType::kDiffuse; }
@@ -139,6 +154,7 @@ struct Scene {
   glm::vec3 environment{0.0f};
   // When set, replaces `environment`: radiance from a map, importance-sampled as a light.
   std::shared_ptr<const EnvironmentMap> environment_map;
+  std::vector<Texture> textures;  // shared by the materials that refer to them
   Camera camera;
 
   bool has_instances() const { return !instances.empty(); }
@@ -176,5 +192,11 @@ Bounds3 scene_bounds(const Scene& scene);
 // The same scene with every instance copied into `mesh` (in the scene's triangle numbering), its
 // vertices moved by to_world.apply: the oracle that instanced rendering is tested against.
 Scene flattened(const Scene& scene);
+// `factor` times the texture `ref` at texture coordinates uv, or `factor` alone without a texture.
+inline glm::vec3 textured(const Scene& scene, const TextureRef& ref, glm::vec3 factor,
+                          glm::vec2 uv) {
+  if (!ref.present()) return factor;
+  return factor * scene.textures[static_cast<size_t>(ref.index)].lookup(uv, ref.wrap_s, ref.wrap_t);
+}
 
 }  // namespace tritrace

@@ -1,13 +1,22 @@
 // Scene transformation: rebuilds the mesh from its exact vertices.
 #include "tritrace/scene/transform.h"
 
+#include <algorithm>
+#include <array>
+
 namespace tritrace {
 
 Scene transformed(const Scene& scene, const Similarity& xf) {
   Scene out;
   const TriangleMesh& m = scene.mesh;
   for (size_t i = 0; i < m.size(); ++i) {
-    out.mesh.add(xf.apply(m.v0()[i]), xf.apply(m.v1()[i]), xf.apply(m.v2()[i]), m.material()[i]);
+    // A uniform scale and a translation leave normals as they are; texture coordinates stay too.
+    std::array<glm::vec3, 3> normals;
+    std::array<glm::vec2, 3> uvs;
+    if (m.has_shading_normals()) std::copy_n(&m.corner_normals()[3 * i], 3, normals.begin());
+    if (m.has_uvs()) std::copy_n(&m.corner_uvs()[3 * i], 3, uvs.begin());
+    out.mesh.add(xf.apply(m.v0()[i]), xf.apply(m.v1()[i]), xf.apply(m.v2()[i]), m.material()[i],
+                 m.has_shading_normals() ? &normals : nullptr, m.has_uvs() ? &uvs : nullptr);
   }
   // Instances keep their prototypes; the similarity is composed into each placement.
   out.prototypes = scene.prototypes;
@@ -17,6 +26,9 @@ Scene transformed(const Scene& scene, const Similarity& xf) {
     a.translation = xf.apply(a.translation);
     add_instance(out, inst.prototype, a);
   }
+  out.environment = scene.environment;
+  out.environment_map = scene.environment_map;
+  out.textures = scene.textures;
   out.materials = scene.materials;
   for (const PointLight& light : scene.lights) {
     out.lights.push_back({xf.apply(light.position), light.power * (xf.scale * xf.scale)});

@@ -107,6 +107,17 @@ TEST(MeshImport, ObjTriangleCountMatchesItsFaceLines) {
   }
 }
 
+// spider.mtl names its textures Windows-style (".\\SpiderTex.jpg"): found with '/' instead, each
+// image once.
+TEST(MeshImport, ObjTexturesWithWindowsSeparatorsAreFound) {
+  const ImportedMesh m = import_mesh_file(kModels + "OBJ/spider.obj");
+  EXPECT_GE(m.textures.size(), 2u);
+  EXPECT_EQ(m.uvs.size(), m.corners.size());
+  size_t textured = 0;
+  for (const Material& mat : m.materials) textured += mat.albedo_texture.present();
+  EXPECT_GE(textured, m.textures.size());
+}
+
 TEST(MeshImport, ObjMaterialsKeepTheirMtlDiffuseColours) {
   // Every Kd colour in spider.mtl is one of the imported albedos.
   const ImportedMesh m = import_mesh_file(kModels + "OBJ/spider.obj");

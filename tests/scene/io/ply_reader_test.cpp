@@ -62,6 +62,15 @@ void expect_same(const ImportedMesh& got, const ImportedMesh& want, int max_ulps
     }
     EXPECT_LE(most, max_ulps);
   }
+  // Vertex normals (nx, ny, nz) where the file has them, at the same corners.
+  ASSERT_EQ(got.normals.size(), want.normals.size());
+  for (size_t i = 0; i < got.normals.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      const float g = got.normals[i][a], w = want.normals[i][a];
+      EXPECT_TRUE(g == w || (std::signbit(g) == std::signbit(w) && ulps(g, w) <= max_ulps))
+          << "normal " << i << ": " << g << " against " << w;
+    }
+  }
   EXPECT_EQ(got.material, want.material);
   ASSERT_EQ(got.materials.size(), want.materials.size());
   for (size_t i = 0; i < got.materials.size(); ++i) {
@@ -86,9 +95,10 @@ void expect_native_equals_assimp(const std::string& path, const ImportedMesh* ex
 }
 
 // An ASCII PLY's triangles by an independent route: the vertex lines' three numbers from x_column
-// through strtof (strtoll for integer properties), faces as (a, c, b) as tritrace stores model
-// files' triangles.
-ImportedMesh ascii_by_strtof(const std::string& path, int x_column, bool integers = false) {
+// through strtof (strtoll for integer properties), and the normal's three from nx_column (none when
+// negative), faces as (a, c, b) as tritrace stores model files' triangles.
+ImportedMesh ascii_by_strtof(const std::string& path, int x_column, bool integers = false,
+                             int nx_column = -1) {
   std::istringstream in(slurp(path));
   size_t vertices = 0, faces = 0;
   for (std::string line; std::getline(in, line) && line.rfind("end_header", 0) != 0;) {
@@ -97,7 +107,7 @@ ImportedMesh ascii_by_strtof(const std::string& path, int x_column, bool integer
     size_t n = 0;
     if (w >> a >> b >> n && a == "element") (b == "vertex" ? vertices : faces) = n;
   }
-  std::vector<glm::vec3> points;
+  std::vector<glm::vec3> points, normals;
   std::string line;
   for (size_t i = 0; i < vertices && std::getline(in, line); ++i) {
     std::istringstream w(line);
@@ -111,6 +121,13 @@ ImportedMesh ascii_by_strtof(const std::string& path, int x_column, bool integer
                       : std::strtof(t.c_str(), nullptr);
     }
     points.push_back(p);
+    if (nx_column >= 0) {
+      glm::vec3 n;
+      for (int a = 0; a < 3; ++a) {
+        n[a] = std::strtof(tokens.at(static_cast<size_t>(nx_column + a)).c_str(), nullptr);
+      }
+      normals.push_back(n);
+    }
   }
   ImportedMesh m;
   for (size_t f = 0; f < faces && std::getline(in, line); ++f) {
@@ -118,9 +135,10 @@ ImportedMesh ascii_by_strtof(const std::string& path, int x_column, bool integer
     size_t n = 0, a = 0, b = 0, c = 0;
     w >> n >> a >> b >> c;
     m.corners.insert(m.corners.end(), {points.at(a), points.at(c), points.at(b)});
+    if (nx_column >= 0) m.normals.insert(m.normals.end(), {normals[a], normals[c], normals[b]});
     m.material.push_back(0);
   }
-  m.materials = {Material{glm::vec3(1.0f)}};
+  m.materials = {Material{.albedo = glm::vec3(1.0f), .two_sided = true}};
   m.material_names = {""};
   m.meshes = 1;
   return m;
@@ -129,7 +147,7 @@ ImportedMesh ascii_by_strtof(const std::string& path, int x_column, bool integer
 TEST(PlyReader, TestModelsReadAsAssimpReadsThem) {
   expect_native_equals_assimp(kModels + "cube_binary.ply");  // binary little-endian
   // ASCII, a free-text header line, normals and UVs beside xyz:
-  const ImportedMesh wuson = ascii_by_strtof(kModels + "Wuson.ply", 0);
+  const ImportedMesh wuson = ascii_by_strtof(kModels + "Wuson.ply", 0, false, 3);
   expect_native_equals_assimp(kModels + "Wuson.ply", &wuson);
   const ImportedMesh colour = ascii_by_strtof(kModels + "float-color.ply", 0);
   expect_native_equals_assimp(kModels + "float-color.ply", &colour);  // ASCII, float colours

@@ -15,7 +15,11 @@
 #include <cmath>
 #include <cstring>
 #include <exception>
+#include <filesystem>
+#include <fstream>
 #include <functional>
+#include <iterator>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <utility>
@@ -48,21 +52,208 @@ float unit_channel(float c) {
   return std::isfinite(c) ? std::clamp(c, 0.0f, 1.0f) : kNeutralGrey.x;
 }
 
-Material convert_material(const aiMaterial& m) {
-  aiColor4D colour;
-  if (m.Get(AI_MATKEY_BASE_COLOR, colour) == AI_SUCCESS ||
-      m.Get(AI_MATKEY_COLOR_DIFFUSE, colour) == AI_SUCCESS) {
-    return {glm::vec3(unit_channel(colour.r), unit_channel(colour.g), unit_channel(colour.b))};
+glm::vec3 unit_colour(const aiColor4D& c) {
+  return {unit_channel(c.r), unit_channel(c.g), unit_channel(c.b)};
+}
+
+// A non-negative finite colour (emission may exceed 1).
+glm::vec3 radiance_colour(const aiColor4D& c) {
+  auto channel = [](float x) { return std::isfinite(x) ? std::max(x, 0.0f) : 0.0f; };
+  return {channel(c.r), channel(c.g), channel(c.b)};
+}
+
+std::optional<float> get_float(const aiMaterial& m, const char* key, unsigned type,
+                               unsigned index) {
+  float value = 0.0f;
+  if (m.Get(key, type, index, value) != AI_SUCCESS || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
+std::optional<glm::vec3> get_colour(const aiMaterial& m, const char* key, unsigned type,
+                                    unsigned index) {
+  aiColor4D c;
+  if (m.Get(key, type, index, c) != AI_SUCCESS) return std::nullopt;
+  return unit_colour(c);
+}
+
+WrapMode wrap_mode(aiTextureMapMode mode) {
+  switch (mode) {
+    case aiTextureMapMode_Clamp:
+    case aiTextureMapMode_Decal:
+      return WrapMode::kClamp;
+    case aiTextureMapMode_Mirror:
+      return WrapMode::kMirror;
+    default:
+      return WrapMode::kRepeat;
   }
-  return {kNeutralGrey};
+}
+
+// The textures of one file: each image decoded once, whichever materials use it. Embedded images
+// (glTF buffers, .glb) come from the aiScene; external ones are read relative to the model file.
+class TextureTable {
+ public:
+  TextureTable(const aiScene& scene, const std::string& subject, std::string directory,
+               ImportedMesh& out)
+      : scene_(scene), subject_(subject), directory_(std::move(directory)), out_(out) {}
+
+  // The material's first texture of `type` (tried in order), or none.
+  TextureRef find(const aiMaterial& m, std::initializer_list<aiTextureType> types) {
+    for (aiTextureType type : types) {
+      if (m.GetTextureCount(type) == 0) continue;
+      aiString path;
+      aiTextureMapMode modes[2] = {aiTextureMapMode_Wrap, aiTextureMapMode_Wrap};
+      if (m.GetTexture(type, 0, &path, nullptr, nullptr, nullptr, nullptr, modes) != AI_SUCCESS) {
+        continue;
+      }
+      TextureRef ref;
+      ref.index = index_of(path.C_Str());
+      ref.wrap_s = wrap_mode(modes[0]);
+      ref.wrap_t = wrap_mode(modes[1]);
+      return ref;
+    }
+    return {};
+  }
+
+ private:
+  int32_t index_of(const std::string& path) {
+    const aiTexture* embedded = scene_.GetEmbeddedTexture(path.c_str());
+    const std::string key = embedded != nullptr ? "*embedded*" + path : path;
+    if (const auto it = loaded_.find(key); it != loaded_.end()) return it->second;
+    TextureImage image =
+        embedded != nullptr ? decode_embedded(*embedded, path) : read_external(path);
+    out_.textures.push_back(std::move(image));
+    const auto index = static_cast<int32_t>(out_.textures.size() - 1);
+    loaded_.emplace(key, index);
+    return index;
+  }
+
+  TextureImage decode_embedded(const aiTexture& t, const std::string& path) const {
+    const std::string what = subject_ + " (embedded texture '" + one_line(path) + "')";
+    if (t.mHeight == 0) {  // compressed: mWidth bytes of a PNG, JPEG ... file
+      return decode_texture_image(
+          std::span(reinterpret_cast<const uint8_t*>(t.pcData), static_cast<size_t>(t.mWidth)),
+          what);
+    }
+    if (static_cast<int64_t>(t.mWidth) * t.mHeight > kMaxTextureTexels) {
+      throw Error(what, "cannot read texture: too large");
+    }
+    TextureImage image{static_cast<int>(t.mWidth), static_cast<int>(t.mHeight), {}};
+    image.rgb.reserve(static_cast<size_t>(t.mWidth) * t.mHeight * 3);
+    for (size_t i = 0; i < static_cast<size_t>(t.mWidth) * t.mHeight; ++i) {
+      image.rgb.insert(image.rgb.end(), {t.pcData[i].r, t.pcData[i].g, t.pcData[i].b});
+    }
+    return image;
+  }
+
+  TextureImage read_external(std::string path) const {
+    namespace fs = std::filesystem;
+    // Files written on Windows name textures with backslashes (".\\wood.jpg").
+    std::replace(path.begin(), path.end(), '\\', '/');
+    const std::string referenced = " (referenced by " + subject_ + ")";
+    if (directory_.empty()) {
+      throw Error(path, "cannot read texture: a model read from memory has no folder" + referenced);
+    }
+    const fs::path file =
+        fs::path(path).is_absolute() ? fs::path(path) : fs::path(directory_) / path;
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw Error(file.string(), "cannot read texture: no such file" + referenced);
+    const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                     std::istreambuf_iterator<char>());
+    try {
+      return decode_texture_image(bytes, file.string());
+    } catch (const Error& e) {
+      throw Error(e.subject(), e.reason() + referenced);
+    }
+  }
+
+  const aiScene& scene_;
+  const std::string& subject_;
+  std::string directory_;
+  ImportedMesh& out_;
+  std::map<std::string, int32_t> loaded_;
+};
+
+// GGX width from a Phong exponent: alpha = sqrt(2 / (Ns + 2)) (Walter et al. 2007, section 5.2,
+// the Beckmann-Phong correspondence), and roughness = sqrt(alpha).
+float roughness_from_phong(float ns) {
+  return std::sqrt(std::sqrt(2.0f / (std::max(ns, 0.0f) + 2.0f)));
+}
+
+float max_channel(glm::vec3 c) {
+  return std::max({c.x, c.y, c.z});
+}
+
+// glTF's metallic-roughness (assimp's PBR keys) becomes the principled material; other files
+// (OBJ/MTL's Kd, Ks, Ns, Ni, d, Ke) map to the type that fits; see docs/SCENE_FORMAT.md. Imported
+// materials are two-sided: a file's winding says nothing about which side should emit.
+Material convert_material(const aiMaterial& m, TextureTable& textures) {
+  Material out{kNeutralGrey};
+  out.two_sided = true;
+  const std::optional<float> metallic = get_float(m, AI_MATKEY_METALLIC_FACTOR);
+  const std::optional<float> roughness = get_float(m, AI_MATKEY_ROUGHNESS_FACTOR);
+  const std::optional<glm::vec3> base = get_colour(m, AI_MATKEY_BASE_COLOR);
+  const std::optional<glm::vec3> diffuse = get_colour(m, AI_MATKEY_COLOR_DIFFUSE);
+  aiColor4D emissive;
+  if (m.Get(AI_MATKEY_COLOR_EMISSIVE, emissive) == AI_SUCCESS) {
+    out.emission = radiance_colour(emissive);
+    if (const std::optional<float> strength = get_float(m, AI_MATKEY_EMISSIVE_INTENSITY)) {
+      out.emission *= std::max(*strength, 0.0f);
+    }
+  }
+  const std::optional<float> ior = get_float(m, AI_MATKEY_REFRACTI);
+  // assimp reports 1 for an MTL without Ni, which would make glass vanish: 1.5 then.
+  if (ior && *ior > 1.0f && *ior <= 4.0f) out.ior = *ior;
+  out.albedo_texture = textures.find(m, {aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
+  out.emission_texture = textures.find(m, {aiTextureType_EMISSIVE});
+  if (metallic || roughness) {
+    out.type = MaterialType::kPrincipled;
+    out.albedo = base ? *base : diffuse ? *diffuse : glm::vec3(1.0f);
+    out.metallic = std::clamp(metallic.value_or(1.0f), 0.0f, 1.0f);  // glTF's defaults
+    out.roughness = std::clamp(roughness.value_or(1.0f), 0.0f, 1.0f);
+    if (const std::optional<float> t = get_float(m, AI_MATKEY_TRANSMISSION_FACTOR)) {
+      out.transmission = std::clamp(*t, 0.0f, 1.0f);
+    }
+    return out;
+  }
+  if (base || diffuse) out.albedo = base ? *base : *diffuse;
+  const glm::vec3 specular = get_colour(m, AI_MATKEY_COLOR_SPECULAR).value_or(glm::vec3(0.0f));
+  const std::optional<float> shininess = get_float(m, AI_MATKEY_SHININESS);
+  const float rough = shininess ? roughness_from_phong(*shininess) : 0.0f;
+  const float opacity = get_float(m, AI_MATKEY_OPACITY).value_or(1.0f);
+  if (opacity < 1.0f) {
+    out.type = MaterialType::kDielectric;
+    out.albedo = glm::vec3(1.0f);
+    out.roughness = max_channel(specular) > 0.0f ? rough : 0.0f;
+  } else if (max_channel(specular) > 0.0f && max_channel(out.albedo) == 0.0f &&
+             !out.albedo_texture.present()) {
+    out.type = MaterialType::kConductor;
+    out.albedo = specular;
+    out.roughness = rough;
+  } else if (max_channel(specular) > 0.0f) {
+    out.type = MaterialType::kPrincipled;
+    out.metallic = 0.0f;
+    out.roughness = rough;
+  }
+  return out;
 }
 
 void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t material,
                  const std::string& subject, ImportedMesh& out) {
+  const bool has_uvs = mesh.HasTextureCoords(0);
+  const bool uvs = has_uvs || !out.uvs.empty();
+  if (uvs) out.uvs.resize(out.corners.size());
+  // Normals move with the inverse transpose of the transform's linear part (which keeps them
+  // perpendicular to the surface under non-uniform scales); they are normalised later.
+  aiMatrix3x3 normal_transform(transform);
+  normal_transform.Inverse().Transpose();
+  // Earlier meshes without normals get zero vectors (add_checked makes them geometric normals).
+  const bool normals = mesh.HasNormals() || !out.normals.empty();
+  if (normals) out.normals.resize(out.corners.size());
   for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
     const aiFace& face = mesh.mFaces[f];
     if (face.mNumIndices != 3) continue;  // points and lines carry no surface
-    glm::vec3 corner[3];
+    glm::vec3 corner[3], normal[3] = {};
+    glm::vec2 uv[3] = {};
     for (int k = 0; k < 3; ++k) {
       const unsigned index = face.mIndices[k];
       if (index >= mesh.mNumVertices) {
@@ -71,6 +262,12 @@ void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t mate
       }
       const aiVector3D v = transform * mesh.mVertices[index];
       corner[k] = glm::vec3(v.x, v.y, v.z);
+      if (mesh.HasNormals()) {
+        const aiVector3D n = normal_transform * mesh.mNormals[index];
+        normal[k] = glm::vec3(n.x, n.y, n.z);
+      }
+      if (has_uvs)
+        uv[k] = glm::vec2(mesh.mTextureCoords[0][index].x, mesh.mTextureCoords[0][index].y);
     }
     if (out.triangles() >= kMaxSceneTriangles) {
       throw Error(subject, "has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
@@ -78,18 +275,23 @@ void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t mate
     // Model files wind front faces counter-clockwise (outward normal e1 x e2); the lab's normal is
     // cross(e2, e1), so the second and third corners swap to keep the lit side outside.
     out.corners.insert(out.corners.end(), {corner[0], corner[2], corner[1]});
+    if (normals) out.normals.insert(out.normals.end(), {normal[0], normal[2], normal[1]});
+    if (uvs) out.uvs.insert(out.uvs.end(), {uv[0], uv[2], uv[1]});
     out.material.push_back(material);
   }
 }
 
-ImportedMesh convert_scene(const aiScene& scene, const std::string& subject) {
+ImportedMesh convert_scene(const aiScene& scene, const std::string& subject,
+                           const std::string& directory) {
   ImportedMesh out;
+  TextureTable textures(scene, subject, directory, out);
   for (unsigned i = 0; i < scene.mNumMaterials; ++i) {
-    out.materials.push_back(convert_material(*scene.mMaterials[i]));
+    out.materials.push_back(convert_material(*scene.mMaterials[i], textures));
     out.material_names.emplace_back(scene.mMaterials[i]->GetName().C_Str());
   }
   if (out.materials.empty()) {
     out.materials.push_back({kNeutralGrey});
+    out.materials.back().two_sided = true;
     out.material_names.emplace_back("default");
   }
   if (scene.mRootNode == nullptr) throw Error(subject, "has no scene graph (no root node)");
@@ -132,8 +334,9 @@ class LogWatch final : public Assimp::LogStream {
 };
 
 // Runs in the importer process (import_isolated), which has assimp's global logger to itself.
+// `directory` is where external textures are looked for (empty for a model read from memory).
 template <typename ReadFn>
-ImportedMesh import_with(const std::string& subject, ReadFn&& read) {
+ImportedMesh import_with(const std::string& subject, const std::string& directory, ReadFn&& read) {
   try {
     Assimp::Importer importer;
     Assimp::DefaultLogger::create(nullptr, Assimp::Logger::NORMAL, 0);
@@ -155,7 +358,7 @@ ImportedMesh import_with(const std::string& subject, ReadFn&& read) {
     if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) {
       throw Error(subject, "cannot import: the file is incomplete");
     }
-    return convert_scene(*scene, subject);
+    return convert_scene(*scene, subject, directory);
   } catch (const Error&) {
     throw;
   } catch (const std::bad_alloc&) {
@@ -230,6 +433,14 @@ std::vector<uint8_t> to_bytes(const ImportedMesh& mesh) {
   for (const std::string& name : mesh.material_names)
     b.put_array(std::vector<char>(name.begin(), name.end()));
   b.put<uint64_t>(mesh.meshes);
+  b.put_array(mesh.normals);
+  b.put_array(mesh.uvs);
+  b.put<uint64_t>(mesh.textures.size());
+  for (const TextureImage& t : mesh.textures) {
+    b.put<int32_t>(t.width);
+    b.put<int32_t>(t.height);
+    b.put_array(t.rgb);
+  }
   return std::move(b.out);
 }
 
@@ -246,6 +457,33 @@ ImportedMesh from_bytes(const std::vector<uint8_t>& bytes, const std::string& su
       mesh.material_names.emplace_back(name.begin(), name.end());
     }
     mesh.meshes = static_cast<size_t>(in.get<uint64_t>());
+    mesh.normals = in.get_array<glm::vec3>();
+    if (!mesh.normals.empty() && mesh.normals.size() != mesh.corners.size()) {
+      throw std::runtime_error("normals");
+    }
+    mesh.uvs = in.get_array<glm::vec2>();
+    if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.corners.size()) {
+      throw std::runtime_error("uvs");
+    }
+    const uint64_t textures = in.get<uint64_t>();
+    for (uint64_t i = 0; i < textures; ++i) {
+      TextureImage t;
+      t.width = in.get<int32_t>();
+      t.height = in.get<int32_t>();
+      t.rgb = in.get_array<uint8_t>();
+      if (t.width <= 0 || t.height <= 0 ||
+          t.rgb.size() != static_cast<size_t>(t.width) * static_cast<size_t>(t.height) * 3) {
+        throw std::runtime_error("texture");
+      }
+      mesh.textures.push_back(std::move(t));
+    }
+    for (const Material& m : mesh.materials) {
+      for (const TextureRef& r : {m.albedo_texture, m.emission_texture}) {
+        if (r.present() && static_cast<uint64_t>(r.index) >= textures) {
+          throw std::runtime_error("texture index");
+        }
+      }
+    }
     return mesh;
   } catch (const std::exception&) {
     throw Error(subject, "cannot import: the importer process returned damaged data");
@@ -280,8 +518,10 @@ ImportedMesh import_mesh_file(const std::string& path) {
 ImportedMesh import_mesh_file_with_assimp(const std::string& path) {
   check_input_file(path);
   return import_isolated(path, [&] {
-    return import_with(
-        path, [&](Assimp::Importer& importer) { return importer.ReadFile(path, kImportFlags); });
+    const std::string folder = std::filesystem::path(path).parent_path().string();
+    return import_with(path, folder.empty() ? "." : folder, [&](Assimp::Importer& importer) {
+      return importer.ReadFile(path, kImportFlags);
+    });
   });
 }
 
@@ -308,7 +548,7 @@ ImportedMesh import_mesh_memory_in_process(std::span<const uint8_t> bytes,
       return std::move(*mesh);
     }
   }
-  return import_with(subject, [&](Assimp::Importer& importer) {
+  return import_with(subject, "", [&](Assimp::Importer& importer) {
     return importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags,
                                        format_hint.c_str());
   });

@@ -1,10 +1,13 @@
 // Mesh import through assimp: any format it reads (OBJ, PLY, STL, glTF 2, FBX, Collada, 3DS ...)
 // becomes a flat triangle list in world space (faces triangulated, node transforms applied) with
-// the file's diffuse or base colours, or a neutral grey where it has none.
+// the file's vertex normals, texture coordinates, textures (decoded in the importer's process) and
+// materials: glTF's metallic-roughness and OBJ/MTL's parameters mapped to tritrace's material types
+// (docs/SCENE_FORMAT.md has the table), or a neutral grey where the file has none.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <span>
 #include <string>
@@ -17,7 +20,16 @@ namespace tritrace {
 inline constexpr glm::vec3 kNeutralGrey{0.6f, 0.6f, 0.6f};
 
 struct ImportedMesh {
-  std::vector<glm::vec3> corners;   // three per triangle, node transforms applied
+  std::vector<glm::vec3> corners;  // three per triangle, node transforms applied
+  // The file's vertex normals at those corners (node transforms applied), or empty when no mesh of
+  // the file has normals; a mesh without them among others that have them gets zero vectors, which
+  // add_checked replaces by the geometric normal.
+  std::vector<glm::vec3> normals;
+  // Texture coordinates (u, v) of the first set at the corners, or empty when no mesh has any.
+  std::vector<glm::vec2> uvs;
+  // The textures the materials refer to (TextureRef::index into this list), each file or embedded
+  // image once however many materials use it.
+  std::vector<TextureImage> textures;
   std::vector<uint32_t> material;   // one per triangle, an index into `materials`
   std::vector<Material> materials;  // the file's, in its order
   std::vector<std::string> material_names;

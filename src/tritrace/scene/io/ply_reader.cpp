@@ -59,16 +59,21 @@ bool is_integer(Type t) {
   return t != Type::kFloat32 && t != Type::kFloat64;
 }
 
-// What the body holds: V vertex records (x, y, z at byte offsets of scalar properties), then F
-// face records of one list (count, then indices).
+// What the body holds: V vertex records (x, y, z and optionally nx, ny, nz at byte offsets of
+// scalar properties), then F face records of one list (count, then indices).
+constexpr int kAttributes = 6;  // x, y, z, nx, ny, nz
 struct Layout {
   Format format = Format::kAscii;
   size_t vertices = 0, faces = 0;
   size_t vertex_bytes = 0;  // binary: one vertex record
   size_t vertex_properties = 0;
-  int xyz_property[3] = {-1, -1, -1};  // index among the vertex properties
-  size_t xyz_offset[3] = {0, 0, 0};    // binary: byte offset in the record
-  Type xyz_type[3] = {Type::kFloat32, Type::kFloat32, Type::kFloat32};
+  int xyz_property[kAttributes] = {-1, -1, -1, -1, -1, -1};  // index among the vertex properties
+  size_t xyz_offset[kAttributes] = {};                       // binary: byte offset in the record
+  Type xyz_type[kAttributes] = {Type::kFloat32, Type::kFloat32, Type::kFloat32,
+                                Type::kFloat32, Type::kFloat32, Type::kFloat32};
+  // Any of nx, ny, nz present (a missing one reads as 0, as assimp has it).
+  bool normals = false;
+  int attributes() const { return normals ? kAttributes : 3; }
   Type count_type = Type::kUint8, index_type = Type::kInt32;
   size_t body = 0;  // offset of the first byte after end_header's line
 };
@@ -146,8 +151,9 @@ std::optional<Layout> parse_header(std::span<const char> bytes) {
         if (w.size() != 3) return std::nullopt;  // vertex lists are left to assimp
         const std::optional<Type> type = parse_type(w[1]);
         if (!type) return std::nullopt;
-        const int axis = w[2] == "x" ? 0 : w[2] == "y" ? 1 : w[2] == "z" ? 2 : -1;
-        if (axis >= 0) {
+        constexpr std::string_view kNames[kAttributes] = {"x", "y", "z", "nx", "ny", "nz"};
+        const int axis = static_cast<int>(std::find(kNames, kNames + kAttributes, w[2]) - kNames);
+        if (axis < kAttributes) {
           if (layout.xyz_property[axis] >= 0) return std::nullopt;
           layout.xyz_property[axis] = static_cast<int>(layout.vertex_properties);
           layout.xyz_offset[axis] = layout.vertex_bytes;
@@ -175,6 +181,8 @@ std::optional<Layout> parse_header(std::span<const char> bytes) {
   for (int a = 0; a < 3; ++a) {
     if (layout.xyz_property[a] < 0) return std::nullopt;
   }
+  layout.normals =
+      layout.xyz_property[3] >= 0 || layout.xyz_property[4] >= 0 || layout.xyz_property[5] >= 0;
   layout.body = pos;
   return layout;
 }
@@ -217,11 +225,16 @@ double binary_value(const char* p, Type t) {
   return 0.0;
 }
 
-// Model files wind front faces counter-clockwise; tritrace stores (a, c, b), as mesh_import.cpp.
-void emit(ImportedMesh& out, size_t face, const std::vector<glm::vec3>& p, const int64_t idx[3]) {
-  out.corners[3 * face] = p[static_cast<size_t>(idx[0])];
-  out.corners[3 * face + 1] = p[static_cast<size_t>(idx[2])];
-  out.corners[3 * face + 2] = p[static_cast<size_t>(idx[1])];
+// Model files wind front faces counter-clockwise; tritrace stores (a, c, b), as mesh_import.cpp,
+// and the corners' normals in the same order.
+void emit(ImportedMesh& out, size_t face, const std::vector<glm::vec3>& p,
+          const std::vector<glm::vec3>& n, const int64_t idx[3]) {
+  const size_t order[3] = {static_cast<size_t>(idx[0]), static_cast<size_t>(idx[2]),
+                           static_cast<size_t>(idx[1])};
+  for (int k = 0; k < 3; ++k) {
+    out.corners[3 * face + k] = p[order[k]];
+    if (!n.empty()) out.normals[3 * face + k] = n[order[k]];
+  }
 }
 
 template <bool kSwap>
@@ -233,19 +246,22 @@ bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out
   const char* vertex_data = bytes.data() + l.body;
   const char* face_data = vertex_data + l.vertices * l.vertex_bytes;
 
-  std::vector<glm::vec3> points(l.vertices);
+  std::vector<glm::vec3> points(l.vertices), normals(l.normals ? l.vertices : 0);
   parallel::for_range(tbb::blocked_range<size_t>(0, l.vertices, 1 << 14), [&](const auto& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const char* rec = vertex_data + i * l.vertex_bytes;
-      for (int a = 0; a < 3; ++a) {
+      for (int a = 0; a < l.attributes(); ++a) {
         // As a float, as assimp keeps it: every PLY type is exact in double, so one rounding.
-        points[i][a] =
-            static_cast<float>(binary_value<kSwap>(rec + l.xyz_offset[a], l.xyz_type[a]));
+        (a < 3 ? points : normals)[i][a % 3] =
+            l.xyz_property[a] < 0
+                ? 0.0f
+                : static_cast<float>(binary_value<kSwap>(rec + l.xyz_offset[a], l.xyz_type[a]));
       }
     }
   });
 
   out.corners.resize(3 * l.faces);
+  if (l.normals) out.normals.resize(3 * l.faces);
   const size_t index_bytes = size_of(l.index_type), count_bytes = size_of(l.count_type);
   const bool ok = parallel::reduce(
       tbb::blocked_range<size_t>(0, l.faces, 1 << 14), true,
@@ -259,7 +275,7 @@ bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out
             if (!(v >= 0.0 && v < static_cast<double>(l.vertices))) return false;
             idx[k] = static_cast<int64_t>(v);
           }
-          emit(out, f, points, idx);
+          emit(out, f, points, normals, idx);
         }
         return good;
       },
@@ -298,25 +314,31 @@ bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out)
   if (l.vertices > body / (2 * l.vertex_properties) || l.faces > body / 8) return false;
   Lines lines(bytes, l.body);
   std::vector<std::string_view> w;
-  std::vector<glm::vec3> points(l.vertices);
+  std::vector<glm::vec3> points(l.vertices), normals(l.normals ? l.vertices : 0);
   for (size_t i = 0; i < l.vertices; ++i) {
     if (!lines.next(w) || w.size() != l.vertex_properties) return false;
-    for (int a = 0; a < 3; ++a) {
+    for (int a = 0; a < l.attributes(); ++a) {
+      float& value = (a < 3 ? points : normals)[i][a % 3];
+      if (l.xyz_property[a] < 0) {
+        value = 0.0f;
+        continue;
+      }
       const std::string_view s = w[static_cast<size_t>(l.xyz_property[a])];
       if (is_integer(l.xyz_type[a])) {
         int64_t v = 0;
         if (!parse_number(s, v)) return false;
-        points[i][a] = static_cast<float>(v);
+        value = static_cast<float>(v);
       } else if (l.xyz_type[a] == Type::kFloat32) {
-        if (!parse_number(s, points[i][a])) return false;
+        if (!parse_number(s, value)) return false;
       } else {
         double v = 0.0;
         if (!parse_number(s, v)) return false;
-        points[i][a] = static_cast<float>(v);
+        value = static_cast<float>(v);
       }
     }
   }
   out.corners.resize(3 * l.faces);
+  if (l.normals) out.normals.resize(3 * l.faces);
   for (size_t f = 0; f < l.faces; ++f) {
     if (!lines.next(w) || w.size() != 4 || w[0] != "3") return false;
     int64_t idx[3];
@@ -324,7 +346,7 @@ bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out)
       if (!parse_number(w[static_cast<size_t>(k) + 1], idx[k])) return false;
       if (idx[k] < 0 || static_cast<uint64_t>(idx[k]) >= l.vertices) return false;
     }
-    emit(out, f, points, idx);
+    emit(out, f, points, normals, idx);
   }
   return true;
 }
@@ -357,9 +379,10 @@ std::optional<ImportedMesh> read_ply_triangles(std::span<const char> bytes,
       break;
   }
   if (!ok) return std::nullopt;
-  // assimp gives a PLY file one material, unnamed, white (its default for PLY); the tests compare.
+  // assimp gives a PLY file one material, unnamed, white (its default for PLY), two-sided as every
+  // imported material; the tests compare.
   out.material.assign(layout->faces, 0);
-  out.materials = {Material{glm::vec3(1.0f)}};
+  out.materials = {Material{.albedo = glm::vec3(1.0f), .two_sided = true}};
   out.material_names = {""};
   out.meshes = 1;
   return out;

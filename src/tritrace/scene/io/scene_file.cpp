@@ -18,6 +18,7 @@
 #include "tritrace/error.h"
 #include "tritrace/image/image_io.h"
 #include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/io/input_file.h"
 #include "tritrace/scene/io/triangle_filter.h"
 #include "tritrace/scene/procedural.h"
 
@@ -111,6 +112,8 @@ struct Transform {
   glm::vec3 scale{1.0f};
 
   glm::vec3 apply(glm::vec3 p) const { return translate + rotate * (scale * p); }
+  // The inverse transpose of rotate * diag(scale) (rotate is orthonormal), unnormalised.
+  glm::vec3 apply_normal(glm::vec3 n) const { return rotate * (n / scale); }
 };
 
 class Parser {
@@ -338,7 +341,7 @@ class Parser {
       object(j[i], where);
       check_keys(j[i], where,
                  {"name", "type", "albedo", "emission", "two_sided", "roughness", "ior", "metallic",
-                  "transmission", "eta", "k"});
+                  "transmission", "eta", "k", "albedo_texture"});
       if (!j[i].contains("name")) fail(where, "missing \"name\"");
       const std::string name = string(j[i]["name"], where + "/name");
       if (name.empty()) fail(where + "/name", "must not be empty");
@@ -419,9 +422,35 @@ class Parser {
         }
         m.two_sided = j[i]["two_sided"].get<bool>();
       }
+      if (j[i].contains("albedo_texture")) {
+        m.albedo_texture.index = texture_file(j[i]["albedo_texture"], where + "/albedo_texture");
+      }
       if (named_.count(name)) fail(where + "/name", "duplicate material '" + shown(name) + "'");
       named_[name] = add_material(m);
     }
+  }
+
+  // The index in scene.textures of an image file named relative to the scene file, read once
+  // however many materials name it.
+  int32_t texture_file(const Json& j, const std::string& where) {
+    const std::string name = string(j, where);
+    if (name.empty()) fail(where, "must name an image file");
+    const fs::path resolved =
+        fs::path(name).is_absolute() ? fs::path(name) : fs::path(path_).parent_path() / name;
+    const std::string file = resolved.lexically_normal().string();
+    if (const auto it = textures_.find(file); it != textures_.end()) return it->second;
+    const std::string referenced = " (referenced by " + path_ + " at " + where + ")";
+    try {
+      const std::string bytes = read_input_file(file);
+      const TextureImage image = decode_texture_image(
+          std::span(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size()), file);
+      out_.scene.textures.push_back(Texture::from_srgb8(image));
+    } catch (const Error& e) {
+      throw Error(e.subject(), e.reason() + referenced, e.exit_code());
+    }
+    const auto index = static_cast<int32_t>(out_.scene.textures.size() - 1);
+    textures_.emplace(file, index);
+    return index;
   }
 
   uint32_t add_material(const Material& m) {
@@ -469,16 +498,23 @@ class Parser {
   TriangleMesh& target() { return target_ ? *target_ : out_.scene.mesh; }
 
   void add(glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t material,
-           const std::optional<Transform>& t, const std::string& where) {
+           const std::optional<Transform>& t, const std::string& where,
+           const glm::vec3* normals = nullptr, const glm::vec2* uvs = nullptr) {
     if (stored_triangles_ >= kMaxSceneTriangles) {
       fail(where, "the scene has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
     }
+    glm::vec3 moved[3];
     if (t) {
       a = t->apply(a);
       b = t->apply(b);
       c = t->apply(c);
+      if (normals != nullptr) {
+        for (int k = 0; k < 3; ++k) moved[k] = t->apply_normal(normals[k]);
+        normals = moved;
+      }
     }
-    stored_triangles_ += add_checked(target(), a, b, c, material, out_.stats) ? 1 : 0;
+    stored_triangles_ +=
+        add_checked(target(), a, b, c, material, normals, uvs, out_.stats) ? 1 : 0;
   }
 
   // "instances": a list of transforms, each placing the mesh once: to_world p = T + R (S p), the
@@ -657,14 +693,25 @@ class Parser {
     }
     const uint32_t offset = static_cast<uint32_t>(out_.scene.materials.size());
     if (!material) {
-      for (const Material& m : imported.materials) add_material(m);
+      const auto texture_offset = static_cast<int32_t>(out_.scene.textures.size());
+      for (const TextureImage& t : imported.textures) {
+        out_.scene.textures.push_back(Texture::from_srgb8(t));
+      }
+      for (Material m : imported.materials) {
+        for (TextureRef* r : {&m.albedo_texture, &m.emission_texture}) {
+          if (r->present()) r->index += texture_offset;
+        }
+        add_material(m);
+      }
     }
     for (size_t k = 0; k < imported.triangles(); ++k) {
       if (!material && imported.material[k] >= imported.materials.size()) {
         fail(where, "mesh material index out of range");
       }
       add(imported.corners[3 * k], imported.corners[3 * k + 1], imported.corners[3 * k + 2],
-          material ? *material : offset + imported.material[k], t, where);
+          material ? *material : offset + imported.material[k], t, where,
+          imported.normals.empty() ? nullptr : &imported.normals[3 * k],
+          imported.uvs.empty() ? nullptr : &imported.uvs[3 * k]);
     }
     out_.stats.meshes += imported.meshes > 0 ? imported.meshes - 1 : 0;
   }
@@ -726,6 +773,7 @@ class Parser {
   std::optional<uint32_t> default_material_;
   TriangleMesh* target_ = nullptr;
   size_t stored_triangles_ = 0;
+  std::map<std::string, int32_t> textures_;  // resolved image path -> index in scene.textures
 };
 
 }  // namespace

@@ -94,9 +94,11 @@ LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& over
   LoadedScene loaded;
   Scene& scene = loaded.scene;
   scene.materials = mesh.materials;
+  for (const TextureImage& t : mesh.textures) scene.textures.push_back(Texture::from_srgb8(t));
   for (size_t k = 0; k < mesh.triangles(); ++k) {
     add_checked(scene.mesh, mesh.corners[3 * k], mesh.corners[3 * k + 1], mesh.corners[3 * k + 2],
-                mesh.material[k], loaded.stats);
+                mesh.material[k], mesh.normals.empty() ? nullptr : &mesh.normals[3 * k],
+                mesh.uvs.empty() ? nullptr : &mesh.uvs[3 * k], loaded.stats);
   }
   loaded.stats.meshes = mesh.meshes;
   if (scene.mesh.empty()) {

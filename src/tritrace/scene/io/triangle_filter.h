@@ -3,6 +3,7 @@
 // render never sees them and `tritrace info` can report how many there were.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <glm/vec3.hpp>
@@ -24,5 +25,11 @@ TriangleCheck check_triangle(glm::vec3 a, glm::vec3 b, glm::vec3 c);
 // was added.
 bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t material,
                  LoadStats& stats);
+// The same with the file's normal and texture coordinates at each corner (null: none). The normals
+// are normalised; one that is not finite or has zero length is replaced by the triangle's geometric
+// normal (a file's broken normal must not turn into NaN shading). Non-finite texture coordinates
+// become (0, 0).
+bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t material,
+                 const glm::vec3* normals, const glm::vec2* uvs, LoadStats& stats);
 
 }  // namespace tritrace

@@ -1,0 +1,60 @@
+// Textures: images looked up by texture coordinates (linear RGB texels, bilinear filtering, the
+// repeat / clamp / mirror wrap modes of OpenGL and glTF samplers), and the sRGB decoding of the
+// 8-bit images that colour textures are stored as.
+#pragma once
+
+#include <cstdint>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace tritrace {
+
+enum class WrapMode : uint8_t { kRepeat, kClamp, kMirror };
+
+// An 8-bit RGB image as decoded from its file, row 0 the top of the picture: what the mesh
+// importer's process hands back (textures are decoded there, beside the parser).
+struct TextureImage {
+  int width = 0;
+  int height = 0;
+  std::vector<uint8_t> rgb;  // width * height * 3 bytes
+};
+
+// The IEC 61966-2-1 sRGB transfer curve, encoded [0, 1] to linear [0, 1].
+float srgb_to_linear(float encoded);
+
+class Texture {
+ public:
+  Texture() = default;
+  // `texels` row by row from the top, width * height of them; width, height >= 1.
+  Texture(int width, int height, std::vector<glm::vec3> texels);
+  // An 8-bit colour image: each byte b decoded as srgb_to_linear(b / 255).
+  static Texture from_srgb8(const TextureImage& image);
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  const glm::vec3& texel(int x, int y) const {
+    return texels_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
+  }
+  const std::vector<glm::vec3>& texels() const { return texels_; }
+
+  // Bilinear filtering at texture coordinates uv, with OpenGL's convention (also assimp's, which
+  // flips glTF's v on import): u = 0 is the left edge, v = 0 the bottom edge, so texel (x, y) has
+  // its centre at ((x + 0.5) / width, 1 - (y + 0.5) / height). `s` wraps u, `t` wraps v.
+  glm::vec3 lookup(glm::vec2 uv, WrapMode s, WrapMode t) const;
+
+ private:
+  int width_ = 0;
+  int height_ = 0;
+  std::vector<glm::vec3> texels_;
+};
+
+// Decodes an image file's bytes (PNG, JPEG, BMP, TGA ... through stb_image) to 8-bit RGB. Throws
+// Error(subject, "cannot read texture: <reason>") for bytes it cannot decode or an image larger
+// than kMaxTextureTexels.
+inline constexpr int64_t kMaxTextureTexels = int64_t{1} << 28;
+TextureImage decode_texture_image(std::span<const uint8_t> bytes, const std::string& subject);
+
+}  // namespace tritrace
