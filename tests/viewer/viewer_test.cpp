@@ -364,6 +364,21 @@ class ViewerTest : public ::testing::Test {
     return "";
   }
 
+  // What a window manager sends when the user clicks the close button: WM_DELETE_WINDOW.
+  void CloseWindow() {
+    Display* x = XOpenDisplay(xvfb_->display().c_str());
+    ASSERT_NE(x, nullptr);
+    XEvent close{};
+    close.xclient.type = ClientMessage;
+    close.xclient.window = static_cast<Window>(std::stoul(window_));
+    close.xclient.message_type = XInternAtom(x, "WM_PROTOCOLS", False);
+    close.xclient.format = 32;
+    close.xclient.data.l[0] = static_cast<long>(XInternAtom(x, "WM_DELETE_WINDOW", False));
+    close.xclient.data.l[1] = CurrentTime;
+    XSendEvent(x, close.xclient.window, False, NoEventMask, &close);
+    XCloseDisplay(x);  // flushes the event
+  }
+
   // The window's title, as a window manager shows it (_NET_WM_NAME, UTF-8).
   std::string Title() {
     std::string title =
@@ -619,18 +634,7 @@ TEST_F(ViewerTest, BenchmarkFramesWithThePathTracer) {
 
 TEST_F(ViewerTest, ClosingTheWindowQuitsWithExitZero) {
   ASSERT_NO_FATAL_FAILURE(StartViewer({"--width", "64", "--height", "64", "-q"}));
-  // What a window manager sends when the user clicks the close button: WM_DELETE_WINDOW.
-  Display* x = XOpenDisplay(xvfb_->display().c_str());
-  ASSERT_NE(x, nullptr);
-  XEvent close{};
-  close.xclient.type = ClientMessage;
-  close.xclient.window = static_cast<Window>(std::stoul(window_));
-  close.xclient.message_type = XInternAtom(x, "WM_PROTOCOLS", False);
-  close.xclient.format = 32;
-  close.xclient.data.l[0] = static_cast<long>(XInternAtom(x, "WM_DELETE_WINDOW", False));
-  close.xclient.data.l[1] = CurrentTime;
-  XSendEvent(x, close.xclient.window, False, NoEventMask, &close);
-  XCloseDisplay(x);  // flushes the event
+  ASSERT_NO_FATAL_FAILURE(CloseWindow());
   const std::optional<int> code = WaitExit(viewer_, 10s);
   viewer_ = -1;
   EXPECT_EQ(code, 0) << Err();
@@ -670,17 +674,7 @@ TEST_F(ViewerTest, ClosingWhileLoadingQuitsWithExitZero) {
   ASSERT_NO_FATAL_FAILURE(
       StartViewer({"--scene", "terrain:4m", "--width", "64", "--height", "64", "-q"}));
   const std::string title = Title();
-  Display* x = XOpenDisplay(xvfb_->display().c_str());
-  ASSERT_NE(x, nullptr);
-  XEvent close{};
-  close.xclient.type = ClientMessage;
-  close.xclient.window = static_cast<Window>(std::stoul(window_));
-  close.xclient.message_type = XInternAtom(x, "WM_PROTOCOLS", False);
-  close.xclient.format = 32;
-  close.xclient.data.l[0] = static_cast<long>(XInternAtom(x, "WM_DELETE_WINDOW", False));
-  close.xclient.data.l[1] = CurrentTime;
-  XSendEvent(x, close.xclient.window, False, NoEventMask, &close);
-  XCloseDisplay(x);
+  ASSERT_NO_FATAL_FAILURE(CloseWindow());
   const Clock::time_point sent = Clock::now();
   const std::optional<int> code = WaitExit(viewer_, 60s);
   viewer_ = -1;
