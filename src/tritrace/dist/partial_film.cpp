@@ -43,7 +43,8 @@ class Hasher {
       h_ = hash_combine(h_, w);
     }
     uint64_t tail = 0;
-    std::memcpy(&tail, p + i, n - i);
+    // Not for n - i == 0: an empty vector's data() may be null, which memcpy must not be given.
+    if (n > i) std::memcpy(&tail, p + i, n - i);
     h_ = hash_combine(hash_combine(h_, tail), n);
   }
   template <typename T>
