@@ -129,17 +129,18 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       const glm::vec3 n_lab = tri.normal;
       const bool own = prim < mesh.size();  // not an instance's triangle
       const bool smooth = mesh_smooth && own;
-      const glm::vec2 uv = own ? mesh.uv(prim, hit.u, hit.v) : glm::vec2(0.0f);
+      // Texture coordinates only for a textured material.
+      const auto uv = [&] { return own ? mesh.uv(prim, hit.u, hit.v) : glm::vec2(0.0f); };
 
       // Texture lookups only where a material has a texture: untextured scenes run as before.
       glm::vec3 albedo = material.albedo;
       if (material.albedo_texture.present()) {
-        albedo = textured(scene, material.albedo_texture, albedo, uv);
+        albedo = textured(scene, material.albedo_texture, albedo, uv());
       }
       if (material.emits()) {
         glm::vec3 le = emitted_radiance(material, n_lab, wo);
         if (material.emission_texture.present()) {
-          le = textured(scene, material.emission_texture, le, uv);
+          le = textured(scene, material.emission_texture, le, uv());
         }
         if (depth == 0) {
           out.radiance[i] += throughput[i] * le;
