@@ -127,11 +127,11 @@ EnvironmentMap test_map() {
 }
 
 // The pdf in solid angle over the sphere, by a midpoint rule in (theta, phi) of world directions
-// (theta from the up axis -y, phi from +x about it: a grid that knows nothing of the map's texels or
-// its rotation), d(omega) = sin(theta) dtheta dphi: 1. The density grows as 1 / sin(theta) towards
-// the poles (a texel there covers little solid angle), so a grid in cos(theta) would converge
-// slowly; in theta the integrand is bounded. The bright texel's edges cross grid cells, whose
-// error shrinks with the grid (1.0022 at 300 x 600; 1.00000 at 600 x 1200 and 1200 x 2400).
+// (theta from the up axis -y, phi from +x about it: a grid that knows nothing of the map's texels
+// or its rotation), d(omega) = sin(theta) dtheta dphi: 1. The density grows as 1 / sin(theta)
+// towards the poles (a texel there covers little solid angle), so a grid in cos(theta) would
+// converge slowly; in theta the integrand is bounded. The bright texel's edges cross grid cells,
+// whose error shrinks with the grid (1.0022 at 300 x 600; 1.00000 at 600 x 1200 and 1200 x 2400).
 TEST(EnvironmentSampling, PdfIntegratesToOneOverTheSphere) {
   const EnvironmentLight env(test_map());
   constexpr int kN = 1200;

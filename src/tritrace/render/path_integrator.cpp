@@ -185,8 +185,8 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
           if (ls.pdf > 0.0f && max_component(f) > 0.0f && max_component(ls.radiance) > 0.0f) {
             const glm::vec3 side = wi_local.z >= 0.0f ? n_lab : -n_lab;
             const glm::vec3 from = leave_surface(
-                tri, smooth ? terminator_safe_point(mesh, prim, hit.u, hit.v, x, side) : x,
-                side, offset_);
+                tri, smooth ? terminator_safe_point(mesh, prim, hit.u, hit.v, x, side) : x, side,
+                offset_);
             glm::vec3 contribution;
             glm::vec3 end;
             if (ls.delta) {
@@ -261,8 +261,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
         if (!(n == n_lab)) ns = -ns;
       }
       const glm::vec3 start = leave_surface(
-          tri, smooth ? terminator_safe_point(mesh, prim, hit.u, hit.v, x, n) : x, n,
-          offset_);
+          tri, smooth ? terminator_safe_point(mesh, prim, hit.u, hit.v, x, n) : x, n, offset_);
       const glm::vec3 f = albedo * kInvPi;  // Lambert
       if (!lights_.empty()) {
         LightSample ls = lights_.sample(scene, x, u_light, u_light_point);

@@ -1,5 +1,5 @@
-// Smooth shading with interpolated vertex normals: the shading normal at a hit, and the origin shift
-// that keeps low-poly spheres free of a faceted, black shadow terminator.
+// Smooth shading with interpolated vertex normals: the shading normal at a hit, and the origin
+// shift that keeps low-poly spheres free of a faceted, black shadow terminator.
 #pragma once
 
 #include <cstddef>

@@ -513,8 +513,7 @@ class Parser {
         normals = moved;
       }
     }
-    stored_triangles_ +=
-        add_checked(target(), a, b, c, material, normals, uvs, out_.stats) ? 1 : 0;
+    stored_triangles_ += add_checked(target(), a, b, c, material, normals, uvs, out_.stats) ? 1 : 0;
   }
 
   // "instances": a list of transforms, each placing the mesh once: to_world p = T + R (S p), the
