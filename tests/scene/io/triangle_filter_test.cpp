@@ -57,7 +57,8 @@ Loaded random_mesh(size_t n, bool normals, bool uvs, uint32_t seed) {
 
 template <typename T>
 bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
 TEST(AddAllChecked, GivesTheMeshAndCountsOfAddingOneByOne) {
