@@ -1,0 +1,604 @@
+// tinyobjloader's callback interface reads the OBJ's statements in file order; this file replays
+// them through a model of how assimp 5.2's OBJ importer groups faces into meshes (a new object at
+// each `o` or changed `g`, a new mesh at a `usemtl` that changes the material of a mesh that has
+// faces, the material of a mesh being the one last set on it) and how aiProcess_Triangulate splits
+// quads, then fills the triangle arrays in parallel. What the model does not cover is declined:
+// a parallel pre-scan of the bytes finds the statements tinyobjloader skips or reads differently.
+#include "tritrace/scene/io/obj_reader.h"
+
+#if TRITRACE_HAVE_TINYOBJLOADER
+#include <assimp/types.h>  // aiVector3D and aiMatrix4x4 with their operations
+#include <tbb/blocked_range.h>
+#include <tiny_obj_loader.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <istream>
+#include <iterator>
+#include <map>
+#include <mutex>
+#include <set>
+#include <streambuf>
+#include <string_view>
+#include <vector>
+
+#include "tritrace/error.h"
+#include "tritrace/parallel.h"
+#include "tritrace/scene/io/material_mapping.h"
+#include "tritrace/scene/io/triangle_filter.h"
+#endif
+
+namespace tritrace {
+
+#if !TRITRACE_HAVE_TINYOBJLOADER
+
+bool native_obj_reader_built() {
+  return false;
+}
+
+std::optional<ImportedMesh> read_obj_triangles(std::span<const char>, const std::string&,
+                                               const std::string&) {
+  return std::nullopt;
+}
+
+#else
+
+namespace {
+
+// assimp refuses OBJ files shorter than this ("OBJ-file is too small").
+constexpr size_t kObjMinSize = 16;
+constexpr uint32_t kNoMaterial = ~0u;
+const std::string kDefaultMaterial = "DefaultMaterial";  // assimp's AI_DEFAULT_MATERIAL_NAME
+
+bool is_blank(char c) {
+  return c == ' ' || c == '\t';
+}
+
+bool starts_with_word(std::string_view text, size_t at, std::string_view word) {
+  if (text.size() - at < word.size() || text.compare(at, word.size(), word) != 0) return false;
+  const size_t end = at + word.size();
+  return end == text.size() || is_blank(text[end]) || text[end] == '\r' || text[end] == '\n';
+}
+
+bool lower_is(std::string_view text, size_t at, const char* two) {
+  return text.size() - at > 2 && std::tolower(static_cast<unsigned char>(text[at + 1])) == two[0] &&
+         std::tolower(static_cast<unsigned char>(text[at + 2])) == two[1];
+}
+
+struct PreScan {
+  bool ok = true;
+  std::vector<size_t> mtllib_lines;  // offsets of the `mtllib` statements
+};
+
+// Finds, in parallel, what tinyobjloader would read differently from assimp or not see at all:
+// line continuations and Windows paths (backslashes), bytes of UTF-16 or binary data, decimal
+// commas (assimp reads "1,5" as 1.5), nan and inf (assimp keeps them, tinyobjloader reads 0),
+// lone carriage returns, indented statements, lines and points (`l`, `p`), free-form geometry
+// (`cstype`) and a byte order mark; and it collects the `mtllib` statements.
+PreScan pre_scan(std::string_view text) {
+  PreScan result;
+  if (text.size() < kObjMinSize || static_cast<unsigned char>(text[0]) >= 0x80) {
+    result.ok = false;
+    return result;
+  }
+  std::atomic<bool> ok{true};
+  std::mutex mutex;
+  parallel::for_range(
+      tbb::blocked_range<size_t>(0, text.size(), size_t{1} << 20),
+      [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<size_t> mtllibs;
+        bool fine = true;
+        for (size_t i = r.begin(); i < r.end() && fine; ++i) {
+          const char c = text[i];
+          switch (c) {
+            case '\\':
+            case '\0':
+            case ',':
+              fine = false;
+              break;
+            case '\r':
+              fine = i + 1 < text.size() && text[i + 1] == '\n';
+              break;
+            case 'n':
+            case 'N':
+              fine = !lower_is(text, i, "an");
+              break;
+            case 'i':
+            case 'I':
+              fine = !lower_is(text, i, "nf");
+              break;
+            default:
+              break;
+          }
+          if (!fine || (i > 0 && text[i - 1] != '\n')) continue;
+          if (is_blank(c) || starts_with_word(text, i, "l") || starts_with_word(text, i, "p") ||
+              starts_with_word(text, i, "cstype")) {
+            fine = false;
+          } else if (starts_with_word(text, i, "mtllib")) {
+            mtllibs.push_back(i);
+          }
+        }
+        if (!fine) ok = false;
+        if (!mtllibs.empty()) {
+          const std::lock_guard lock(mutex);
+          result.mtllib_lines.insert(result.mtllib_lines.end(), mtllibs.begin(), mtllibs.end());
+        }
+      });
+  result.ok = ok;
+  std::sort(result.mtllib_lines.begin(), result.mtllib_lines.end());
+  return result;
+}
+
+std::string_view trimmed(std::string_view s) {
+  while (!s.empty() && (is_blank(s.front()) || s.front() == '\r')) s.remove_prefix(1);
+  while (!s.empty() && (is_blank(s.back()) || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+
+bool has_blank(std::string_view s) {
+  return std::any_of(s.begin(), s.end(), [](char c) { return is_blank(c); });
+}
+
+std::vector<std::string_view> words(std::string_view s) {
+  std::vector<std::string_view> out;
+  s = trimmed(s);
+  while (!s.empty()) {
+    size_t end = 0;
+    while (end < s.size() && !is_blank(s[end])) ++end;
+    out.push_back(s.substr(0, end));
+    s = trimmed(s.substr(end));
+  }
+  return out;
+}
+
+// Which keys an MTL material states (tinyobjloader gives its defaults for the others, which are
+// not assimp's), with the map names as written.
+struct MtlKeys {
+  bool kd = false, ks = false, ke = false, ns = false, ni = false, d = false;
+  std::string map_kd, map_ke;
+};
+
+// Reads `mtllib` files from the OBJ's folder for tinyobjloader, after checking that each uses only
+// what both readers read alike: one-word material names given once, three numbers per colour,
+// one per scalar, map_Kd and map_Ke with a plain file name and no options. Tr (which assimp 5.2
+// and tinyobjloader may not invert alike) and the PBR extension's Pr and Pm are declined.
+class MtlReader final : public tinyobj::MaterialReader {
+ public:
+  explicit MtlReader(std::string directory) : directory_(std::move(directory)) {}
+
+  bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                  std::map<std::string, int>* map, std::string* warn, std::string* err) override {
+    std::ifstream in(std::filesystem::path(directory_) / name, std::ios::binary);
+    if (!in) {
+      declined = true;  // assimp then tries the OBJ's own name with .mtl
+      return false;
+    }
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const size_t before = materials->size();
+    if (!scan(text)) {
+      declined = true;
+      return false;
+    }
+    std::istringstream stream(text);
+    tinyobj::LoadMtl(map, materials, &stream, warn, err);
+    if (materials->size() - before != keys_.size() - keys_before_) declined = true;
+    keys_before_ = keys_.size();
+    return true;
+  }
+
+  bool declined = false;
+  const std::vector<MtlKeys>& keys() const { return keys_; }
+
+ private:
+  bool scan(const std::string& text) {
+    std::string_view rest(text);
+    std::set<std::string, std::less<> > names;
+    bool in_material = false;
+    while (!rest.empty()) {
+      const size_t end = std::min(rest.find('\n'), rest.size());
+      const std::vector<std::string_view> w = words(rest.substr(0, end));
+      rest.remove_prefix(std::min(end + 1, rest.size()));
+      if (w.empty() || w[0][0] == '#') continue;
+      const std::string_view key = w[0];
+      if (key == "newmtl") {
+        if (w.size() != 2 || !names.insert(std::string(w[1])).second) return false;
+        keys_.emplace_back();
+        in_material = true;
+        continue;
+      }
+      const bool colour = key == "Kd" || key == "Ks" || key == "Ke";
+      const bool scalar = key == "Ns" || key == "Ni" || key == "d";
+      const bool map = key == "map_Kd" || key == "map_Ke";
+      if (key == "Tr" || key == "Pr" || key == "Pm") return false;
+      if (!colour && !scalar && !map) continue;
+      if (!in_material) return false;
+      if (colour && w.size() != 4) return false;
+      if ((scalar || map) && w.size() != 2) return false;
+      if (map && w[1][0] == '-') return false;
+      MtlKeys& k = keys_.back();
+      if (key == "Kd") k.kd = true;
+      if (key == "Ks") k.ks = true;
+      if (key == "Ke") k.ke = true;
+      if (key == "Ns") k.ns = true;
+      if (key == "Ni") k.ni = true;
+      if (key == "d") k.d = true;
+      if (key == "map_Kd") k.map_kd = std::string(w[1]);
+      if (key == "map_Ke") k.map_ke = std::string(w[1]);
+    }
+    return true;
+  }
+
+  std::string directory_;
+  std::vector<MtlKeys> keys_;
+  size_t keys_before_ = 0;
+};
+
+// assimp's ObjFile::Material defaults where the MTL says nothing: grey diffuse 0.6, black
+// specular and emission, Ns 0, Ni 1, d 1.
+MaterialKeys default_keys() {
+  MaterialKeys k;
+  k.diffuse = glm::vec3(0.6f);
+  k.specular = glm::vec3(0.0f);
+  k.emissive = glm::vec3(0.0f);
+  k.shininess = 0.0f;
+  k.ior = 1.0f;
+  k.opacity = 1.0f;
+  return k;
+}
+
+struct Corner {
+  int32_t v, vt, vn;  // resolved 0-based indices; -1 where the face has none
+};
+
+// One of assimp's meshes: a run of consecutive faces with the material last set on it.
+struct Run {
+  size_t first_face;
+  uint32_t material = kNoMaterial;
+  bool normals = false;  // a face of it has normal indices
+  bool uvs = false;      // a face of it has texture coordinate indices
+};
+
+struct MaterialEntry {
+  explicit MaterialEntry(std::string material_name) : name(std::move(material_name)) {}
+  std::string name;
+  MaterialKeys keys = default_keys();
+  std::string map_kd, map_ke;
+};
+
+// The statements in file order, replayed as assimp's ObjFileParser acts on them.
+struct Replay {
+  explicit Replay(MtlReader& mtl_reader) : mtl(mtl_reader) {
+    lib.emplace_back(kDefaultMaterial);
+    lib_index.emplace(kDefaultMaterial, 0);
+  }
+
+  MtlReader& mtl;
+  bool declined = false;
+  std::vector<aiVector3D> positions, normals, texcoords;
+  std::vector<Corner> corners;
+  std::vector<size_t> face_start;  // first corner of each face
+  std::vector<Run> runs;
+  bool has_mesh = false;    // assimp's mCurrentMesh is set
+  bool has_object = false;  // assimp's mCurrentObject is set
+  std::set<std::string, std::less<> > object_names;
+  std::string active_group;
+  std::optional<uint32_t> current_material;
+  std::vector<MaterialEntry> lib;
+  std::map<std::string, uint32_t, std::less<> > lib_index;
+  size_t materials_seen = 0;
+
+  void create_mesh() {
+    runs.push_back({face_start.size()});
+    has_mesh = true;
+  }
+  void create_object(const std::string& name) {
+    object_names.insert(name);
+    has_object = true;
+    create_mesh();
+    if (current_material) runs.back().material = *current_material;
+  }
+  bool current_has_faces() const { return has_mesh && face_start.size() > runs.back().first_face; }
+
+  static Replay& of(void* p) { return *static_cast<Replay*>(p); }
+
+  static void vertex(void* p, float x, float y, float z, float w) {
+    Replay& r = of(p);
+    if (w != 1.0f) r.declined = true;  // homogeneous w or colours: assimp reads those apart
+    r.positions.emplace_back(x, y, z);
+  }
+  static void normal(void* p, float x, float y, float z) { of(p).normals.emplace_back(x, y, z); }
+  static void texcoord(void* p, float x, float y, float z) {
+    of(p).texcoords.emplace_back(x, y, z);
+  }
+
+  // An index as assimp stores it: 1-based, or negative relative to the elements read so far.
+  static int32_t resolve(int raw, size_t count, bool& bad) {
+    if (raw > 0) return raw - 1;
+    const int64_t relative = static_cast<int64_t>(count) + raw;
+    if (relative < 0) bad = true;
+    return static_cast<int32_t>(relative);
+  }
+
+  static void face(void* p, tinyobj::index_t* indices, int n) {
+    Replay& r = of(p);
+    // Points, lines, polygons of more than four corners and missing vertex indices are left to
+    // assimp (its triangulation of n-gons is not reproduced here).
+    if (n < 3 || n > 4) {
+      r.declined = true;
+      return;
+    }
+    const bool uvs = indices[0].texcoord_index != 0, normals = indices[0].normal_index != 0;
+    bool bad = false;
+    const size_t start = r.corners.size();
+    for (int k = 0; k < n; ++k) {
+      const tinyobj::index_t& i = indices[k];
+      // Every corner with the same parts; a texture coordinate index before any `vt` (assimp
+      // then reads it as a normal index) or a normal index before any `vn` is declined.
+      if (i.vertex_index == 0 || (i.texcoord_index != 0) != uvs ||
+          (i.normal_index != 0) != normals || (uvs && r.texcoords.empty()) ||
+          (normals && r.normals.empty())) {
+        bad = true;
+      }
+      r.corners.push_back({resolve(i.vertex_index, r.positions.size(), bad),
+                           uvs ? resolve(i.texcoord_index, r.texcoords.size(), bad) : -1,
+                           normals ? resolve(i.normal_index, r.normals.size(), bad) : -1});
+    }
+    if (bad) {
+      r.declined = true;
+      r.corners.resize(start);
+      return;
+    }
+    if (!r.has_object) r.create_object("defaultobject");
+    r.face_start.push_back(start);
+    r.runs.back().normals |= normals;
+    r.runs.back().uvs |= uvs;
+  }
+
+  static void usemtl(void* p, const char* raw_name, int) {
+    Replay& r = of(p);
+    const std::string_view name = trimmed(raw_name);
+    if (name.empty()) return;
+    if (has_blank(name)) {
+      r.declined = true;
+      return;
+    }
+    if (r.current_material && r.lib[*r.current_material].name == name) return;
+    auto it = r.lib_index.find(name);
+    if (it == r.lib_index.end()) {  // assimp makes a default material of that name
+      r.lib.emplace_back(std::string(name));
+      it = r.lib_index.emplace(std::string(name), static_cast<uint32_t>(r.lib.size() - 1)).first;
+    }
+    r.current_material = it->second;
+    const bool new_mesh =
+        !r.has_mesh || (r.runs.back().material != kNoMaterial &&
+                        r.runs.back().material != it->second && r.current_has_faces());
+    if (new_mesh) r.create_mesh();
+    r.runs.back().material = it->second;
+  }
+
+  static void mtllib(void* p, const tinyobj::material_t* materials, int n) {
+    Replay& r = of(p);
+    const std::vector<MtlKeys>& keys = r.mtl.keys();
+    for (size_t i = r.materials_seen; i < static_cast<size_t>(n); ++i) {
+      const tinyobj::material_t& m = materials[i];
+      if (i >= keys.size() || r.lib_index.count(m.name) != 0) {
+        r.declined = true;  // defined twice, or used before its definition
+        continue;
+      }
+      const MtlKeys& k = keys[i];
+      MaterialEntry e{m.name};
+      const auto colour = [](const float* c) { return glm::vec3(c[0], c[1], c[2]); };
+      if (k.kd) e.keys.diffuse = colour(m.diffuse);
+      if (k.ks) e.keys.specular = colour(m.specular);
+      if (k.ke) e.keys.emissive = colour(m.emission);
+      if (k.ns) e.keys.shininess = m.shininess;
+      if (k.ni) e.keys.ior = m.ior;
+      if (k.d) e.keys.opacity = m.dissolve;
+      if (k.map_kd != m.diffuse_texname || k.map_ke != m.emissive_texname) r.declined = true;
+      e.map_kd = k.map_kd;
+      e.map_ke = k.map_ke;
+      r.lib.push_back(std::move(e));
+      r.lib_index.emplace(m.name, static_cast<uint32_t>(r.lib.size() - 1));
+    }
+    r.materials_seen = std::max(r.materials_seen, static_cast<size_t>(n));
+  }
+
+  static void group(void* p, const char** names, int n) {
+    Replay& r = of(p);
+    if (n != 1) {
+      r.declined = true;
+      return;
+    }
+    const std::string name = names[0];
+    if (name != r.active_group) {
+      r.create_object(name);
+      r.active_group = name;
+    }
+  }
+
+  static void object(void* p, const char* raw_name) {
+    Replay& r = of(p);
+    const std::string_view name = trimmed(raw_name);
+    if (name.empty()) return;
+    // assimp switches back to an object of the same name (faces then join another object's
+    // meshes) and reads only the first word: both are left to it.
+    if (has_blank(name) || r.object_names.count(name) != 0) {
+      r.declined = true;
+      return;
+    }
+    r.create_object(std::string(name));
+  }
+};
+
+class MemoryStreamBuf final : public std::streambuf {
+ public:
+  explicit MemoryStreamBuf(std::span<const char> bytes) {
+    char* p = const_cast<char*>(bytes.data());  // read only: the get area is never written
+    setg(p, p, p + bytes.size());
+  }
+};
+
+// aiProcess_Triangulate's split of a quad (assimp 5.2, TriangulateProcess): the fan starts at the
+// first corner whose two angles to the neighbours around the opposite diagonal add up to more
+// than pi (a concave corner), else at corner 0. Written with assimp's own vector type so that the
+// float operations are those it performs.
+int quad_start(const aiVector3D* v) {
+  for (int i = 0; i < 4; ++i) {
+    aiVector3D left = v[(i + 3) % 4] - v[i];
+    aiVector3D diag = v[(i + 2) % 4] - v[i];
+    aiVector3D right = v[(i + 1) % 4] - v[i];
+    left.Normalize();
+    diag.Normalize();
+    right.Normalize();
+    const float angle = std::acos(left * diag) + std::acos(right * diag);
+    if (angle > AI_MATH_PI_F) return i;
+  }
+  return 0;
+}
+
+}  // namespace
+
+bool native_obj_reader_built() {
+  return true;
+}
+
+std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
+                                               const std::string& subject,
+                                               const std::string& directory) {
+  const std::string_view text(bytes.data(), bytes.size());
+  const PreScan scan = pre_scan(text);
+  if (!scan.ok) return std::nullopt;
+  for (const size_t at : scan.mtllib_lines) {
+    const size_t end = std::min(text.find('\n', at), text.size());
+    const std::string_view name = trimmed(text.substr(at + 6, end - at - 6));
+    // From memory assimp would look for the library beside the running program.
+    if (directory.empty() || name.empty() || has_blank(name)) return std::nullopt;
+  }
+
+  MtlReader mtl(directory);
+  Replay replay(mtl);
+  tinyobj::callback_t callbacks;
+  callbacks.vertex_cb = &Replay::vertex;
+  callbacks.normal_cb = &Replay::normal;
+  callbacks.texcoord_cb = &Replay::texcoord;
+  callbacks.index_cb = &Replay::face;
+  callbacks.usemtl_cb = &Replay::usemtl;
+  callbacks.mtllib_cb = &Replay::mtllib;
+  callbacks.group_cb = &Replay::group;
+  callbacks.object_cb = &Replay::object;
+  MemoryStreamBuf buffer(bytes);
+  std::istream stream(&buffer);
+  std::string warn, err;
+  if (!tinyobj::LoadObjWithCallback(stream, callbacks, &replay, &mtl, &warn, &err) ||
+      replay.declined || mtl.declined || replay.face_start.empty()) {
+    return std::nullopt;
+  }
+  for (const Corner& c : replay.corners) {
+    if (static_cast<size_t>(c.v) >= replay.positions.size() ||
+        (c.vt >= 0 && static_cast<size_t>(c.vt) >= replay.texcoords.size()) ||
+        (c.vn >= 0 && static_cast<size_t>(c.vn) >= replay.normals.size())) {
+      return std::nullopt;  // assimp fails, or drops the mesh's normals or coordinates
+    }
+  }
+
+  const size_t faces = replay.face_start.size();
+  const size_t triangles = replay.corners.size() - 2 * faces;
+  if (triangles > kMaxSceneTriangles) {
+    throw Error(subject, "has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
+  }
+  ImportedMesh out;
+  ExternalTextures textures(subject, directory, out);
+  for (const MaterialEntry& e : replay.lib) {
+    MaterialKeys keys = e.keys;
+    if (!e.map_kd.empty()) keys.albedo_texture.index = textures.index_of(e.map_kd);
+    if (!e.map_ke.empty()) keys.emission_texture.index = textures.index_of(e.map_ke);
+    out.materials.push_back(map_material(keys));
+    out.material_names.push_back(e.name);
+  }
+
+  // A mesh has normals (coordinates) where a face of it has them and the file has some; the
+  // others get zeros, as the assimp path fills them in.
+  const bool any_normals =
+      !replay.normals.empty() &&
+      std::any_of(replay.runs.begin(), replay.runs.end(), [](const Run& r) { return r.normals; });
+  const bool any_uvs =
+      !replay.texcoords.empty() &&
+      std::any_of(replay.runs.begin(), replay.runs.end(), [](const Run& r) { return r.uvs; });
+  out.corners.resize(3 * triangles);
+  out.material.resize(triangles);
+  if (any_normals) out.normals.resize(3 * triangles);
+  if (any_uvs) out.uvs.resize(3 * triangles);
+  std::vector<Run> runs;  // those with faces
+  for (size_t i = 0; i < replay.runs.size(); ++i) {
+    const size_t next = i + 1 < replay.runs.size() ? replay.runs[i + 1].first_face : faces;
+    if (next > replay.runs[i].first_face) runs.push_back(replay.runs[i]);
+  }
+  out.meshes = runs.size();
+  replay.face_start.push_back(replay.corners.size());
+
+  // The node transform of assimp's OBJ scenes is the identity, but applying it as the assimp path
+  // does keeps its float results, signed zeros included.
+  const aiMatrix4x4 transform = aiMatrix4x4() * aiMatrix4x4();
+  aiMatrix3x3 normal_transform(transform);
+  normal_transform.Inverse().Transpose();
+  parallel::for_range(tbb::blocked_range<size_t>(0, faces, 1 << 14), [&](const auto& range) {
+    size_t run = static_cast<size_t>(
+        std::upper_bound(runs.begin(), runs.end(), range.begin(),
+                         [](size_t f, const Run& r) { return f < r.first_face; }) -
+        runs.begin() - 1);
+    for (size_t f = range.begin(); f < range.end(); ++f) {
+      while (run + 1 < runs.size() && runs[run + 1].first_face <= f) ++run;
+      const Run& mesh = runs[run];
+      const bool normals = mesh.normals && !replay.normals.empty();
+      const bool uvs = mesh.uvs && !replay.texcoords.empty();
+      const size_t first = replay.face_start[f], n = replay.face_start[f + 1] - first;
+      aiVector3D p[4];
+      for (size_t k = 0; k < n; ++k) p[k] = replay.positions[replay.corners[first + k].v];
+      const int start = n == 4 ? quad_start(p) : 0;
+      const size_t tri = first - 2 * f;
+      for (size_t t = 0; t + 2 < n; ++t) {
+        const size_t order[3] = {static_cast<size_t>(start), (start + t + 1) % 4,
+                                 (start + t + 2) % 4};
+        glm::vec3 corner[3], normal[3] = {};
+        glm::vec2 uv[3] = {};
+        for (int k = 0; k < 3; ++k) {
+          const Corner& c = replay.corners[first + (n == 4 ? order[k] : order[k] % 3)];
+          const aiVector3D v = transform * replay.positions[c.v];
+          corner[k] = glm::vec3(v.x, v.y, v.z);
+          if (normals) {
+            const aiVector3D nv =
+                normal_transform * (c.vn >= 0 ? replay.normals[c.vn] : aiVector3D());
+            normal[k] = glm::vec3(nv.x, nv.y, nv.z);
+          }
+          if (uvs && c.vt >= 0)
+            uv[k] = glm::vec2(replay.texcoords[c.vt].x, replay.texcoords[c.vt].y);
+        }
+        const size_t i = tri + t;
+        // The assimp path's winding: the second and third corners swap (mesh_import.cpp).
+        out.corners[3 * i] = corner[0];
+        out.corners[3 * i + 1] = corner[2];
+        out.corners[3 * i + 2] = corner[1];
+        if (any_normals) {
+          out.normals[3 * i] = normal[0];
+          out.normals[3 * i + 1] = normal[2];
+          out.normals[3 * i + 2] = normal[1];
+        }
+        if (any_uvs) {
+          out.uvs[3 * i] = uv[0];
+          out.uvs[3 * i + 1] = uv[2];
+          out.uvs[3 * i + 2] = uv[1];
+        }
+        out.material[i] = mesh.material == kNoMaterial ? 0 : mesh.material;
+      }
+    }
+  });
+  return out;
+}
+
+#endif  // TRITRACE_HAVE_TINYOBJLOADER
+
+}  // namespace tritrace
