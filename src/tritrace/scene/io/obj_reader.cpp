@@ -69,6 +69,12 @@ bool lower_is(std::string_view text, size_t at, const char* two) {
          std::tolower(static_cast<unsigned char>(text[at + 2])) == two[1];
 }
 
+// Whether the line from `at` holds nothing but blanks.
+bool blank_line(std::string_view text, size_t at) {
+  while (at < text.size() && (is_blank(text[at]) || text[at] == '\r')) ++at;
+  return at == text.size() || text[at] == '\n';
+}
+
 struct PreScan {
   bool ok = true;
   std::vector<size_t> mtllib_lines;  // offsets of the `mtllib` statements
@@ -77,7 +83,8 @@ struct PreScan {
 // Finds, in parallel, what tinyobjloader would read differently from assimp or not see at all:
 // line continuations and Windows paths (backslashes), bytes of UTF-16 or binary data, decimal
 // commas (assimp reads "1,5" as 1.5), nan and inf (assimp keeps them, tinyobjloader reads 0),
-// lone carriage returns, indented statements, lines and points (`l`, `p`), free-form geometry
+// lone carriage returns, indented statements (blank lines are fine), lines and points (`l`, `p`),
+// free-form geometry
 // (`cstype`) and a byte order mark; and it collects the `mtllib` statements.
 PreScan pre_scan(std::string_view text) {
   PreScan result;
@@ -115,8 +122,8 @@ PreScan pre_scan(std::string_view text) {
               break;
           }
           if (!fine || (i > 0 && text[i - 1] != '\n')) continue;
-          if (is_blank(c) || starts_with_word(text, i, "l") || starts_with_word(text, i, "p") ||
-              starts_with_word(text, i, "cstype")) {
+          if ((is_blank(c) && !blank_line(text, i)) || starts_with_word(text, i, "l") ||
+              starts_with_word(text, i, "p") || starts_with_word(text, i, "cstype")) {
             fine = false;
           } else if (starts_with_word(text, i, "mtllib")) {
             mtllibs.push_back(i);
@@ -158,6 +165,7 @@ std::vector<std::string_view> words(std::string_view s) {
 // Which keys an MTL material states (tinyobjloader gives its defaults for the others, which are
 // not assimp's), with the map names as written.
 struct MtlKeys {
+  std::string name;
   bool kd = false, ks = false, ke = false, ns = false, ni = false, d = false;
   std::string map_kd, map_ke;
 };
@@ -185,7 +193,12 @@ class MtlReader final : public tinyobj::MaterialReader {
     }
     std::istringstream stream(text);
     tinyobj::LoadMtl(map, materials, &stream, warn, err);
-    if (materials->size() - before != keys_.size() - keys_before_) declined = true;
+    // tinyobjloader hands over materials->at(0) after a successful read, so an MTL without
+    // materials must not be one.
+    if (materials->empty() || materials->size() - before != keys_.size() - keys_before_) {
+      declined = true;
+      return false;
+    }
     keys_before_ = keys_.size();
     return true;
   }
@@ -207,6 +220,7 @@ class MtlReader final : public tinyobj::MaterialReader {
       if (key == "newmtl") {
         if (w.size() != 2 || !names.insert(std::string(w[1])).second) return false;
         keys_.emplace_back();
+        keys_.back().name = std::string(w[1]);
         in_material = true;
         continue;
       }
@@ -257,9 +271,11 @@ struct Corner {
 // One of assimp's meshes: a run of consecutive faces with the material last set on it.
 struct Run {
   size_t first_face;
+  size_t object;  // assimp's object (node) it belongs to
   uint32_t material = kNoMaterial;
-  bool normals = false;  // a face of it has normal indices
-  bool uvs = false;      // a face of it has texture coordinate indices
+  size_t first_triangle = 0;  // where its triangles go in the output
+  bool normals = false;       // a face of it has normal indices
+  bool uvs = false;           // a face of it has texture coordinate indices
 };
 
 struct MaterialEntry {
@@ -284,6 +300,9 @@ struct Replay {
   std::vector<Run> runs;
   bool has_mesh = false;    // assimp's mCurrentMesh is set
   bool has_object = false;  // assimp's mCurrentObject is set
+  // Objects created; runs record the current one (a run made before any object belongs to none,
+  // 0, and never gets faces).
+  size_t objects = 0;
   std::set<std::string, std::less<> > object_names;
   std::string active_group;
   std::optional<uint32_t> current_material;
@@ -292,12 +311,13 @@ struct Replay {
   size_t materials_seen = 0;
 
   void create_mesh() {
-    runs.push_back({face_start.size()});
+    runs.push_back({face_start.size(), objects});
     has_mesh = true;
   }
   void create_object(const std::string& name) {
     object_names.insert(name);
     has_object = true;
+    ++objects;
     create_mesh();
     if (current_material) runs.back().material = *current_material;
   }
@@ -385,7 +405,7 @@ struct Replay {
     const std::vector<MtlKeys>& keys = r.mtl.keys();
     for (size_t i = r.materials_seen; i < static_cast<size_t>(n); ++i) {
       const tinyobj::material_t& m = materials[i];
-      if (i >= keys.size() || r.lib_index.count(m.name) != 0) {
+      if (i >= keys.size() || keys[i].name != m.name || r.lib_index.count(m.name) != 0) {
         r.declined = true;  // defined twice, or used before its definition
         continue;
       }
@@ -493,10 +513,14 @@ std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
   MemoryStreamBuf buffer(bytes);
   std::istream stream(&buffer);
   std::string warn, err;
-  if (!tinyobj::LoadObjWithCallback(stream, callbacks, &replay, &mtl, &warn, &err) ||
-      replay.declined || mtl.declined || replay.face_start.empty()) {
-    return std::nullopt;
+  try {
+    if (!tinyobj::LoadObjWithCallback(stream, callbacks, &replay, &mtl, &warn, &err)) {
+      return std::nullopt;
+    }
+  } catch (const std::exception&) {
+    return std::nullopt;  // assimp reads it, or gives its error
   }
+  if (replay.declined || mtl.declined || replay.face_start.empty()) return std::nullopt;
   for (const Corner& c : replay.corners) {
     if (static_cast<size_t>(c.v) >= replay.positions.size() ||
         (c.vt >= 0 && static_cast<size_t>(c.vt) >= replay.texcoords.size()) ||
@@ -539,6 +563,21 @@ std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
   }
   out.meshes = runs.size();
   replay.face_start.push_back(replay.corners.size());
+  // assimp makes a node per object under the root, and the assimp path walks nodes with a stack:
+  // the objects come out last first, each with its meshes in order.
+  {
+    std::vector<size_t> order(runs.size());
+    for (size_t i = 0; i < runs.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return runs[a].object > runs[b].object; });
+    size_t next = 0;
+    for (const size_t i : order) {
+      runs[i].first_triangle = next;
+      const size_t end_face = i + 1 < runs.size() ? runs[i + 1].first_face : faces;
+      next += (replay.face_start[end_face] - 2 * end_face) -
+              (replay.face_start[runs[i].first_face] - 2 * runs[i].first_face);
+    }
+  }
 
   // The node transform of assimp's OBJ scenes is the identity, but applying it as the assimp path
   // does keeps its float results, signed zeros included.
@@ -559,7 +598,8 @@ std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
       aiVector3D p[4];
       for (size_t k = 0; k < n; ++k) p[k] = replay.positions[replay.corners[first + k].v];
       const int start = n == 4 ? quad_start(p) : 0;
-      const size_t tri = first - 2 * f;
+      const size_t tri = mesh.first_triangle + (first - 2 * f) -
+                         (replay.face_start[mesh.first_face] - 2 * mesh.first_face);
       for (size_t t = 0; t + 2 < n; ++t) {
         const size_t order[3] = {static_cast<size_t>(start), (start + t + 1) % 4,
                                  (start + t + 2) % 4};
