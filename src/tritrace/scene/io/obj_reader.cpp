@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <climits>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -41,7 +42,7 @@ bool native_obj_reader_built() {
 }
 
 std::optional<ImportedMesh> read_obj_triangles(std::span<const char>, const std::string&,
-                                               const std::string&) {
+                                               const std::string&, size_t) {
   return std::nullopt;
 }
 
@@ -264,8 +265,10 @@ MaterialKeys default_keys() {
   return k;
 }
 
+constexpr int32_t kAbsent = INT32_MIN;
+
 struct Corner {
-  int32_t v, vt, vn;  // resolved 0-based indices; -1 where the face has none
+  int32_t v, vt, vn;  // resolved 0-based indices (negative: out of range); kAbsent for none
 };
 
 // One of assimp's meshes: a run of consecutive faces with the material last set on it.
@@ -285,6 +288,107 @@ struct MaterialEntry {
   std::string map_kd, map_ke;
 };
 
+// A statement that changes how faces are grouped, with the number of faces before it (in its
+// piece of the file).
+struct Event {
+  enum class Kind : uint8_t { kUsemtl, kGroup, kObject, kMtllib } kind;
+  size_t face;
+  std::string name;
+};
+
+// What tinyobjloader reads from one piece of the file (pieces end at line ends and are read in
+// parallel): the elements, the faces with indices resolved within the piece (negative ones listed
+// in `relative`, to be moved by the counts of the pieces before), and the grouping statements.
+struct Piece {
+  std::vector<aiVector3D> positions, normals, texcoords;
+  std::vector<Corner> corners;
+  std::vector<uint32_t> face_start;  // first corner of each face, in this piece
+  std::vector<uint8_t> face_parts;   // bit 0: normal indices, bit 1: texture coordinate indices
+  std::vector<std::pair<uint32_t, uint8_t> > relative;  // (corner, 0 v / 1 vt / 2 vn)
+  std::vector<Event> events;
+  bool declined = false;
+  // A face with texture coordinate (normal) indices before any `vt` (`vn`) of this piece: fine
+  // only if an earlier piece has some.
+  bool uvs_before_vt = false, normals_before_vn = false;
+
+  static Piece& of(void* p) { return *static_cast<Piece*>(p); }
+
+  static void vertex(void* p, float x, float y, float z, float w) {
+    Piece& r = of(p);
+    if (w != 1.0f) r.declined = true;  // homogeneous w or colours: assimp reads those apart
+    r.positions.emplace_back(x, y, z);
+  }
+  static void normal(void* p, float x, float y, float z) { of(p).normals.emplace_back(x, y, z); }
+  static void texcoord(void* p, float x, float y, float z) {
+    of(p).texcoords.emplace_back(x, y, z);
+  }
+
+  // An index as assimp stores it: 1-based, or negative relative to the elements read so far.
+  int32_t resolve(int raw, size_t count, uint8_t field) {
+    if (raw > 0) return raw - 1;
+    relative.emplace_back(static_cast<uint32_t>(corners.size()), field);
+    return static_cast<int32_t>(static_cast<int64_t>(count) + raw);
+  }
+
+  static void face(void* p, tinyobj::index_t* indices, int n) {
+    Piece& r = of(p);
+    // Points, lines, polygons of more than four corners and missing vertex indices are left to
+    // assimp (its triangulation of n-gons is not reproduced here).
+    if (n < 3 || n > 4 || r.declined) {
+      r.declined = true;
+      return;
+    }
+    const bool uvs = indices[0].texcoord_index != 0, normals = indices[0].normal_index != 0;
+    r.face_start.push_back(static_cast<uint32_t>(r.corners.size()));
+    r.face_parts.push_back(static_cast<uint8_t>((normals ? 1 : 0) | (uvs ? 2 : 0)));
+    if (uvs && r.texcoords.empty()) r.uvs_before_vt = true;
+    if (normals && r.normals.empty()) r.normals_before_vn = true;
+    for (int k = 0; k < n; ++k) {
+      const tinyobj::index_t& i = indices[k];
+      // Every corner with the same parts.
+      if (i.vertex_index == 0 || (i.texcoord_index != 0) != uvs ||
+          (i.normal_index != 0) != normals) {
+        r.declined = true;
+      }
+      Corner c{r.resolve(i.vertex_index, r.positions.size(), 0), kAbsent, kAbsent};
+      if (uvs) c.vt = r.resolve(i.texcoord_index, r.texcoords.size(), 1);
+      if (normals) c.vn = r.resolve(i.normal_index, r.normals.size(), 2);
+      r.corners.push_back(c);
+    }
+  }
+
+  void event(Event::Kind kind, std::string_view name) {
+    events.push_back({kind, face_start.size(), std::string(name)});
+  }
+  static void usemtl(void* p, const char* name, int) {
+    of(p).event(Event::Kind::kUsemtl, trimmed(name));
+  }
+  static void group(void* p, const char** names, int n) {
+    if (n != 1) {
+      of(p).declined = true;
+      return;
+    }
+    of(p).event(Event::Kind::kGroup, names[0]);
+  }
+  static void object(void* p, const char* name) {
+    of(p).event(Event::Kind::kObject, trimmed(name));
+  }
+};
+
+// Notes the `mtllib` statements of a piece for the replay, which reads the libraries in order.
+class MtllibRecorder final : public tinyobj::MaterialReader {
+ public:
+  explicit MtllibRecorder(Piece& piece) : piece_(piece) {}
+  bool operator()(const std::string& name, std::vector<tinyobj::material_t>*,
+                  std::map<std::string, int>*, std::string*, std::string*) override {
+    piece_.event(Event::Kind::kMtllib, name);
+    return false;
+  }
+
+ private:
+  Piece& piece_;
+};
+
 // The statements in file order, replayed as assimp's ObjFileParser acts on them.
 struct Replay {
   explicit Replay(MtlReader& mtl_reader) : mtl(mtl_reader) {
@@ -294,6 +398,8 @@ struct Replay {
 
   MtlReader& mtl;
   bool declined = false;
+  size_t faces = 0;  // faces so far
+  // The whole file's elements and faces (filled after the replay of the statements).
   std::vector<aiVector3D> positions, normals, texcoords;
   std::vector<Corner> corners;
   std::vector<size_t> face_start;  // first corner of each face
@@ -308,10 +414,13 @@ struct Replay {
   std::optional<uint32_t> current_material;
   std::vector<MaterialEntry> lib;
   std::map<std::string, uint32_t, std::less<> > lib_index;
-  size_t materials_seen = 0;
+  std::vector<tinyobj::material_t> mtl_materials;  // every library's, as tinyobjloader keeps them
+  std::map<std::string, int> mtl_map;
+  std::set<std::string> mtl_files;
+  size_t from_libraries = 0;  // materials taken from mtl_materials
 
   void create_mesh() {
-    runs.push_back({face_start.size(), objects});
+    runs.push_back({faces, objects});
     has_mesh = true;
   }
   void create_object(const std::string& name) {
@@ -321,92 +430,77 @@ struct Replay {
     create_mesh();
     if (current_material) runs.back().material = *current_material;
   }
-  bool current_has_faces() const { return has_mesh && face_start.size() > runs.back().first_face; }
 
-  static Replay& of(void* p) { return *static_cast<Replay*>(p); }
-
-  static void vertex(void* p, float x, float y, float z, float w) {
-    Replay& r = of(p);
-    if (w != 1.0f) r.declined = true;  // homogeneous w or colours: assimp reads those apart
-    r.positions.emplace_back(x, y, z);
-  }
-  static void normal(void* p, float x, float y, float z) { of(p).normals.emplace_back(x, y, z); }
-  static void texcoord(void* p, float x, float y, float z) {
-    of(p).texcoords.emplace_back(x, y, z);
+  // Faces [faces, end) join the current mesh; parts[i] are their bits as in Piece::face_parts.
+  void add_faces(size_t end, const uint8_t* parts) {
+    if (end == faces) return;
+    if (!has_object) create_object("defaultobject");
+    uint8_t any = 0;
+    for (size_t i = 0; i < end - faces; ++i) any |= parts[i];
+    runs.back().normals |= (any & 1) != 0;
+    runs.back().uvs |= (any & 2) != 0;
+    faces = end;
   }
 
-  // An index as assimp stores it: 1-based, or negative relative to the elements read so far.
-  static int32_t resolve(int raw, size_t count, bool& bad) {
-    if (raw > 0) return raw - 1;
-    const int64_t relative = static_cast<int64_t>(count) + raw;
-    if (relative < 0) bad = true;
-    return static_cast<int32_t>(relative);
-  }
-
-  static void face(void* p, tinyobj::index_t* indices, int n) {
-    Replay& r = of(p);
-    // Points, lines, polygons of more than four corners and missing vertex indices are left to
-    // assimp (its triangulation of n-gons is not reproduced here).
-    if (n < 3 || n > 4) {
-      r.declined = true;
-      return;
+  void apply(const Event& e) {
+    switch (e.kind) {
+      case Event::Kind::kUsemtl:
+        return usemtl(e.name);
+      case Event::Kind::kGroup:
+        if (e.name != active_group) {
+          create_object(e.name);
+          active_group = e.name;
+        }
+        return;
+      case Event::Kind::kObject:
+        if (e.name.empty()) return;
+        // assimp switches back to an object of the same name (faces then join another object's
+        // meshes) and reads only the first word: both are left to it.
+        if (has_blank(e.name) || object_names.count(e.name) != 0) {
+          declined = true;
+          return;
+        }
+        return create_object(e.name);
+      case Event::Kind::kMtllib:
+        return mtllib(e.name);
     }
-    const bool uvs = indices[0].texcoord_index != 0, normals = indices[0].normal_index != 0;
-    bool bad = false;
-    const size_t start = r.corners.size();
-    for (int k = 0; k < n; ++k) {
-      const tinyobj::index_t& i = indices[k];
-      // Every corner with the same parts; a texture coordinate index before any `vt` (assimp
-      // then reads it as a normal index) or a normal index before any `vn` is declined.
-      if (i.vertex_index == 0 || (i.texcoord_index != 0) != uvs ||
-          (i.normal_index != 0) != normals || (uvs && r.texcoords.empty()) ||
-          (normals && r.normals.empty())) {
-        bad = true;
-      }
-      r.corners.push_back({resolve(i.vertex_index, r.positions.size(), bad),
-                           uvs ? resolve(i.texcoord_index, r.texcoords.size(), bad) : -1,
-                           normals ? resolve(i.normal_index, r.normals.size(), bad) : -1});
-    }
-    if (bad) {
-      r.declined = true;
-      r.corners.resize(start);
-      return;
-    }
-    if (!r.has_object) r.create_object("defaultobject");
-    r.face_start.push_back(start);
-    r.runs.back().normals |= normals;
-    r.runs.back().uvs |= uvs;
   }
 
-  static void usemtl(void* p, const char* raw_name, int) {
-    Replay& r = of(p);
-    const std::string_view name = trimmed(raw_name);
+  void usemtl(const std::string& name) {
     if (name.empty()) return;
     if (has_blank(name)) {
-      r.declined = true;
+      declined = true;
       return;
     }
-    if (r.current_material && r.lib[*r.current_material].name == name) return;
-    auto it = r.lib_index.find(name);
-    if (it == r.lib_index.end()) {  // assimp makes a default material of that name
-      r.lib.emplace_back(std::string(name));
-      it = r.lib_index.emplace(std::string(name), static_cast<uint32_t>(r.lib.size() - 1)).first;
+    if (current_material && lib[*current_material].name == name) return;
+    auto it = lib_index.find(name);
+    if (it == lib_index.end()) {  // assimp makes a default material of that name
+      lib.emplace_back(name);
+      it = lib_index.emplace(name, static_cast<uint32_t>(lib.size() - 1)).first;
     }
-    r.current_material = it->second;
-    const bool new_mesh =
-        !r.has_mesh || (r.runs.back().material != kNoMaterial &&
-                        r.runs.back().material != it->second && r.current_has_faces());
-    if (new_mesh) r.create_mesh();
-    r.runs.back().material = it->second;
+    current_material = it->second;
+    const bool current_has_faces = has_mesh && faces > runs.back().first_face;
+    const bool new_mesh = !has_mesh || (runs.back().material != kNoMaterial &&
+                                        runs.back().material != it->second && current_has_faces);
+    if (new_mesh) create_mesh();
+    runs.back().material = it->second;
   }
 
-  static void mtllib(void* p, const tinyobj::material_t* materials, int n) {
-    Replay& r = of(p);
-    const std::vector<MtlKeys>& keys = r.mtl.keys();
-    for (size_t i = r.materials_seen; i < static_cast<size_t>(n); ++i) {
-      const tinyobj::material_t& m = materials[i];
-      if (i >= keys.size() || keys[i].name != m.name || r.lib_index.count(m.name) != 0) {
-        r.declined = true;  // defined twice, or used before its definition
+  // As tinyobjloader does: a library read once, its materials added to the earlier ones.
+  void mtllib(const std::string& file) {
+    if (mtl_files.count(file) == 0) {
+      std::string warn, err;
+      if (!mtl(file, &mtl_materials, &mtl_map, &warn, &err)) {
+        declined = true;
+        return;
+      }
+      mtl_files.insert(file);
+    }
+    const std::vector<MtlKeys>& keys = mtl.keys();
+    for (size_t i = from_libraries; i < mtl_materials.size(); ++i) {
+      const tinyobj::material_t& m = mtl_materials[i];
+      if (i >= keys.size() || keys[i].name != m.name || lib_index.count(m.name) != 0) {
+        declined = true;  // defined twice, or used before its definition
         continue;
       }
       const MtlKeys& k = keys[i];
@@ -418,39 +512,13 @@ struct Replay {
       if (k.ns) e.keys.shininess = m.shininess;
       if (k.ni) e.keys.ior = m.ior;
       if (k.d) e.keys.opacity = m.dissolve;
-      if (k.map_kd != m.diffuse_texname || k.map_ke != m.emissive_texname) r.declined = true;
+      if (k.map_kd != m.diffuse_texname || k.map_ke != m.emissive_texname) declined = true;
       e.map_kd = k.map_kd;
       e.map_ke = k.map_ke;
-      r.lib.push_back(std::move(e));
-      r.lib_index.emplace(m.name, static_cast<uint32_t>(r.lib.size() - 1));
+      lib.push_back(std::move(e));
+      lib_index.emplace(m.name, static_cast<uint32_t>(lib.size() - 1));
+      ++from_libraries;
     }
-    r.materials_seen = std::max(r.materials_seen, static_cast<size_t>(n));
-  }
-
-  static void group(void* p, const char** names, int n) {
-    Replay& r = of(p);
-    if (n != 1) {
-      r.declined = true;
-      return;
-    }
-    const std::string name = names[0];
-    if (name != r.active_group) {
-      r.create_object(name);
-      r.active_group = name;
-    }
-  }
-
-  static void object(void* p, const char* raw_name) {
-    Replay& r = of(p);
-    const std::string_view name = trimmed(raw_name);
-    if (name.empty()) return;
-    // assimp switches back to an object of the same name (faces then join another object's
-    // meshes) and reads only the first word: both are left to it.
-    if (has_blank(name) || r.object_names.count(name) != 0) {
-      r.declined = true;
-      return;
-    }
-    r.create_object(std::string(name));
   }
 };
 
@@ -488,7 +556,7 @@ bool native_obj_reader_built() {
 
 std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
                                                const std::string& subject,
-                                               const std::string& directory) {
+                                               const std::string& directory, size_t piece_bytes) {
   const std::string_view text(bytes.data(), bytes.size());
   const PreScan scan = pre_scan(text);
   if (!scan.ok) return std::nullopt;
@@ -499,35 +567,110 @@ std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
     if (directory.empty() || name.empty() || has_blank(name)) return std::nullopt;
   }
 
+  // tinyobjloader reads pieces of about piece_bytes, each ending at a line end, in parallel.
+  std::vector<size_t> cuts = {0};
+  while (cuts.back() < text.size()) {
+    size_t cut = std::min(cuts.back() + std::max<size_t>(piece_bytes, 1), text.size());
+    while (cut < text.size() && text[cut - 1] != '\n') ++cut;
+    cuts.push_back(cut);
+  }
+  std::vector<Piece> pieces(cuts.size() - 1);
+  std::atomic<bool> failed{false};
+  parallel::for_range(tbb::blocked_range<size_t>(0, pieces.size(), 1), [&](const auto& range) {
+    for (size_t k = range.begin(); k < range.end(); ++k) {
+      Piece& piece = pieces[k];
+      tinyobj::callback_t callbacks;
+      callbacks.vertex_cb = &Piece::vertex;
+      callbacks.normal_cb = &Piece::normal;
+      callbacks.texcoord_cb = &Piece::texcoord;
+      callbacks.index_cb = &Piece::face;
+      callbacks.usemtl_cb = &Piece::usemtl;
+      callbacks.group_cb = &Piece::group;
+      callbacks.object_cb = &Piece::object;
+      MtllibRecorder recorder(piece);
+      MemoryStreamBuf buffer(bytes.subspan(cuts[k], cuts[k + 1] - cuts[k]));
+      std::istream stream(&buffer);
+      std::string warn, err;
+      try {
+        if (!tinyobj::LoadObjWithCallback(stream, callbacks, &piece, &recorder, &warn, &err)) {
+          failed = true;
+        }
+      } catch (const std::exception&) {
+        failed = true;  // assimp reads it, or gives its error
+      }
+    }
+  });
+  if (failed) return std::nullopt;
+
+  // The pieces' statements in order, and where each piece's elements start in the whole file.
   MtlReader mtl(directory);
   Replay replay(mtl);
-  tinyobj::callback_t callbacks;
-  callbacks.vertex_cb = &Replay::vertex;
-  callbacks.normal_cb = &Replay::normal;
-  callbacks.texcoord_cb = &Replay::texcoord;
-  callbacks.index_cb = &Replay::face;
-  callbacks.usemtl_cb = &Replay::usemtl;
-  callbacks.mtllib_cb = &Replay::mtllib;
-  callbacks.group_cb = &Replay::group;
-  callbacks.object_cb = &Replay::object;
-  MemoryStreamBuf buffer(bytes);
-  std::istream stream(&buffer);
-  std::string warn, err;
-  try {
-    if (!tinyobj::LoadObjWithCallback(stream, callbacks, &replay, &mtl, &warn, &err)) {
+  struct Base {
+    size_t positions = 0, normals = 0, texcoords = 0, corners = 0, faces = 0;
+  };
+  std::vector<Base> base(pieces.size() + 1);
+  for (size_t k = 0; k < pieces.size(); ++k) {
+    const Piece& piece = pieces[k];
+    if (piece.declined || (piece.uvs_before_vt && base[k].texcoords == 0) ||
+        (piece.normals_before_vn && base[k].normals == 0)) {
       return std::nullopt;
     }
-  } catch (const std::exception&) {
-    return std::nullopt;  // assimp reads it, or gives its error
-  }
-  if (replay.declined || mtl.declined || replay.face_start.empty()) return std::nullopt;
-  for (const Corner& c : replay.corners) {
-    if (static_cast<size_t>(c.v) >= replay.positions.size() ||
-        (c.vt >= 0 && static_cast<size_t>(c.vt) >= replay.texcoords.size()) ||
-        (c.vn >= 0 && static_cast<size_t>(c.vn) >= replay.normals.size())) {
-      return std::nullopt;  // assimp fails, or drops the mesh's normals or coordinates
+    for (const Event& e : piece.events) {
+      replay.add_faces(base[k].faces + e.face,
+                       piece.face_parts.data() + (replay.faces - base[k].faces));
+      replay.apply(e);
+      if (replay.declined || mtl.declined) return std::nullopt;
     }
+    base[k + 1] = {base[k].positions + piece.positions.size(),
+                   base[k].normals + piece.normals.size(),
+                   base[k].texcoords + piece.texcoords.size(),
+                   base[k].corners + piece.corners.size(), base[k].faces + piece.face_start.size()};
+    replay.add_faces(base[k + 1].faces, piece.face_parts.data() + (replay.faces - base[k].faces));
   }
+  const Base& total = base.back();
+  if (total.faces == 0) return std::nullopt;
+  if (total.positions > INT32_MAX || total.normals > INT32_MAX || total.texcoords > INT32_MAX) {
+    return std::nullopt;
+  }
+  replay.positions.resize(total.positions);
+  replay.normals.resize(total.normals);
+  replay.texcoords.resize(total.texcoords);
+  replay.corners.resize(total.corners);
+  replay.face_start.resize(total.faces);
+  parallel::for_range(tbb::blocked_range<size_t>(0, pieces.size(), 1), [&](const auto& range) {
+    for (size_t k = range.begin(); k < range.end(); ++k) {
+      Piece& piece = pieces[k];
+      const Base& b = base[k];
+      for (const auto& [corner, field] : piece.relative) {
+        Corner& c = piece.corners[corner];
+        int32_t& index = field == 0 ? c.v : field == 1 ? c.vt : c.vn;
+        index += static_cast<int32_t>(field == 0   ? b.positions
+                                      : field == 1 ? b.texcoords
+                                                   : b.normals);
+      }
+      bool bad = false;
+      for (const Corner& c : piece.corners) {
+        // Out of range: assimp fails, or drops the mesh's normals or coordinates.
+        bad |= c.v < 0 || static_cast<size_t>(c.v) >= total.positions ||
+               (c.vt != kAbsent && (c.vt < 0 || static_cast<size_t>(c.vt) >= total.texcoords)) ||
+               (c.vn != kAbsent && (c.vn < 0 || static_cast<size_t>(c.vn) >= total.normals));
+      }
+      if (bad) failed = true;
+      std::copy(piece.positions.begin(), piece.positions.end(),
+                replay.positions.begin() + static_cast<ptrdiff_t>(b.positions));
+      std::copy(piece.normals.begin(), piece.normals.end(),
+                replay.normals.begin() + static_cast<ptrdiff_t>(b.normals));
+      std::copy(piece.texcoords.begin(), piece.texcoords.end(),
+                replay.texcoords.begin() + static_cast<ptrdiff_t>(b.texcoords));
+      std::copy(piece.corners.begin(), piece.corners.end(),
+                replay.corners.begin() + static_cast<ptrdiff_t>(b.corners));
+      for (size_t f = 0; f < piece.face_start.size(); ++f) {
+        replay.face_start[b.faces + f] = b.corners + piece.face_start[f];
+      }
+      piece = Piece();  // its memory back before the triangles are made
+    }
+  });
+  if (failed) return std::nullopt;
 
   const size_t faces = replay.face_start.size();
   const size_t triangles = replay.corners.size() - 2 * faces;
@@ -611,10 +754,10 @@ std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
           corner[k] = glm::vec3(v.x, v.y, v.z);
           if (normals) {
             const aiVector3D nv =
-                normal_transform * (c.vn >= 0 ? replay.normals[c.vn] : aiVector3D());
+                normal_transform * (c.vn != kAbsent ? replay.normals[c.vn] : aiVector3D());
             normal[k] = glm::vec3(nv.x, nv.y, nv.z);
           }
-          if (uvs && c.vt >= 0)
+          if (uvs && c.vt != kAbsent)
             uv[k] = glm::vec2(replay.texcoords[c.vt].x, replay.texcoords[c.vt].y);
         }
         const size_t i = tri + t;
