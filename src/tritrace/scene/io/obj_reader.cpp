@@ -82,11 +82,11 @@ struct PreScan {
 };
 
 // Finds, in parallel, what tinyobjloader would read differently from assimp or not see at all:
-// line continuations and Windows paths (backslashes), bytes of UTF-16 or binary data, decimal
-// commas (assimp reads "1,5" as 1.5), nan and inf (assimp keeps them, tinyobjloader reads 0),
-// lone carriage returns, indented statements (blank lines are fine), lines and points (`l`, `p`),
-// free-form geometry
-// (`cstype`) and a byte order mark; and it collects the `mtllib` statements.
+// line continuations and Windows paths (backslashes, in comments too), bytes of UTF-16 or binary
+// data outside comments, decimal commas (assimp reads "1,5" as 1.5), nan and inf (assimp keeps
+// them, tinyobjloader reads 0), lone carriage returns, indented statements (blank lines are
+// fine), lines and points (`l`, `p`), free-form geometry (`cstype`) and a byte order mark; and it
+// collects the `mtllib` statements.
 PreScan pre_scan(std::string_view text) {
   PreScan result;
   if (text.size() < kObjMinSize || static_cast<unsigned char>(text[0]) >= 0x80) {
@@ -95,40 +95,51 @@ PreScan pre_scan(std::string_view text) {
   }
   std::atomic<bool> ok{true};
   std::mutex mutex;
+  // Each task takes the lines that start in its range, whole.
   parallel::for_range(
-      tbb::blocked_range<size_t>(0, text.size(), size_t{1} << 20),
-      [&](const tbb::blocked_range<size_t>& r) {
+      tbb::blocked_range<size_t>(0, text.size(), size_t{1} << 20), [&](const auto& r) {
         std::vector<size_t> mtllibs;
         bool fine = true;
-        for (size_t i = r.begin(); i < r.end() && fine; ++i) {
-          const char c = text[i];
-          switch (c) {
-            case '\\':
-            case '\0':
-            case ',':
-              fine = false;
-              break;
-            case '\r':
-              fine = i + 1 < text.size() && text[i + 1] == '\n';
-              break;
-            case 'n':
-            case 'N':
-              fine = !lower_is(text, i, "an");
-              break;
-            case 'i':
-            case 'I':
-              fine = !lower_is(text, i, "nf");
-              break;
-            default:
-              break;
-          }
-          if (!fine || (i > 0 && text[i - 1] != '\n')) continue;
-          if ((is_blank(c) && !blank_line(text, i)) || starts_with_word(text, i, "l") ||
-              starts_with_word(text, i, "p") || starts_with_word(text, i, "cstype")) {
+        size_t i = r.begin();
+        if (i > 0 && text[i - 1] != '\n') i = std::min(text.find('\n', i), text.size()) + 1;
+        while (fine && i < r.end()) {
+          const size_t end = std::min(text.find('\n', i), text.size());
+          const std::string_view line = text.substr(i, end - i);
+          if (line.empty()) {
+            // nothing to check
+          } else if (line[0] == '#') {
+            // A comment may say anything, but a backslash at its end continues it for assimp.
+            fine = line.find('\\') == std::string_view::npos;
+          } else if ((is_blank(line[0]) && !blank_line(text, i)) ||
+                     starts_with_word(text, i, "l") || starts_with_word(text, i, "p") ||
+                     starts_with_word(text, i, "cstype")) {
             fine = false;
-          } else if (starts_with_word(text, i, "mtllib")) {
-            mtllibs.push_back(i);
+          } else {
+            if (starts_with_word(text, i, "mtllib")) mtllibs.push_back(i);
+            for (size_t k = 0; k < line.size() && fine; ++k) {
+              switch (line[k]) {
+                case '\\':
+                case '\0':
+                case ',':
+                  fine = false;
+                  break;
+                case '\r':
+                  fine = k + 1 == line.size() && end < text.size();
+                  break;
+                case 'n':
+                case 'N':
+                  fine = !lower_is(line, k, "an");
+                  break;
+                case 'i':
+                case 'I':
+                  fine = !lower_is(line, k, "nf");
+                  break;
+                default:
+                  break;
+              }
+            }
           }
+          i = end + 1;
         }
         if (!fine) ok = false;
         if (!mtllibs.empty()) {
