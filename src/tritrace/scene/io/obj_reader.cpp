@@ -110,12 +110,17 @@ PreScan pre_scan(std::string_view text) {
           } else if (line[0] == '#') {
             // A comment may say anything, but a backslash at its end continues it for assimp.
             fine = line.find('\\') == std::string_view::npos;
-          } else if ((is_blank(line[0]) && !blank_line(text, i)) ||
-                     starts_with_word(text, i, "l") || starts_with_word(text, i, "p") ||
-                     starts_with_word(text, i, "cstype")) {
-            fine = false;
+          } else if (is_blank(line[0])) {
+            fine = blank_line(text, i);
           } else {
-            if (starts_with_word(text, i, "mtllib")) mtllibs.push_back(i);
+            // Only lines starting with these letters need a word compared.
+            const char c = line[0];
+            if ((c == 'l' && starts_with_word(text, i, "l")) ||
+                (c == 'p' && starts_with_word(text, i, "p")) ||
+                (c == 'c' && starts_with_word(text, i, "cstype"))) {
+              fine = false;
+            }
+            if (c == 'm' && starts_with_word(text, i, "mtllib")) mtllibs.push_back(i);
             for (size_t k = 0; k < line.size() && fine; ++k) {
               switch (line[k]) {
                 case '\\':
@@ -590,6 +595,13 @@ std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
   parallel::for_range(tbb::blocked_range<size_t>(0, pieces.size(), 1), [&](const auto& range) {
     for (size_t k = range.begin(); k < range.end(); ++k) {
       Piece& piece = pieces[k];
+      // Room for the densest text (a face line takes at least 6 bytes, a corner 2, a vertex
+      // 8): reserved, not touched, so that growing never copies.
+      const size_t size = cuts[k + 1] - cuts[k];
+      piece.positions.reserve(size / 8);
+      piece.corners.reserve(size / 2);
+      piece.face_start.reserve(size / 6);
+      piece.face_parts.reserve(size / 6);
       tinyobj::callback_t callbacks;
       callbacks.vertex_cb = &Piece::vertex;
       callbacks.normal_cb = &Piece::normal;
