@@ -1,9 +1,11 @@
-// tinyobjloader's callback interface reads the OBJ's statements in file order; this file replays
-// them through a model of how assimp 5.2's OBJ importer groups faces into meshes (a new object at
-// each `o` or changed `g`, a new mesh at a `usemtl` that changes the material of a mesh that has
-// faces, the material of a mesh being the one last set on it) and how aiProcess_Triangulate splits
-// quads, then fills the triangle arrays in parallel. What the model does not cover is declined:
-// a parallel pre-scan of the bytes finds the statements tinyobjloader skips or reads differently.
+// tinyobjloader's callback interface reads pieces of the OBJ in parallel, noting the grouping
+// statements with their place among the faces; these are then replayed in file order through a
+// model of how assimp 5.2's OBJ importer groups faces into meshes (a new object at each `o` or
+// changed `g`, a new mesh at a `usemtl` that changes the material of a mesh that has faces, the
+// material of a mesh being the one last set on it, objects coming out last first) and how
+// aiProcess_Triangulate splits quads, and the triangle arrays are filled in parallel. What the
+// model does not cover is declined: a parallel pre-scan of the bytes finds the statements
+// tinyobjloader skips or reads differently.
 #include "tritrace/scene/io/obj_reader.h"
 
 #if TRITRACE_HAVE_TINYOBJLOADER
