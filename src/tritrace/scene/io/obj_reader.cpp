@@ -31,6 +31,7 @@
 
 #include "tritrace/error.h"
 #include "tritrace/parallel.h"
+#include "tritrace/scene/io/load_progress.h"
 #include "tritrace/scene/io/material_mapping.h"
 #include "tritrace/scene/io/triangle_filter.h"
 #endif
@@ -594,6 +595,9 @@ std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
   }
   std::vector<Piece> pieces(cuts.size() - 1);
   std::atomic<bool> failed{false};
+  // Worker threads report to the calling thread's progress, in bytes parsed.
+  LoadProgress* progress = load_progress();
+  if (progress != nullptr) progress->begin("parsing", text.size());
   parallel::for_range(tbb::blocked_range<size_t>(0, pieces.size(), 1), [&](const auto& range) {
     for (size_t k = range.begin(); k < range.end(); ++k) {
       Piece& piece = pieces[k];
@@ -623,6 +627,7 @@ std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
       } catch (const std::exception&) {
         failed = true;  // assimp reads it, or gives its error
       }
+      if (progress != nullptr) progress->advance(size);
     }
   });
   if (failed) return std::nullopt;
