@@ -1,9 +1,13 @@
 #!/usr/bin/env python3
 """Writes a big binary PLY for load and build benchmarks: a displaced sphere (bumps of several
 frequencies on a UV sphere) inside the lab box's [-1, 1] cube, with about the number of triangles
-asked for (rings x segments x 2). Needs NumPy (python3-numpy).
+asked for (rings x segments x 2). Needs NumPy (python3-numpy). An output name ending in .obj
+writes the same mesh as a Wavefront OBJ instead (coordinates with 9 significant digits, which read
+back as the PLY's floats; --quads writes each pair of triangles as one quad, which assimp and the
+native reader split back into the same two triangles).
 
     /usr/bin/python3 scripts/make_displaced_sphere_ply.py --triangles 10000000 -o sphere10m.ply
+    /usr/bin/python3 scripts/make_displaced_sphere_ply.py --triangles 10000000 -o sphere10m.obj
 """
 import argparse
 import os
@@ -12,10 +16,23 @@ import sys
 import numpy as np
 
 
+def write_obj(path, vertices, faces):
+    """ASCII OBJ in blocks (1-based indices); %.9g prints each float so that it reads back exactly."""
+    block = 1 << 20
+    with open(path, "w") as f:
+        f.write("# displaced sphere, scripts/make_displaced_sphere_ply.py\no sphere\n")
+        for i in range(0, len(vertices), block):
+            np.savetxt(f, vertices[i:i + block].astype(np.float64), fmt="v %.9g %.9g %.9g")
+        fmt = "f" + " %d" * faces.shape[1]
+        for i in range(0, len(faces), block):
+            np.savetxt(f, faces[i:i + block] + 1, fmt=fmt)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--triangles", type=int, default=10_000_000)
     parser.add_argument("-o", "--output", required=True)
+    parser.add_argument("--quads", action="store_true", help="OBJ only: faces of four corners")
     args = parser.parse_args()
     if args.triangles < 8:
         parser.error("--triangles: at least 8")
@@ -45,6 +62,14 @@ def main():
     faces["i"] = tris
 
     tmp = args.output + ".tmp"
+    if args.output.lower().endswith(".obj"):
+        write_obj(tmp, vertices, quads if args.quads else tris)
+        os.replace(tmp, args.output)
+        print(f"{args.output}: {len(vertices)} vertices, {len(tris)} triangles, "
+              f"{os.path.getsize(args.output) / 1e6:.0f} MB")
+        return 0
+    if args.quads:
+        parser.error("--quads: only for .obj output")
     with open(tmp, "wb") as f:
         f.write(b"ply\nformat binary_little_endian 1.0\n"
                 b"comment displaced sphere, scripts/make_displaced_sphere_ply.py\n")

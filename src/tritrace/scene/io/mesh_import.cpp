@@ -31,6 +31,8 @@
 #include "tritrace/scene/io/input_file.h"
 #include "tritrace/scene/io/isolated_call.h"
 #include "tritrace/scene/io/load_progress.h"
+#include "tritrace/scene/io/material_mapping.h"
+#include "tritrace/scene/io/obj_reader.h"
 #include "tritrace/scene/io/ply_reader.h"
 #include "tritrace/scene/io/triangle_filter.h"
 
@@ -52,24 +54,10 @@ std::string one_line(std::string text) {
   return text.empty() ? "unknown reason" : text;
 }
 
-float unit_channel(float c) {
-  return std::isfinite(c) ? std::clamp(c, 0.0f, 1.0f) : kNeutralGrey.x;
-}
-
-glm::vec3 unit_colour(const aiColor4D& c) {
-  return {unit_channel(c.r), unit_channel(c.g), unit_channel(c.b)};
-}
-
-// A non-negative finite colour (emission may exceed 1).
-glm::vec3 radiance_colour(const aiColor4D& c) {
-  auto channel = [](float x) { return std::isfinite(x) ? std::max(x, 0.0f) : 0.0f; };
-  return {channel(c.r), channel(c.g), channel(c.b)};
-}
-
 std::optional<float> get_float(const aiMaterial& m, const char* key, unsigned type,
                                unsigned index) {
   float value = 0.0f;
-  if (m.Get(key, type, index, value) != AI_SUCCESS || !std::isfinite(value)) return std::nullopt;
+  if (m.Get(key, type, index, value) != AI_SUCCESS) return std::nullopt;
   return value;
 }
 
@@ -77,7 +65,7 @@ std::optional<glm::vec3> get_colour(const aiMaterial& m, const char* key, unsign
                                     unsigned index) {
   aiColor4D c;
   if (m.Get(key, type, index, c) != AI_SUCCESS) return std::nullopt;
-  return unit_colour(c);
+  return glm::vec3(c.r, c.g, c.b);
 }
 
 WrapMode wrap_mode(aiTextureMapMode mode) {
@@ -98,7 +86,10 @@ class TextureTable {
  public:
   TextureTable(const aiScene& scene, const std::string& subject, std::string directory,
                ImportedMesh& out)
-      : scene_(scene), subject_(subject), directory_(std::move(directory)), out_(out) {}
+      : scene_(scene),
+        subject_(subject),
+        external_(subject, std::move(directory), out),
+        out_(out) {}
 
   // The material's first texture of `type` (tried in order), or none.
   TextureRef find(const aiMaterial& m, std::initializer_list<aiTextureType> types) {
@@ -121,13 +112,11 @@ class TextureTable {
  private:
   int32_t index_of(const std::string& path) {
     const aiTexture* embedded = scene_.GetEmbeddedTexture(path.c_str());
-    const std::string key = embedded != nullptr ? "*embedded*" + path : path;
-    if (const auto it = loaded_.find(key); it != loaded_.end()) return it->second;
-    TextureImage image =
-        embedded != nullptr ? decode_embedded(*embedded, path) : read_external(path);
-    out_.textures.push_back(std::move(image));
+    if (embedded == nullptr) return external_.index_of(path);
+    if (const auto it = embedded_.find(path); it != embedded_.end()) return it->second;
+    out_.textures.push_back(decode_embedded(*embedded, path));
     const auto index = static_cast<int32_t>(out_.textures.size() - 1);
-    loaded_.emplace(key, index);
+    embedded_.emplace(path, index);
     return index;
   }
 
@@ -149,96 +138,30 @@ class TextureTable {
     return image;
   }
 
-  TextureImage read_external(std::string path) const {
-    namespace fs = std::filesystem;
-    // Files written on Windows name textures with backslashes (".\\wood.jpg").
-    std::replace(path.begin(), path.end(), '\\', '/');
-    const std::string referenced = " (referenced by " + subject_ + ")";
-    if (directory_.empty()) {
-      throw Error(path, "cannot read texture: a model read from memory has no folder" + referenced);
-    }
-    const fs::path file =
-        fs::path(path).is_absolute() ? fs::path(path) : fs::path(directory_) / path;
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw Error(file.string(), "cannot read texture: no such file" + referenced);
-    const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
-                                     std::istreambuf_iterator<char>());
-    try {
-      return decode_texture_image(bytes, file.string());
-    } catch (const Error& e) {
-      throw Error(e.subject(), e.reason() + referenced);
-    }
-  }
-
   const aiScene& scene_;
   const std::string& subject_;
-  std::string directory_;
+  ExternalTextures external_;  // files beside the model
   ImportedMesh& out_;
-  std::map<std::string, int32_t> loaded_;
+  std::map<std::string, int32_t> embedded_;
 };
 
-// GGX width from a Phong exponent: alpha = sqrt(2 / (Ns + 2)) (Walter et al. 2007, section 5.2,
-// the Beckmann-Phong correspondence), and roughness = sqrt(alpha).
-float roughness_from_phong(float ns) {
-  return std::sqrt(std::sqrt(2.0f / (std::max(ns, 0.0f) + 2.0f)));
-}
-
-float max_channel(glm::vec3 c) {
-  return std::max({c.x, c.y, c.z});
-}
-
-// glTF's metallic-roughness (assimp's PBR keys) becomes the principled material; other files
-// (OBJ/MTL's Kd, Ks, Ns, Ni, d, Ke) map to the type that fits; see docs/SCENE_FORMAT.md. Imported
-// materials are two-sided: a file's winding says nothing about which side should emit.
+// assimp's keys, as they are, for the one mapping (material_mapping.h).
 Material convert_material(const aiMaterial& m, TextureTable& textures) {
-  Material out{kNeutralGrey};
-  out.two_sided = true;
-  const std::optional<float> metallic = get_float(m, AI_MATKEY_METALLIC_FACTOR);
-  const std::optional<float> roughness = get_float(m, AI_MATKEY_ROUGHNESS_FACTOR);
-  const std::optional<glm::vec3> base = get_colour(m, AI_MATKEY_BASE_COLOR);
-  const std::optional<glm::vec3> diffuse = get_colour(m, AI_MATKEY_COLOR_DIFFUSE);
-  aiColor4D emissive;
-  if (m.Get(AI_MATKEY_COLOR_EMISSIVE, emissive) == AI_SUCCESS) {
-    out.emission = radiance_colour(emissive);
-    if (const std::optional<float> strength = get_float(m, AI_MATKEY_EMISSIVE_INTENSITY)) {
-      out.emission *= std::max(*strength, 0.0f);
-    }
-  }
-  const std::optional<float> ior = get_float(m, AI_MATKEY_REFRACTI);
-  // assimp reports 1 for an MTL without Ni, which would make glass vanish: 1.5 then.
-  if (ior && *ior > 1.0f && *ior <= 4.0f) out.ior = *ior;
-  out.albedo_texture = textures.find(m, {aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
-  out.emission_texture = textures.find(m, {aiTextureType_EMISSIVE});
-  if (metallic || roughness) {
-    out.type = MaterialType::kPrincipled;
-    out.albedo = base ? *base : diffuse ? *diffuse : glm::vec3(1.0f);
-    out.metallic = std::clamp(metallic.value_or(1.0f), 0.0f, 1.0f);  // glTF's defaults
-    out.roughness = std::clamp(roughness.value_or(1.0f), 0.0f, 1.0f);
-    if (const std::optional<float> t = get_float(m, AI_MATKEY_TRANSMISSION_FACTOR)) {
-      out.transmission = std::clamp(*t, 0.0f, 1.0f);
-    }
-    return out;
-  }
-  if (base || diffuse) out.albedo = base ? *base : *diffuse;
-  const glm::vec3 specular = get_colour(m, AI_MATKEY_COLOR_SPECULAR).value_or(glm::vec3(0.0f));
-  const std::optional<float> shininess = get_float(m, AI_MATKEY_SHININESS);
-  const float rough = shininess ? roughness_from_phong(*shininess) : 0.0f;
-  const float opacity = get_float(m, AI_MATKEY_OPACITY).value_or(1.0f);
-  if (opacity < 1.0f) {
-    out.type = MaterialType::kDielectric;
-    out.albedo = glm::vec3(1.0f);
-    out.roughness = max_channel(specular) > 0.0f ? rough : 0.0f;
-  } else if (max_channel(specular) > 0.0f && max_channel(out.albedo) == 0.0f &&
-             !out.albedo_texture.present()) {
-    out.type = MaterialType::kConductor;
-    out.albedo = specular;
-    out.roughness = rough;
-  } else if (max_channel(specular) > 0.0f) {
-    out.type = MaterialType::kPrincipled;
-    out.metallic = 0.0f;
-    out.roughness = rough;
-  }
-  return out;
+  MaterialKeys keys;
+  keys.metallic = get_float(m, AI_MATKEY_METALLIC_FACTOR);
+  keys.roughness = get_float(m, AI_MATKEY_ROUGHNESS_FACTOR);
+  keys.base_colour = get_colour(m, AI_MATKEY_BASE_COLOR);
+  keys.diffuse = get_colour(m, AI_MATKEY_COLOR_DIFFUSE);
+  keys.specular = get_colour(m, AI_MATKEY_COLOR_SPECULAR);
+  keys.emissive = get_colour(m, AI_MATKEY_COLOR_EMISSIVE);
+  keys.emissive_intensity = get_float(m, AI_MATKEY_EMISSIVE_INTENSITY);
+  keys.ior = get_float(m, AI_MATKEY_REFRACTI);
+  keys.shininess = get_float(m, AI_MATKEY_SHININESS);
+  keys.opacity = get_float(m, AI_MATKEY_OPACITY);
+  keys.transmission = get_float(m, AI_MATKEY_TRANSMISSION_FACTOR);
+  keys.albedo_texture = textures.find(m, {aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
+  keys.emission_texture = textures.find(m, {aiTextureType_EMISSIVE});
+  return map_material(keys);
 }
 
 void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t material,
@@ -393,13 +316,37 @@ ImportedMesh import_with(const std::string& subject, const std::string& director
   }
 }
 
-// PLY files go to the native reader first (ply_reader.h), which leaves what it does not take to
-// assimp.
-bool is_ply(const std::string& path) {
+// PLY and OBJ files go to the native readers first (ply_reader.h, obj_reader.h), which leave what
+// they do not take to assimp.
+bool has_extension(const std::string& path, const char* extension) {
   if (path.size() < 4) return false;
   std::string ext = path.substr(path.size() - 4);
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".ply";
+  return ext == extension;
+}
+
+bool is_ply(const std::string& path) {
+  return has_extension(path, ".ply");
+}
+
+bool is_obj(const std::string& path) {
+  return has_extension(path, ".obj");
+}
+
+// The folder assimp resolves a model's material libraries and textures in.
+std::string model_folder(const std::string& path) {
+  const std::string folder = std::filesystem::path(path).parent_path().string();
+  return folder.empty() ? "." : folder;
+}
+
+// The native readers' result for these bytes, or nullopt for assimp to read them. `directory` is
+// the model's folder, empty for bytes from memory.
+std::optional<ImportedMesh> read_natively(std::span<const char> bytes, const std::string& extension,
+                                          const std::string& subject,
+                                          const std::string& directory) {
+  if (is_ply(extension)) return read_ply_triangles(bytes, subject);
+  if (is_obj(extension)) return read_obj_triangles(bytes, subject, directory);
+  return std::nullopt;
 }
 
 // ImportedMesh to bytes and back, for the trip from the importer process.
@@ -557,9 +504,11 @@ ImportedMesh import_isolated(const std::string& subject, const std::function<Imp
 
 ImportedMesh import_mesh_file(const std::string& path) {
   check_input_file(path);
-  if (is_ply(path)) {
+  if (is_ply(path) || is_obj(path)) {
     const std::string bytes = read_input_file(path);
-    if (std::optional<ImportedMesh> mesh = read_ply_triangles(bytes, path)) return std::move(*mesh);
+    if (std::optional<ImportedMesh> mesh = read_natively(bytes, path, path, model_folder(path))) {
+      return std::move(*mesh);
+    }
   }
   return import_mesh_file_with_assimp(path);
 }
@@ -567,8 +516,7 @@ ImportedMesh import_mesh_file(const std::string& path) {
 ImportedMesh import_mesh_file_with_assimp(const std::string& path) {
   check_input_file(path);
   return import_isolated(path, [&] {
-    const std::string folder = std::filesystem::path(path).parent_path().string();
-    return import_with(path, folder.empty() ? "." : folder, [&](Assimp::Importer& importer) {
+    return import_with(path, model_folder(path), [&](Assimp::Importer& importer) {
       return importer.ReadFile(path, kImportFlags);
     });
   });
@@ -577,11 +525,9 @@ ImportedMesh import_mesh_file_with_assimp(const std::string& path) {
 ImportedMesh import_mesh_memory(std::span<const uint8_t> bytes, const std::string& format_hint,
                                 const std::string& subject) {
   if (bytes.empty()) throw Error(subject, "is empty");
-  if (is_ply("." + format_hint)) {
-    const std::span<const char> chars(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-    if (std::optional<ImportedMesh> mesh = read_ply_triangles(chars, subject)) {
-      return std::move(*mesh);
-    }
+  const std::span<const char> chars(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  if (std::optional<ImportedMesh> mesh = read_natively(chars, "." + format_hint, subject, "")) {
+    return std::move(*mesh);
   }
   return import_isolated(
       subject, [&] { return import_mesh_memory_in_process(bytes, format_hint, subject); });
@@ -591,11 +537,9 @@ ImportedMesh import_mesh_memory_in_process(std::span<const uint8_t> bytes,
                                            const std::string& format_hint,
                                            const std::string& subject) {
   if (bytes.empty()) throw Error(subject, "is empty");
-  if (is_ply("." + format_hint)) {
-    const std::span<const char> chars(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-    if (std::optional<ImportedMesh> mesh = read_ply_triangles(chars, subject)) {
-      return std::move(*mesh);
-    }
+  const std::span<const char> chars(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  if (std::optional<ImportedMesh> mesh = read_natively(chars, "." + format_hint, subject, "")) {
+    return std::move(*mesh);
   }
   return import_with(subject, "", [&](Assimp::Importer& importer) {
     return importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags,
