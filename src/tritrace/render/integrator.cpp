@@ -11,8 +11,16 @@ void write_first_hit_aovs(const Scene& scene, std::span<const Ray> rays, std::sp
   for (size_t i = 0; i < hits.size(); ++i) {
     const Hit& h = hits[i];
     if (!out.albedo.empty()) {
-      out.albedo[i] =
-          h.found() ? scene.materials[scene.material_of(h.prim)].albedo : glm::vec3(0.0f);
+      glm::vec3 albedo(0.0f);
+      if (h.found()) {
+        const Material& m = scene.materials[scene.material_of(h.prim)];
+        albedo = m.albedo;
+        // Textured as the path tracer shades it (instanced triangles are untextured there too).
+        if (m.albedo_texture.present() && h.prim < scene.mesh.size()) {
+          albedo = textured(scene, m.albedo_texture, albedo, scene.mesh.uv(h.prim, h.u, h.v));
+        }
+      }
+      out.albedo[i] = albedo;
     }
     if (!out.normal.empty()) {
       glm::vec3 n(0.0f);

@@ -23,7 +23,7 @@ struct SampleBatch {
   std::span<Sampler> samplers{};
 };
 
-// Where an integrator writes: radiance always; the AOVs of the first hit (albedo, shading normal,
+// Where an integrator writes: radiance always; the AOVs of the first hit (albedo, geometric normal,
 // distance along the camera ray; zero where the ray escapes) when their spans are not empty.
 struct SampleOutput {
   std::span<glm::vec3> radiance{};
@@ -33,7 +33,8 @@ struct SampleOutput {
 };
 
 // Fills out's AOV spans (those not empty) from the camera rays' first hits: the hit material's
-// albedo, the geometric normal facing the ray, and the distance t; zero where a ray escapes.
+// albedo (its texture's value at the hit where it has one), the geometric normal facing the ray,
+// and the distance t; zero where a ray escapes.
 void write_first_hit_aovs(const Scene& scene, std::span<const Ray> rays, std::span<const Hit> hits,
                           const SampleOutput& out);
 

@@ -52,6 +52,7 @@ LightSampler::LightSampler(const Scene& scene) {
     light.index = prim;
     light.point = false;
     light.two_sided = m.two_sided;
+    light.textured = m.emission_texture.present();
     light.p0 = mesh.v0()[prim];
     light.e1 = mesh.e1()[prim];
     light.e2 = mesh.e2()[prim];
@@ -122,8 +123,8 @@ LightSample LightSampler::sample(const Scene& scene, glm::vec3 x, float u_select
   const float cos_light = std::abs(cos_out) / std::sqrt(dist2);
   if (!(cos_light > 0.0f)) return out;
   out.radiance = light.radiance;
-  const Material& m = scene.materials[scene.mesh.material()[light.index]];
-  if (m.emission_texture.present()) {
+  if (light.textured) {
+    const Material& m = scene.materials[scene.mesh.material()[light.index]];
     out.radiance =
         textured(scene, m.emission_texture, light.radiance, scene.mesh.uv(light.index, b.y, b.z));
   }

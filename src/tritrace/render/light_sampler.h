@@ -60,6 +60,7 @@ class LightSampler {
     bool point;
     bool environment;
     bool two_sided;
+    bool textured;  // its material has an emission texture
     glm::vec3 p0, e1, e2, normal;
     glm::vec3 radiance;   // Le, or a point light's intensity P / (4 pi)
     float pmf_over_area;  // the probability of choosing it, per unit area (triangles)

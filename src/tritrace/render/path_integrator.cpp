@@ -34,8 +34,8 @@ Scratch& thread_scratch() {
 // A point on triangle `tri` moved off it towards the side `n` (its normal, facing the way the ray
 // leaves), first towards the centroid (a point on an edge lies on the neighbour's plane too) then
 // off the surface, as the lab's shadow rays start (lab_integrator.cpp; Wächter and Binder 2019).
-glm::vec3 leave_surface(const SurfaceTriangle& tri, glm::vec3 x, glm::vec3 n,
-                        const RayOffsetParams& offset) {
+[[gnu::always_inline]] inline glm::vec3 leave_surface(const SurfaceTriangle& tri, glm::vec3 x,
+                                                      glm::vec3 n, const RayOffsetParams& offset) {
   const glm::vec3 e1 = tri.e1, e2 = tri.e2;
   const float extent = triangle_extent(e1, e2);
   const glm::vec3 inward = tri.v0 + (e1 + e2) / 3.0f - x;
@@ -50,14 +50,80 @@ float max_component(glm::vec3 c) {
   return std::max({c.x, c.y, c.z});
 }
 
+// A light sample's contribution at a vertex if nothing blocks its shadow ray: `throughput_f` is
+// the path's throughput times the BSDF value towards wi, `cos_theta` the cosine there, and
+// `bsdf_pdf()` the BSDF's density of wi (asked for only where MIS weighs the sample).
+template <class BsdfPdf>
+glm::vec3 light_contribution(const LightSample& ls, glm::vec3 throughput_f, float cos_theta,
+                             float dist2, bool mis, BsdfPdf&& bsdf_pdf) {
+  // A point light's intensity / r^2 is the irradiance normal to the light's direction.
+  if (ls.delta) return throughput_f * ls.radiance * (cos_theta / (dist2 * ls.pdf));
+  const float weight = mis ? power_heuristic(1.0f, ls.pdf, 1.0f, bsdf_pdf()) : 1.0f;
+  return throughput_f * ls.radiance * (cos_theta * weight / ls.pdf);
+}
+
+// The shadow rays of a bounce: the ray, the path that owns it and what it brings if unblocked.
+struct ShadowRays {
+  explicit ShadowRays(std::array<Ray, kMaxBatch>& storage) : rays(storage) {}
+
+  std::array<Ray, kMaxBatch>& rays;
+  std::array<uint16_t, kMaxBatch> owner;
+  std::array<glm::vec3, kMaxBatch> contribution;
+  size_t count = 0;
+
+  // Queues the ray from `from` (already off the surface at x, whose triangle's extent is
+  // `extent`) to the light sample `ls` in direction wi; where nothing fits between the two
+  // offsets, the contribution is added at once.
+  void add(const LightSample& ls, glm::vec3 wi, glm::vec3 from, float extent,
+           glm::vec3 contribution_if_unblocked, uint16_t path, glm::vec3& radiance,
+           const RayOffsetParams& offset) {
+    glm::vec3 end;
+    if (ls.delta) {
+      end = offset_ray_origin(ls.point, -wi, extent, offset);
+    } else if (ls.infinite) {
+      end = from + wi;  // only its direction is used: the ray runs to kRayTMax
+    } else {
+      const glm::vec3 light_side = glm::dot(ls.normal, wi) < 0.0f ? ls.normal : -ls.normal;
+      end = offset_ray_origin(ls.point, light_side, ls.extent, offset);
+    }
+    const glm::vec3 segment = end - from;
+    const float length = ls.infinite ? kRayTMax : std::sqrt(glm::dot(segment, segment));
+    if (!(length > 0.0f && glm::dot(segment, wi) > 0.0f)) {
+      radiance += contribution_if_unblocked;
+      return;
+    }
+    Ray& r = rays[count];
+    r.origin = from;
+    r.dir = ls.infinite ? wi : segment * (1.0f / length);
+    r.tmin = 0.0f;
+    r.tmax = length;
+    owner[count] = path;
+    contribution[count] = contribution_if_unblocked;
+    ++count;
+  }
+};
+
 }  // namespace
 
 PathIntegrator::PathIntegrator(const Scene& scene, const PathSettings& settings,
                                const RayOffsetParams& offset)
-    : settings_(settings), offset_(offset), lights_(scene) {}
+    : settings_(settings), offset_(offset), lights_(scene) {
+  plain_diffuse_ =
+      !scene.mesh.has_shading_normals() && scene.instances.empty() &&
+      std::all_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) {
+        return m.is_diffuse() && !m.albedo_texture.present() && !m.emission_texture.present();
+      });
+}
 
 uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& out,
                                   const Scene& scene, const Accel& accel) const {
+  return plain_diffuse_ ? trace<true>(batch, out, scene, accel)
+                        : trace<false>(batch, out, scene, accel);
+}
+
+template <bool kPlainDiffuse>
+uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out,
+                               const Scene& scene, const Accel& accel) const {
   const size_t n = batch.rays.size();
   assert(n <= kMaxBatch && batch.samplers.size() == n && out.radiance.size() == n);
   const TriangleMesh& mesh = scene.mesh;
@@ -68,15 +134,13 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
   // Meshes without vertex normals take exactly the flat-shading code below (the same images).
   // Instanced triangles (prim beyond scene.mesh) shade flat and untextured for now: the
   // prototypes' corner normals and texture coordinates are not moved to world space yet.
-  const bool mesh_smooth = mesh.has_shading_normals();
+  const bool mesh_smooth = !kPlainDiffuse && mesh.has_shading_normals();
 
   Scratch& scratch = thread_scratch();
   std::array<glm::vec3, kMaxBatch> throughput, origin_point;
   std::array<float, kMaxBatch> bsdf_pdf;
   std::array<uint16_t, kMaxBatch> path;  // active slot -> path index
-  // Shadow rays of the current vertex: their owner and what they bring if unblocked.
-  std::array<uint16_t, kMaxBatch> shadow_owner;
-  std::array<glm::vec3, kMaxBatch> shadow_contribution;
+  ShadowRays shadows(scratch.shadow_rays);
 
   for (size_t i = 0; i < n; ++i) {
     out.radiance[i] = glm::vec3(0.0f);
@@ -90,7 +154,8 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
   write_first_hit_aovs(scene, batch.rays, std::span<const Hit>(scratch.hits.data(), n), out);
 
   for (int depth = 0; active > 0; ++depth) {
-    size_t shadows = 0, next = 0;
+    shadows.count = 0;
+    size_t next = 0;
     for (size_t k = 0; k < active; ++k) {
       const Hit& hit = scratch.hits[k];
       const uint16_t i = path[k];
@@ -122,24 +187,25 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
 
       const uint32_t prim = hit.prim;
       // In world space: an instanced triangle is moved there here (Scene::triangle).
-      const SurfaceTriangle tri = scene.triangle(prim);
+      const SurfaceTriangle tri =
+          kPlainDiffuse ? stored_triangle(mesh, prim) : scene.triangle(prim);
       const Material& material = scene.materials[tri.material];
       const glm::vec3 x = tri.v0 + hit.u * tri.e1 + hit.v * tri.e2;
       const glm::vec3 wo = -scratch.rays[k].dir;
       const glm::vec3 n_lab = tri.normal;
-      const bool own = prim < mesh.size();  // not an instance's triangle
+      const bool own = kPlainDiffuse || prim < mesh.size();  // not an instance's triangle
       const bool smooth = mesh_smooth && own;
       // Texture coordinates only for a textured material.
       const auto uv = [&] { return own ? mesh.uv(prim, hit.u, hit.v) : glm::vec2(0.0f); };
 
       // Texture lookups only where a material has a texture: untextured scenes run as before.
       glm::vec3 albedo = material.albedo;
-      if (material.albedo_texture.present()) {
+      if (!kPlainDiffuse && material.albedo_texture.present()) {
         albedo = textured(scene, material.albedo_texture, albedo, uv());
       }
       if (material.emits()) {
         glm::vec3 le = emitted_radiance(material, n_lab, wo);
-        if (material.emission_texture.present()) {
+        if (!kPlainDiffuse && material.emission_texture.present()) {
           le = textured(scene, material.emission_texture, le, uv());
         }
         if (depth == 0) {
@@ -154,7 +220,7 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       }
       if (depth == settings_.max_depth) continue;
 
-      if (!material.is_diffuse()) {
+      if (!kPlainDiffuse && !material.is_diffuse()) {
         // Glossy and transparent surfaces, through their Bsdf. The lobe choice reuses the light's
         // choice number: light sampling adds its term and the bounce continues the path, so the
         // estimate's expectation is the sum of two expectations, each over a uniform number, and
@@ -181,45 +247,16 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
           // A direction on one side of the shading surface and the other of the geometric one
           // is neither a reflection nor a transmission: no light that way (pbrt-v3's rule).
           if (smooth && (wi_local.z >= 0.0f) != (glm::dot(wi, n_lab) >= 0.0f)) f = glm::vec3(0.0f);
-          const float cos_theta = std::abs(wi_local.z);
           if (ls.pdf > 0.0f && max_component(f) > 0.0f && max_component(ls.radiance) > 0.0f) {
             const glm::vec3 side = wi_local.z >= 0.0f ? n_lab : -n_lab;
             const glm::vec3 from = leave_surface(
                 tri, smooth ? terminator_safe_point(mesh, prim, hit.u, hit.v, x, side) : x, side,
                 offset_);
-            glm::vec3 contribution;
-            glm::vec3 end;
-            if (ls.delta) {
-              contribution = throughput[i] * f * ls.radiance * (cos_theta / (dist2 * ls.pdf));
-              end = offset_ray_origin(ls.point, -wi, triangle_extent(tri.e1, tri.e2), offset_);
-            } else if (ls.infinite) {
-              const float weight =
-                  mis ? power_heuristic(1.0f, ls.pdf, 1.0f, bsdf.pdf(wo_local, wi_local)) : 1.0f;
-              contribution = throughput[i] * f * ls.radiance * (cos_theta * weight / ls.pdf);
-              end = from + wi;  // only its direction is used: the ray runs to kRayTMax
-            } else {
-              const float weight =
-                  mis ? power_heuristic(1.0f, ls.pdf, 1.0f, bsdf.pdf(wo_local, wi_local)) : 1.0f;
-              contribution = throughput[i] * f * ls.radiance * (cos_theta * weight / ls.pdf);
-              const glm::vec3 light_side = glm::dot(ls.normal, wi) < 0.0f ? ls.normal : -ls.normal;
-              end = offset_ray_origin(ls.point, light_side,
-                                      triangle_extent(mesh.e1()[ls.prim], mesh.e2()[ls.prim]),
-                                      offset_);
-            }
-            const glm::vec3 segment = end - from;
-            const float length = ls.infinite ? kRayTMax : std::sqrt(glm::dot(segment, segment));
-            if (length > 0.0f && glm::dot(segment, wi) > 0.0f) {
-              Ray& r = scratch.shadow_rays[shadows];
-              r.origin = from;
-              r.dir = ls.infinite ? wi : segment * (1.0f / length);
-              r.tmin = 0.0f;
-              r.tmax = length;
-              shadow_owner[shadows] = i;
-              shadow_contribution[shadows] = contribution;
-              ++shadows;
-            } else {
-              out.radiance[i] += contribution;
-            }
+            const glm::vec3 contribution =
+                light_contribution(ls, throughput[i] * f, std::abs(wi_local.z), dist2, mis,
+                                   [&] { return bsdf.pdf(wo_local, wi_local); });
+            shadows.add(ls, wi, from, triangle_extent(tri.e1, tri.e2), contribution, i,
+                        out.radiance[i], offset_);
           }
         }
         const BsdfSample bs = bsdf.sample(wo_local, u_light, u_bsdf);
@@ -272,40 +309,11 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
         const glm::vec3 wi = ls.infinite ? ls.wi : to_light * (1.0f / dist);
         const float cos_theta = glm::dot(ns, wi);
         if (ls.pdf > 0.0f && dist > 0.0f && cos_theta > 0.0f && max_component(ls.radiance) > 0.0f) {
-          glm::vec3 contribution;
-          glm::vec3 end;
-          if (ls.delta) {
-            // Intensity / r^2 is the irradiance normal to the light's direction.
-            contribution = throughput[i] * f * ls.radiance * (cos_theta / (dist2 * ls.pdf));
-            end = offset_ray_origin(ls.point, -wi, triangle_extent(tri.e1, tri.e2), offset_);
-          } else if (ls.infinite) {
-            const float weight =
-                mis ? power_heuristic(1.0f, ls.pdf, 1.0f, cosine_hemisphere_pdf(cos_theta)) : 1.0f;
-            contribution = throughput[i] * f * ls.radiance * (cos_theta * weight / ls.pdf);
-            end = start + wi;  // only its direction is used: the ray runs to kRayTMax
-          } else {
-            const float weight =
-                mis ? power_heuristic(1.0f, ls.pdf, 1.0f, cosine_hemisphere_pdf(cos_theta)) : 1.0f;
-            contribution = throughput[i] * f * ls.radiance * (cos_theta * weight / ls.pdf);
-            const glm::vec3 light_side = glm::dot(ls.normal, wi) < 0.0f ? ls.normal : -ls.normal;
-            end =
-                offset_ray_origin(ls.point, light_side,
-                                  triangle_extent(mesh.e1()[ls.prim], mesh.e2()[ls.prim]), offset_);
-          }
-          const glm::vec3 segment = end - start;
-          const float length = ls.infinite ? kRayTMax : std::sqrt(glm::dot(segment, segment));
-          if (length > 0.0f && glm::dot(segment, wi) > 0.0f) {
-            Ray& r = scratch.shadow_rays[shadows];
-            r.origin = start;
-            r.dir = ls.infinite ? wi : segment * (1.0f / length);
-            r.tmin = 0.0f;
-            r.tmax = length;
-            shadow_owner[shadows] = i;
-            shadow_contribution[shadows] = contribution;
-            ++shadows;
-          } else {
-            out.radiance[i] += contribution;  // nothing fits between the offsets
-          }
+          const glm::vec3 contribution =
+              light_contribution(ls, throughput[i] * f, cos_theta, dist2, mis,
+                                 [&] { return cosine_hemisphere_pdf(cos_theta); });
+          shadows.add(ls, wi, start, triangle_extent(tri.e1, tri.e2), contribution, i,
+                      out.radiance[i], offset_);
         }
       }
 
@@ -334,12 +342,12 @@ uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
       ++next;
     }
 
-    if (shadows > 0) {
-      accel.occluded_incoherent(std::span<const Ray>(scratch.shadow_rays.data(), shadows),
-                                std::span(scratch.blocked).first(shadows));
-      traced += shadows;
-      for (size_t s = 0; s < shadows; ++s) {
-        if (!scratch.blocked[s]) out.radiance[shadow_owner[s]] += shadow_contribution[s];
+    if (shadows.count > 0) {
+      accel.occluded_incoherent(std::span<const Ray>(scratch.shadow_rays.data(), shadows.count),
+                                std::span(scratch.blocked).first(shadows.count));
+      traced += shadows.count;
+      for (size_t s = 0; s < shadows.count; ++s) {
+        if (!scratch.blocked[s]) out.radiance[shadows.owner[s]] += shadows.contribution[s];
       }
     }
     active = next;

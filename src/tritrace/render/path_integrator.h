@@ -39,9 +39,16 @@ class PathIntegrator final : public Integrator {
   const PathSettings& settings() const { return settings_; }
 
  private:
+  // The path tracer for the scene's kind: kPlainDiffuse leaves out what diffuse scenes without
+  // textures, vertex normals or instances never take (the branches cost a few percent per vertex).
+  template <bool kPlainDiffuse>
+  uint64_t trace(const SampleBatch& batch, const SampleOutput& out, const Scene& scene,
+                 const Accel& accel) const;
+
   PathSettings settings_;
   RayOffsetParams offset_;
   LightSampler lights_;
+  bool plain_diffuse_ = false;  // every material diffuse and untextured, flat shading, no instances
 };
 
 }  // namespace tritrace

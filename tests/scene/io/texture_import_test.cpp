@@ -18,6 +18,7 @@
 #include "tritrace/accel/brute_force.h"
 #include "tritrace/accel/bvh/bvh_accel.h"
 #include "tritrace/error.h"
+#include "tritrace/render/film.h"
 #include "tritrace/render/path_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/io/mesh_import.h"
@@ -108,6 +109,11 @@ TEST_F(TexturedFiles, ObjQuadShowsItsMapKdTexels) {
   const BvhAccel accel(scene.mesh, kDefaultKernel);
   const PathIntegrator integrator(scene);
   const Image image = render(scene, accel, integrator, {.spp = 16, .seed = 1});
+  // The first-hit albedo AOV shows the texture too: the mean over the pixel's camera rays, so the
+  // bilinear value at its centre as for the radiance, without the noise.
+  Film film(32, 32, AovSet{.albedo = true});
+  render_to_film(scene, accel, integrator, film, {.spp = 16, .seed = 1});
+  const Image albedo = film.resolve_albedo();
   int checked = 0;
   for (int y = 0; y < 32; ++y) {
     for (int x = 0; x < 32; ++x) {
@@ -118,6 +124,7 @@ TEST_F(TexturedFiles, ObjQuadShowsItsMapKdTexels) {
       const glm::dvec3 want = bilinear_repeat(rgb, 4, 4, (px + 1) / 2, (py + 1) / 2);
       for (int c = 0; c < 3; ++c) {
         EXPECT_NEAR(image.at(x, y)[c], want[c], 0.02) << x << "," << y << " channel " << c;
+        EXPECT_NEAR(albedo.at(x, y)[c], want[c], 0.02) << "albedo AOV " << x << "," << y;
       }
       ++checked;
     }

@@ -1,9 +1,12 @@
-// fork, pipe and waitpid. The child writes one status byte, then either the result or an error's
-// subject, reason and exit code, each length-prefixed; it leaves with _exit so that nothing of the
-// parent (stdio buffers, atexit handlers) runs twice.
+// memfd_create, fork and waitpid. The child writes one status byte, then either the result or an
+// error's subject, reason and exit code, each length-prefixed, into the memfd; it leaves with _exit
+// so that nothing of the parent (stdio buffers, atexit handlers) runs twice. Once it has exited,
+// the parent maps what it wrote.
 #include "tritrace/scene/io/isolated_call.h"
 
+#include <sys/mman.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -11,6 +14,8 @@
 #include <csignal>
 #include <cstring>
 #include <new>
+#include <span>
+#include <utility>
 
 #include "tritrace/error.h"
 
@@ -47,7 +52,20 @@ constexpr bool kSanitized = false;
 constexpr bool kSanitized = false;
 #endif
 
-[[noreturn]] void child(int fd, const std::function<std::vector<uint8_t>()>& work,
+// The result at the start of the memfd: status, size, bytes (the layout write_blob gives).
+bool write_result(int fd, const IsolatedOutput& result) {
+  const uint64_t total = 1 + sizeof(uint64_t) + result.size;
+  if (::ftruncate(fd, static_cast<off_t>(total)) != 0) return false;
+  void* mapping = ::mmap(nullptr, total, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+  if (mapping == MAP_FAILED) return false;
+  auto* out = static_cast<uint8_t*>(mapping);
+  std::memcpy(out + 1, &result.size, sizeof(uint64_t));
+  result.write(out + 1 + sizeof(uint64_t));
+  out[0] = kResult;  // last: an exception in write() leaves the status to the handler below
+  return ::munmap(mapping, total) == 0;
+}
+
+[[noreturn]] void child(int fd, const std::function<IsolatedOutput()>& work,
                         uint64_t memory_limit) {
   // Sanitizers reserve terabytes of address space for their shadow memory, so an address-space
   // limit would fail every allocation; sanitized builds run without it.
@@ -57,9 +75,7 @@ constexpr bool kSanitized = false;
   }
   bool ok = true;
   try {
-    const std::vector<uint8_t> result = work();
-    const uint8_t status = kResult;
-    ok = write_all(fd, &status, 1) && write_blob(fd, result.data(), result.size());
+    ok = write_result(fd, work());
   } catch (const Error& e) {
     const uint8_t status = kError;
     const int32_t code = static_cast<int32_t>(e.exit_code());
@@ -78,56 +94,72 @@ constexpr bool kSanitized = false;
 
 class Reader {
  public:
-  explicit Reader(const std::vector<uint8_t>& bytes) : bytes_(bytes) {}
+  explicit Reader(std::span<const uint8_t> bytes) : bytes_(bytes) {}
   bool take(void* out, size_t n) {
     if (bytes_.size() - pos_ < n) return false;
     std::memcpy(out, bytes_.data() + pos_, n);
     pos_ += n;
     return true;
   }
-  bool blob(std::vector<uint8_t>& out) {
+  // The next length-prefixed blob: its offset and size in the bytes.
+  bool blob(size_t& offset, size_t& size) {
     uint64_t n = 0;
     if (!take(&n, sizeof(n)) || bytes_.size() - pos_ < n) return false;
-    out.assign(bytes_.begin() + static_cast<ptrdiff_t>(pos_),
-               bytes_.begin() + static_cast<ptrdiff_t>(pos_ + n));
-    pos_ += n;
+    offset = pos_;
+    size = static_cast<size_t>(n);
+    pos_ += size;
     return true;
+  }
+  std::string text(size_t offset, size_t size) const {
+    return std::string(reinterpret_cast<const char*>(bytes_.data()) + offset, size);
   }
 
  private:
-  const std::vector<uint8_t>& bytes_;
+  std::span<const uint8_t> bytes_;
   size_t pos_ = 0;
+};
+
+// Closes the memfd and unmaps it on every way out of call_isolated but the result's.
+struct Handover {
+  int fd = -1;
+  const uint8_t* mapping = nullptr;
+  size_t size = 0;
+  ~Handover() {
+    if (mapping != nullptr) ::munmap(const_cast<uint8_t*>(mapping), size);
+    if (fd >= 0) ::close(fd);
+  }
 };
 
 }  // namespace
 
-std::vector<uint8_t> call_isolated(const std::string& subject,
-                                   const std::function<std::vector<uint8_t>()>& work,
-                                   uint64_t memory_limit_bytes) {
-  int fds[2];
-  if (::pipe(fds) != 0)
-    throw Error(subject, std::string("cannot create a pipe: ") + std::strerror(errno));
+IsolatedResult& IsolatedResult::operator=(IsolatedResult&& other) noexcept {
+  if (this != &other) {
+    if (mapping_ != nullptr) ::munmap(const_cast<uint8_t*>(mapping_), mapping_size_);
+    mapping_ = std::exchange(other.mapping_, nullptr);
+    mapping_size_ = std::exchange(other.mapping_size_, 0);
+    offset_ = std::exchange(other.offset_, 0);
+    size_ = std::exchange(other.size_, 0);
+  }
+  return *this;
+}
+
+IsolatedResult::~IsolatedResult() {
+  if (mapping_ != nullptr) ::munmap(const_cast<uint8_t*>(mapping_), mapping_size_);
+}
+
+IsolatedResult call_isolated(const std::string& subject,
+                             const std::function<IsolatedOutput()>& work,
+                             uint64_t memory_limit_bytes) {
+  Handover shared;
+  shared.fd = ::memfd_create("tritrace-import", MFD_CLOEXEC);
+  if (shared.fd < 0) {
+    throw Error(subject, std::string("cannot create shared memory: ") + std::strerror(errno));
+  }
   const pid_t pid = ::fork();
   if (pid < 0) {
-    const int err = errno;
-    ::close(fds[0]);
-    ::close(fds[1]);
-    throw Error(subject, std::string("cannot start the importer process: ") + std::strerror(err));
+    throw Error(subject, std::string("cannot start the importer process: ") + std::strerror(errno));
   }
-  if (pid == 0) {
-    ::close(fds[0]);
-    child(fds[1], work, memory_limit_bytes);
-  }
-  ::close(fds[1]);
-  std::vector<uint8_t> bytes;
-  uint8_t buffer[1 << 16];
-  for (;;) {
-    const ssize_t n = ::read(fds[0], buffer, sizeof(buffer));
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    bytes.insert(bytes.end(), buffer, buffer + n);
-  }
-  ::close(fds[0]);
+  if (pid == 0) child(shared.fd, work, memory_limit_bytes);
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
@@ -135,21 +167,39 @@ std::vector<uint8_t> call_isolated(const std::string& subject,
     throw Error(subject, std::string("cannot import: the importer crashed (") +
                              strsignal(WTERMSIG(status)) + ")");
   }
-  Reader in(bytes);
-  uint8_t kind = 0;
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || !in.take(&kind, 1)) {
+  struct stat info {};
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || ::fstat(shared.fd, &info) != 0 ||
+      info.st_size <= 0) {
     throw Error(subject, "cannot import: the importer process failed");
   }
-  std::vector<uint8_t> result;
+  shared.size = static_cast<size_t>(info.st_size);
+  // MAP_POPULATE: the pages exist already (the child wrote them); map them all at once rather
+  // than fault them in one by one while the result is read.
+  void* mapping = ::mmap(nullptr, shared.size, PROT_READ, MAP_SHARED | MAP_POPULATE, shared.fd, 0);
+  if (mapping == MAP_FAILED) {
+    throw Error(subject, std::string("cannot map the importer's result: ") + std::strerror(errno));
+  }
+  shared.mapping = static_cast<const uint8_t*>(mapping);
+  Reader in(std::span(shared.mapping, shared.size));
+  uint8_t kind = 0;
+  if (!in.take(&kind, 1)) throw Error(subject, "cannot import: the importer process failed");
+  size_t offset = 0, size = 0;
   switch (kind) {
     case kResult:
-      if (!in.blob(result)) break;
-      return result;
+      if (!in.blob(offset, size)) break;
+      {
+        IsolatedResult result(shared.mapping, shared.size, offset, size);
+        shared.mapping = nullptr;  // the result unmaps it
+        return result;
+      }
     case kError: {
-      std::vector<uint8_t> who, why;
+      size_t who_offset = 0, who_size = 0, why_offset = 0, why_size = 0;
       int32_t code = 1;
-      if (!in.blob(who) || !in.blob(why) || !in.take(&code, sizeof(code))) break;
-      throw Error(std::string(who.begin(), who.end()), std::string(why.begin(), why.end()),
+      if (!in.blob(who_offset, who_size) || !in.blob(why_offset, why_size) ||
+          !in.take(&code, sizeof(code))) {
+        break;
+      }
+      throw Error(in.text(who_offset, who_size), in.text(why_offset, why_size),
                   code == 2 ? ExitCode::kUsage : ExitCode::kRuntime);
     }
     case kOutOfMemory:

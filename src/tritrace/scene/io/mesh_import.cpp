@@ -20,7 +20,9 @@
 #include <functional>
 #include <iterator>
 #include <map>
+#include <memory>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <utility>
 
@@ -378,25 +380,38 @@ bool is_ply(const std::string& path) {
 }
 
 // ImportedMesh to bytes and back, for the trip from the importer process.
+// Writes values one after another at `out`, or only counts their bytes when `out` is null: the
+// first of two passes (the size, then the bytes straight into the memory shared with the parent).
 class Bytes {
  public:
+  explicit Bytes(uint8_t* out = nullptr) : out_(out) {}
   template <typename T>
   void put(const T& value) {
-    const auto* p = reinterpret_cast<const uint8_t*>(&value);
-    out.insert(out.end(), p, p + sizeof(T));
+    put_raw(&value, sizeof(T));
+  }
+  template <typename T>
+  void put_array(std::span<const T> values) {
+    put<uint64_t>(values.size());
+    put_raw(values.data(), values.size_bytes());
   }
   template <typename T>
   void put_array(const std::vector<T>& values) {
-    put<uint64_t>(values.size());
-    const auto* p = reinterpret_cast<const uint8_t*>(values.data());
-    out.insert(out.end(), p, p + values.size() * sizeof(T));
+    put_array(std::span<const T>(values));
   }
-  std::vector<uint8_t> out;
+  uint64_t size() const { return size_; }
+
+ private:
+  void put_raw(const void* p, size_t n) {
+    if (out_ != nullptr && n > 0) std::memcpy(out_ + size_, p, n);
+    size_ += n;
+  }
+  uint8_t* out_;
+  uint64_t size_ = 0;
 };
 
 class Unbytes {
  public:
-  explicit Unbytes(const std::vector<uint8_t>& bytes) : in_(bytes) {}
+  explicit Unbytes(std::span<const uint8_t> bytes) : in_(bytes) {}
   template <typename T>
   T get() {
     T value{};
@@ -420,18 +435,18 @@ class Unbytes {
   void need(size_t n) const {
     if (in_.size() - pos_ < n) throw std::runtime_error("truncated");
   }
-  const std::vector<uint8_t>& in_;
+  std::span<const uint8_t> in_;
   size_t pos_ = 0;
 };
 
-std::vector<uint8_t> to_bytes(const ImportedMesh& mesh) {
-  Bytes b;
+void put_mesh(const ImportedMesh& mesh, Bytes& b) {
   b.put_array(mesh.corners);
   b.put_array(mesh.material);
   b.put_array(mesh.materials);
   b.put<uint64_t>(mesh.material_names.size());
-  for (const std::string& name : mesh.material_names)
-    b.put_array(std::vector<char>(name.begin(), name.end()));
+  for (const std::string& name : mesh.material_names) {
+    b.put_array(std::span<const char>(name.data(), name.size()));
+  }
   b.put<uint64_t>(mesh.meshes);
   b.put_array(mesh.normals);
   b.put_array(mesh.uvs);
@@ -441,10 +456,9 @@ std::vector<uint8_t> to_bytes(const ImportedMesh& mesh) {
     b.put<int32_t>(t.height);
     b.put_array(t.rgb);
   }
-  return std::move(b.out);
 }
 
-ImportedMesh from_bytes(const std::vector<uint8_t>& bytes, const std::string& subject) {
+ImportedMesh from_bytes(std::span<const uint8_t> bytes, const std::string& subject) {
   try {
     Unbytes in(bytes);
     ImportedMesh mesh;
@@ -499,9 +513,20 @@ uint64_t importer_memory_limit() {
 }
 
 ImportedMesh import_isolated(const std::string& subject, const std::function<ImportedMesh()>& fn) {
-  return from_bytes(call_isolated(
-                        subject, [&] { return to_bytes(fn()); }, importer_memory_limit()),
-                    subject);
+  // The mesh lives in the child until it has written it out (the lambda's copy of the shared_ptr).
+  const IsolatedResult result = call_isolated(
+      subject,
+      [&] {
+        auto mesh = std::make_shared<const ImportedMesh>(fn());
+        Bytes counter;
+        put_mesh(*mesh, counter);
+        return IsolatedOutput{counter.size(), [mesh](uint8_t* out) {
+                                Bytes b(out);
+                                put_mesh(*mesh, b);
+                              }};
+      },
+      importer_memory_limit());
+  return from_bytes(result.bytes(), subject);
 }
 
 }  // namespace
