@@ -2,6 +2,7 @@
 // after the next draw time has passed, so most calls cost one clock read and one compare.
 #include "progress.h"
 
+#include <algorithm>
 #include <utility>
 
 namespace tritrace::cli {
@@ -65,8 +66,8 @@ void ProgressBar::draw(int done, int total, int64_t now) noexcept {
   std::fflush(out_);
 }
 
-PhaseLine::PhaseLine(std::FILE* out, bool enabled, std::string what)
-    : out_(out), what_(std::move(what)), start_ns_(now_ns()) {
+PhaseLine::PhaseLine(std::FILE* out, bool enabled, std::string what, const LoadProgress* progress)
+    : out_(out), what_(std::move(what)), progress_(progress), start_ns_(now_ns()) {
   if (enabled) thread_ = std::thread([this] { run(); });
 }
 
@@ -83,8 +84,12 @@ void PhaseLine::done() noexcept {
   wake_.notify_one();
   thread_.join();
   if (shown_) {
-    std::fprintf(out_, "\r%s  %.1f s          \n", what_.c_str(),
-                 static_cast<double>(now_ns() - start_ns_) * 1e-9);
+    char seconds[32];
+    std::snprintf(seconds, sizeof seconds, "  %.1f s",
+                  static_cast<double>(now_ns() - start_ns_) * 1e-9);
+    const std::string line = what_ + seconds;
+    std::fprintf(out_, "\r%s%*s\n", line.c_str(),
+                 static_cast<int>(drawn_ > line.size() ? drawn_ - line.size() : 0), "");
     std::fflush(out_);
   }
 }
@@ -95,9 +100,19 @@ void PhaseLine::run() {
     return;
   }
   do {
-    std::fprintf(out_, "\r%s  %.1f s ", what_.c_str(),
-                 static_cast<double>(now_ns() - start_ns_) * 1e-9);
+    std::string line = what_;
+    if (progress_ != nullptr) {
+      const std::string step = progress_->describe();
+      if (!step.empty()) line += "  " + step;
+    }
+    char seconds[32];
+    std::snprintf(seconds, sizeof seconds, "  %.1f s",
+                  static_cast<double>(now_ns() - start_ns_) * 1e-9);
+    line += seconds;
+    std::fprintf(out_, "\r%s%*s", line.c_str(),
+                 static_cast<int>(drawn_ > line.size() ? drawn_ - line.size() : 0), "");
     std::fflush(out_);
+    drawn_ = std::max(drawn_, line.size());
     shown_ = true;
   } while (!wake_.wait_for(lock, std::chrono::nanoseconds(kIntervalNs), [this] { return stop_; }));
 }

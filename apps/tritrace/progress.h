@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "tritrace/render/renderer.h"
+#include "tritrace/scene/io/load_progress.h"
 
 namespace tritrace::cli {
 
@@ -44,11 +45,12 @@ class ProgressBar final : public RenderProgress {
 
 // A phase before the render (loading the scene, building the BVH), which can take seconds on big
 // models: on a terminal, once it has run for kPhaseDelay, one line `building BVH  1.3 s` redrawn
-// by a thread of its own every tenth of a second, and finished with the phase's total time when
-// it ends. Nothing when `enabled` is false (not a terminal, or --quiet).
+// by a thread of its own every tenth of a second, with what `progress` says in between when given
+// (`loading big.ply  parsing 43%  1.3 s`), and finished with the phase's total time when it
+// ends. Nothing when `enabled` is false (not a terminal, or --quiet).
 class PhaseLine final {
  public:
-  PhaseLine(std::FILE* out, bool enabled, std::string what);
+  PhaseLine(std::FILE* out, bool enabled, std::string what, const LoadProgress* progress = nullptr);
   PhaseLine(const PhaseLine&) = delete;
   PhaseLine& operator=(const PhaseLine&) = delete;
   ~PhaseLine();
@@ -59,7 +61,9 @@ class PhaseLine final {
 
   std::FILE* out_;
   std::string what_;
+  const LoadProgress* progress_;
   int64_t start_ns_;
+  size_t drawn_ = 0;  // characters of the last line drawn, to blank what a shorter one leaves
   std::mutex mutex_;
   std::condition_variable wake_;
   bool stop_ = false;

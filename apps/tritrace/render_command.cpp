@@ -20,6 +20,7 @@
 #include "tritrace/render/make_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/io/load_progress.h"
 #include "tritrace/scene/io/scene_loader.h"
 #include "tritrace/scene/procedural.h"
 
@@ -241,8 +242,12 @@ int run_render(const RenderArgs& args) {
   render_options.threads = thread_count(args.scene);
 
   const bool terminal = !args.quiet && ::isatty(STDERR_FILENO);
-  PhaseLine loading(stderr, terminal, loading_phase(args.scene));
-  const LoadedScene loaded = load_scene_from(args.scene, overrides);
+  LoadProgress load_progress;
+  PhaseLine loading(stderr, terminal, loading_phase(args.scene), &load_progress);
+  const LoadedScene loaded = [&] {
+    const LoadProgressScope report(&load_progress);
+    return load_scene_from(args.scene, overrides);
+  }();
   loading.done();
   const std::string output =
       args.output_given ? args.output : default_output(args.scene.file, loaded);

@@ -36,6 +36,7 @@
 #include "tritrace/render/film.h"
 #include "tritrace/render/make_integrator.h"
 #include "tritrace/render/renderer.h"
+#include "tritrace/scene/io/load_progress.h"
 #include "tritrace/scene/io/scene_loader.h"
 #include "view_state.h"
 
@@ -233,10 +234,16 @@ class Viewer {
     Clock::time_point phase_start = Clock::now();
     std::exception_ptr error;
     std::atomic<bool> done{false};
+    std::atomic<bool> building{false};
+    LoadProgress load_progress;
     const Uint32 wake = SDL_RegisterEvents(1);
     std::thread worker([&] {
       try {
-        loaded_ = cli::load_scene_from(options_.scene, overrides);
+        {
+          const LoadProgressScope report(&load_progress);
+          loaded_ = cli::load_scene_from(options_.scene, overrides);
+        }
+        building = true;
         {
           const std::lock_guard<std::mutex> lock(mutex);
           phase =
@@ -262,7 +269,9 @@ class Viewer {
         char seconds[32];
         std::snprintf(seconds, sizeof seconds, "  %.1f s",
                       seconds_since(phase_start, Clock::now()));
-        line = phase + seconds;
+        // The loading step and how far it is, as `tritrace render`'s phase line shows it.
+        const std::string step = building ? std::string() : load_progress.describe();
+        line = phase + (step.empty() ? "" : "  " + step) + seconds;
       }
       SDL_SetWindowTitle(window_.get(), ("tritrace \u2014 " + line).c_str());
       SDL_Renderer* r = renderer_.get();

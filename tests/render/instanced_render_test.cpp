@@ -2,11 +2,15 @@
 // integrators, bit for bit, where the transforms make the arithmetic exact.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstring>
+#include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
 #include <vector>
 
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/dist/partial_film.h"
+#include "tritrace/render/film.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/path_integrator.h"
 #include "tritrace/render/renderer.h"
@@ -82,6 +86,65 @@ TEST(InstancedRender, PathImageIsTheFlattenedScenesBitForBit) {
   const Image want = render(flat, *flat_accel, pt_flat, options);
   const auto accel = make_accel(AccelKind::kBvh, s, kDefaultKernel);
   EXPECT_TRUE(same_bits(want, render(s, *accel, pt, options)));
+}
+
+// The same scene with vertex normals bent away from the face normals and texture coordinates on
+// every mesh (the scene's own and the prototypes), the blocks' materials textured: instances
+// shade smooth and textured as their flattened copies do, the normals moved by the inverse
+// transpose of each transform (mirrored and scaled here).
+Scene smooth_textured(Scene s) {
+  auto bend = [](TriangleMesh& m) {
+    TriangleMesh out;
+    for (uint32_t i = 0; i < m.size(); ++i) {
+      std::array<glm::vec3, 3> normals;
+      std::array<glm::vec2, 3> uvs;
+      for (int k = 0; k < 3; ++k) {
+        const glm::vec3 p = m.vertex(i, k);
+        normals[static_cast<size_t>(k)] = glm::normalize(m.normal()[i] + 0.4f * glm::sin(3.0f * p));
+        uvs[static_cast<size_t>(k)] = glm::vec2(p.x + 0.3f * p.z, p.y - 0.2f * p.z);
+      }
+      out.add(m.vertex(i, 0), m.vertex(i, 1), m.vertex(i, 2), m.material()[i], &normals, &uvs);
+    }
+    m = out;
+  };
+  bend(s.mesh);
+  for (TriangleMesh& p : s.prototypes) bend(p);
+  TextureImage image{.width = 4, .height = 3, .rgb = {}};
+  for (int k = 0; k < 36; ++k) image.rgb.push_back(static_cast<uint8_t>(40 + 37 * k % 200));
+  s.textures = {Texture::from_srgb8(image)};
+  for (const TriangleMesh& p : s.prototypes) {
+    for (uint32_t m : p.material()) s.materials[m].albedo_texture.index = 0;
+  }
+  return s;
+}
+
+TEST(InstancedRender, SmoothTexturedPathImageIsTheFlattenedScenesBitForBit) {
+  const Scene s =
+      smooth_textured(instanced_lab_box(make_cornell_area({.width = 40, .height = 30})));
+  ASSERT_TRUE(s.smooth(s.instances.back().first_prim));
+  const Scene flat = flattened(s);
+  ASSERT_TRUE(flat.mesh.has_shading_normals() && flat.mesh.has_uvs());
+  const PathIntegrator pt_flat(flat), pt(s);
+  const auto flat_accel = make_accel(AccelKind::kBvh, flat, kDefaultKernel);
+  const RenderOptions options{.spp = 8, .seed = 5};
+  Film want(40, 30, AovSet{.albedo = true}), got(40, 30, AovSet{.albedo = true});
+  render_to_film(flat, *flat_accel, pt_flat, want, options);
+  const auto accel = make_accel(AccelKind::kBvh, s, kDefaultKernel);
+  render_to_film(s, *accel, pt, got, options);
+  EXPECT_TRUE(same_bits(want.resolve(), got.resolve()));
+  EXPECT_TRUE(same_bits(want.resolve_albedo(), got.resolve_albedo()));
+  // The normals and the texture show: the instanced scene without them renders otherwise.
+  Scene plain = s;
+  for (TriangleMesh& p : plain.prototypes) {
+    TriangleMesh bare;
+    for (uint32_t i = 0; i < p.size(); ++i) {
+      bare.add(p.vertex(i, 0), p.vertex(i, 1), p.vertex(i, 2), p.material()[i]);
+    }
+    p = bare;
+  }
+  const auto plain_accel = make_accel(AccelKind::kBvh, plain, kDefaultKernel);
+  EXPECT_FALSE(
+      same_bits(got.resolve(), render(plain, *plain_accel, PathIntegrator(plain), options)));
 }
 
 // Parts of one render are merged only when their identities agree: an instance's transform or a

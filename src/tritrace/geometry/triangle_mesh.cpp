@@ -1,23 +1,33 @@
 // TriangleMesh construction and queries.
 #include "tritrace/geometry/triangle_mesh.h"
 
+#include <cassert>
 #include <cmath>
 #include <glm/glm.hpp>
 
 namespace tritrace {
 
+namespace {
+
+// The unit normal add() and set() store: the lab's cross(e2, e1), or zero for no area.
+glm::vec3 face_normal(const glm::vec3& e1, const glm::vec3& e2) {
+  const glm::vec3 n = glm::cross(e2, e1);
+  const float len = glm::length(n);
+  return len > 0.0f ? n / len : glm::vec3(0.0f);
+}
+
+}  // namespace
+
 void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,
                        uint32_t material) {
   const glm::vec3 e1 = b - a;
   const glm::vec3 e2 = c - a;
-  const glm::vec3 n = glm::cross(e2, e1);
-  const float len = glm::length(n);
   v0_.push_back(a);
   v1_.push_back(b);
   v2_.push_back(c);
   e1_.push_back(e1);
   e2_.push_back(e2);
-  normal_.push_back(len > 0.0f ? n / len : glm::vec3(0.0f));
+  normal_.push_back(face_normal(e1, e2));
   material_.push_back(material);
   if (!corner_normals_.empty()) corner_normals_.insert(corner_normals_.end(), 3, normal_.back());
   if (!corner_uvs_.empty()) corner_uvs_.insert(corner_uvs_.end(), 3, glm::vec2(0.0f));
@@ -70,6 +80,36 @@ void TriangleMesh::reserve(size_t triangles) {
   material_.reserve(triangles);
   if (!corner_normals_.empty()) corner_normals_.reserve(3 * triangles);
   if (!corner_uvs_.empty()) corner_uvs_.reserve(3 * triangles);
+}
+
+void TriangleMesh::resize(size_t triangles, bool corner_normals, bool corner_uvs) {
+  for (auto* v : {&v0_, &v1_, &v2_, &e1_, &e2_, &normal_}) v->resize(triangles);
+  material_.resize(triangles);
+  corner_normals_.resize(corner_normals ? 3 * triangles : 0);
+  corner_uvs_.resize(corner_uvs ? 3 * triangles : 0);
+}
+
+void TriangleMesh::set(size_t i, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,
+                       uint32_t material, const std::array<glm::vec3, 3>* normals,
+                       const std::array<glm::vec2, 3>* uvs) {
+  assert(i < size() && (normals == nullptr || has_shading_normals()) &&
+         (uvs == nullptr || has_uvs()));
+  const glm::vec3 e1 = b - a;
+  const glm::vec3 e2 = c - a;
+  v0_[i] = a;
+  v1_[i] = b;
+  v2_[i] = c;
+  e1_[i] = e1;
+  e2_[i] = e2;
+  normal_[i] = face_normal(e1, e2);
+  material_[i] = material;
+  if (has_shading_normals()) {
+    for (size_t k = 0; k < 3; ++k)
+      corner_normals_[3 * i + k] = normals ? (*normals)[k] : normal_[i];
+  }
+  if (has_uvs()) {
+    for (size_t k = 0; k < 3; ++k) corner_uvs_[3 * i + k] = uvs ? (*uvs)[k] : glm::vec2(0.0f);
+  }
 }
 
 void TriangleMesh::append(const TriangleMesh& other, uint32_t material_offset) {

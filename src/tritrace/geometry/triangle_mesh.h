@@ -34,6 +34,13 @@ class TriangleMesh {
   void append(const TriangleMesh& other, uint32_t material_offset);
 
   void reserve(size_t triangles);
+  // Room for exactly `triangles` triangles (with corner normals, with corner texture coordinates),
+  // each then filled by set(): how a loader adds many triangles in parallel instead of add().
+  void resize(size_t triangles, bool corner_normals, bool corner_uvs);
+  // Stores triangle i exactly as add() with the same arguments would have (normals and uvs may be
+  // given only when resize() made room for them).
+  void set(size_t i, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, uint32_t material,
+           const std::array<glm::vec3, 3>* normals, const std::array<glm::vec2, 3>* uvs);
   size_t size() const { return v0_.size(); }
   bool empty() const { return v0_.empty(); }
 

@@ -15,9 +15,9 @@ void write_first_hit_aovs(const Scene& scene, std::span<const Ray> rays, std::sp
       if (h.found()) {
         const Material& m = scene.materials[scene.material_of(h.prim)];
         albedo = m.albedo;
-        // Textured as the path tracer shades it (instanced triangles are untextured there too).
-        if (m.albedo_texture.present() && h.prim < scene.mesh.size()) {
-          albedo = textured(scene, m.albedo_texture, albedo, scene.mesh.uv(h.prim, h.u, h.v));
+        // Textured as the path tracer shades it.
+        if (m.albedo_texture.present()) {
+          albedo = textured(scene, m.albedo_texture, albedo, scene.uv(h.prim, h.u, h.v));
         }
       }
       out.albedo[i] = albedo;

@@ -132,9 +132,6 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
   const bool light_finds_triangles = settings_.strategy != PathSettings::Strategy::kBsdfOnly;
   const bool bsdf_finds_lights = settings_.strategy != PathSettings::Strategy::kLightOnly;
   // Meshes without vertex normals take exactly the flat-shading code below (the same images).
-  // Instanced triangles (prim beyond scene.mesh) shade flat and untextured for now: the
-  // prototypes' corner normals and texture coordinates are not moved to world space yet.
-  const bool mesh_smooth = !kPlainDiffuse && mesh.has_shading_normals();
 
   Scratch& scratch = thread_scratch();
   std::array<glm::vec3, kMaxBatch> throughput, origin_point;
@@ -193,10 +190,13 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       const glm::vec3 x = tri.v0 + hit.u * tri.e1 + hit.v * tri.e2;
       const glm::vec3 wo = -scratch.rays[k].dir;
       const glm::vec3 n_lab = tri.normal;
-      const bool own = kPlainDiffuse || prim < mesh.size();  // not an instance's triangle
-      const bool smooth = mesh_smooth && own;
+      // An instance's triangles shade smooth where its prototype has vertex normals, with the
+      // corners moved to world space (Scene::corners).
+      const bool smooth = !kPlainDiffuse && scene.smooth(prim);
+      SmoothCorners corners;
+      if (smooth) corners = scene.corners(prim);
       // Texture coordinates only for a textured material.
-      const auto uv = [&] { return own ? mesh.uv(prim, hit.u, hit.v) : glm::vec2(0.0f); };
+      const auto uv = [&] { return scene.uv(prim, hit.u, hit.v); };
 
       // Texture lookups only where a material has a texture: untextured scenes run as before.
       glm::vec3 albedo = material.albedo;
@@ -230,7 +230,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
         // surfaces (then the lobes, which decide inside and outside by wo, would be told wrong).
         glm::vec3 n_shade = n_lab;
         if (smooth) {
-          const glm::vec3 ns = oriented_shading_normal(mesh, prim, hit.u, hit.v, n_lab);
+          const glm::vec3 ns = oriented_shading_normal(corners, hit.u, hit.v, n_lab);
           if ((glm::dot(wo, ns) >= 0.0f) == (glm::dot(wo, n_lab) >= 0.0f)) n_shade = ns;
         }
         const Frame frame = Frame::from_normal(n_shade);
@@ -250,7 +250,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
           if (ls.pdf > 0.0f && max_component(f) > 0.0f && max_component(ls.radiance) > 0.0f) {
             const glm::vec3 side = wi_local.z >= 0.0f ? n_lab : -n_lab;
             const glm::vec3 from = leave_surface(
-                tri, smooth ? terminator_safe_point(mesh, prim, hit.u, hit.v, x, side) : x, side,
+                tri, smooth ? terminator_safe_point(corners, hit.u, hit.v, x, side) : x, side,
                 offset_);
             const glm::vec3 contribution =
                 light_contribution(ls, throughput[i] * f, std::abs(wi_local.z), dist2, mis,
@@ -276,8 +276,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
         Ray& r = scratch.rays[next];
         const glm::vec3 side = bs.wi.z >= 0.0f ? n_lab : -n_lab;
         r.origin = leave_surface(
-            tri, smooth ? terminator_safe_point(mesh, prim, hit.u, hit.v, x, side) : x, side,
-            offset_);
+            tri, smooth ? terminator_safe_point(corners, hit.u, hit.v, x, side) : x, side, offset_);
         r.dir = wi_world;
         r.tmin = 0.0f;
         r.tmax = kRayTMax;
@@ -294,11 +293,11 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       // leaving from the curved surface the normals describe (shading_normal.h), above the facets.
       glm::vec3 ns = n;
       if (smooth) {
-        ns = oriented_shading_normal(mesh, prim, hit.u, hit.v, n_lab);
+        ns = oriented_shading_normal(corners, hit.u, hit.v, n_lab);
         if (!(n == n_lab)) ns = -ns;
       }
       const glm::vec3 start = leave_surface(
-          tri, smooth ? terminator_safe_point(mesh, prim, hit.u, hit.v, x, n) : x, n, offset_);
+          tri, smooth ? terminator_safe_point(corners, hit.u, hit.v, x, n) : x, n, offset_);
       const glm::vec3 f = albedo * kInvPi;  // Lambert
       if (!lights_.empty()) {
         LightSample ls = lights_.sample(scene, x, u_light, u_light_point);

@@ -2,17 +2,28 @@
 // shift that keeps low-poly spheres free of a faceted, black shadow terminator.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
 #include "tritrace/geometry/triangle_mesh.h"
+#include "tritrace/scene/scene.h"
 
 namespace tritrace {
 
-// The mesh's interpolated shading normal at barycentrics (u, v), turned to the side of the
-// geometric normal `ng` (a vertex normal may disagree with the winding, or the interpolation
-// may cross the surface at a sharp crease).
+// The interpolated shading normal at barycentrics (u, v) of a triangle with corners `c`, turned to
+// the side of the geometric normal `ng` (a vertex normal may disagree with the winding, or the
+// interpolation may cross the surface at a sharp crease); `ng` itself where the interpolated
+// normal vanishes. TriangleMesh::shading_normal's arithmetic.
+inline glm::vec3 oriented_shading_normal(const SmoothCorners& c, float u, float v, glm::vec3 ng) {
+  const glm::vec3 s = (1.0f - u - v) * c.normal[0] + u * c.normal[1] + v * c.normal[2];
+  const float len2 = glm::dot(s, s);
+  const glm::vec3 ns = len2 > 0.0f && std::isfinite(len2) ? s * (1.0f / std::sqrt(len2)) : ng;
+  return glm::dot(ns, ng) < 0.0f ? -ns : ns;
+}
+
+// The same for triangle `tri` of a mesh with vertex normals.
 inline glm::vec3 oriented_shading_normal(const TriangleMesh& mesh, size_t tri, float u, float v,
                                          glm::vec3 ng) {
   const glm::vec3 ns = mesh.shading_normal(tri, u, v);
@@ -29,17 +40,22 @@ inline glm::vec3 oriented_shading_normal(const TriangleMesh& mesh, size_t tri, f
 // the mesh is concave (x above every tangent plane) x stays. The normals are taken on the side
 // `side` (a unit vector on the side the ray leaves to); the result is x plus a vector that never
 // points below that side's plane of the corner normals.
-inline glm::vec3 terminator_safe_point(const TriangleMesh& mesh, size_t tri, float u, float v,
-                                       glm::vec3 x, glm::vec3 side) {
-  const glm::vec3* n = &mesh.corner_normals()[3 * tri];
+inline glm::vec3 terminator_safe_point(const SmoothCorners& c, float u, float v, glm::vec3 x,
+                                       glm::vec3 side) {
   const float w[3] = {1.0f - u - v, u, v};
   glm::vec3 shift(0.0f);
   for (int k = 0; k < 3; ++k) {
-    const glm::vec3 nk = glm::dot(n[k], side) < 0.0f ? -n[k] : n[k];
-    const float below = glm::dot(x - mesh.vertex(tri, k), nk);
+    const glm::vec3 nk = glm::dot(c.normal[k], side) < 0.0f ? -c.normal[k] : c.normal[k];
+    const float below = glm::dot(x - c.vertex[k], nk);
     if (below < 0.0f) shift -= (w[k] * below) * nk;
   }
   return x + shift;
+}
+
+// The same for triangle `tri` of a mesh with vertex normals.
+inline glm::vec3 terminator_safe_point(const TriangleMesh& mesh, size_t tri, float u, float v,
+                                       glm::vec3 x, glm::vec3 side) {
+  return terminator_safe_point(stored_corners(mesh, static_cast<uint32_t>(tri)), u, v, x, side);
 }
 
 }  // namespace tritrace

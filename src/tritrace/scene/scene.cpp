@@ -2,6 +2,7 @@
 #include "tritrace/scene/scene.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <glm/geometric.hpp>
 #include <string>
@@ -77,6 +78,27 @@ SurfaceTriangle Scene::instanced_triangle(uint32_t prim) const {
   return t;
 }
 
+bool Scene::instanced_smooth(uint32_t prim) const {
+  return prototypes[instance_of(prim).prototype].has_shading_normals();
+}
+
+SmoothCorners Scene::instanced_corners(uint32_t prim) const {
+  const Instance& inst = instance_of(prim);
+  const TriangleMesh& proto = prototypes[inst.prototype];
+  const uint32_t k = prim - inst.first_prim;
+  SmoothCorners c = stored_corners(proto, k);
+  for (int j = 0; j < 3; ++j) {
+    c.vertex[j] = inst.to_world.apply(c.vertex[j]);
+    c.normal[j] = inst.normal_to_world(c.normal[j]);
+  }
+  return c;
+}
+
+glm::vec2 Scene::instanced_uv(uint32_t prim, float u, float v) const {
+  const Instance& inst = instance_of(prim);
+  return prototypes[inst.prototype].uv(prim - inst.first_prim, u, v);
+}
+
 void add_instance(Scene& scene, uint32_t prototype, const Affine& to_world) {
   const uint64_t drawn = scene.drawn_triangles();
   const uint64_t added = scene.prototypes.at(prototype).size();
@@ -129,8 +151,18 @@ Scene flattened(const Scene& scene) {
   for (const Instance& inst : scene.instances) {
     const TriangleMesh& proto = scene.prototypes[inst.prototype];
     for (uint32_t k = 0; k < proto.size(); ++k) {
+      // Vertex normals as Scene::corners gives them, texture coordinates as they are.
+      std::array<glm::vec3, 3> normals;
+      std::array<glm::vec2, 3> uvs;
+      for (size_t j = 0; j < 3 && proto.has_shading_normals(); ++j) {
+        normals[j] = inst.normal_to_world(proto.corner_normals()[3 * size_t{k} + j]);
+      }
+      for (size_t j = 0; j < 3 && proto.has_uvs(); ++j)
+        uvs[j] = proto.corner_uvs()[3 * size_t{k} + j];
       out.mesh.add(inst.to_world.apply(proto.v0()[k]), inst.to_world.apply(proto.v1()[k]),
-                   inst.to_world.apply(proto.v2()[k]), proto.material()[k]);
+                   inst.to_world.apply(proto.v2()[k]), proto.material()[k],
+                   proto.has_shading_normals() ? &normals : nullptr,
+                   proto.has_uvs() ? &uvs : nullptr);
     }
   }
   return out;

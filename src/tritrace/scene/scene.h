@@ -3,6 +3,7 @@
 // instanced meshes.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
@@ -100,6 +101,16 @@ struct Instance {
   Affine to_object;  // inverse(to_world)
   // The instance's triangle k is the scene's triangle first_prim + k (Scene::triangle).
   uint32_t first_prim = 0;
+
+  // A unit normal of the prototype in world space: the inverse transpose of to_world's linear
+  // part (to_object's, transposed) applied, then normalised.
+  glm::vec3 normal_to_world(glm::vec3 n) const {
+    const glm::mat3& m = to_object.linear;
+    const glm::vec3 w{m[0][0] * n.x + m[0][1] * n.y + m[0][2] * n.z,
+                      m[1][0] * n.x + m[1][1] * n.y + m[1][2] * n.z,
+                      m[2][0] * n.x + m[2][1] * n.y + m[2][2] * n.z};
+    return w / std::sqrt(w.x * w.x + w.y * w.y + w.z * w.z);
+  }
 };
 
 // A triangle as drawn, in world space: what shading needs from a hit. For a triangle of
@@ -117,6 +128,22 @@ struct SurfaceTriangle {
 inline SurfaceTriangle stored_triangle(const TriangleMesh& mesh, uint32_t prim) {
   return {mesh.v0()[prim], mesh.e1()[prim], mesh.e2()[prim], mesh.normal()[prim],
           mesh.material()[prim]};
+}
+
+// A smooth-shaded triangle's corners in world space: vertices and unit vertex normals.
+struct SmoothCorners {
+  glm::vec3 vertex[3];
+  glm::vec3 normal[3];
+};
+
+// Triangle `prim` of `mesh` (which has vertex normals), as stored.
+inline SmoothCorners stored_corners(const TriangleMesh& mesh, uint32_t prim) {
+  SmoothCorners c;
+  for (int k = 0; k < 3; ++k) {
+    c.vertex[k] = mesh.vertex(prim, k);
+    c.normal[k] = mesh.corner_normals()[3 * size_t{prim} + static_cast<size_t>(k)];
+  }
+  return c;
 }
 
 // The most triangles a scene may draw (instances counted once per placement): a hit names its
@@ -172,9 +199,27 @@ struct Scene {
   uint32_t material_of(uint32_t prim) const {
     return prim < mesh.size() ? mesh.material()[prim] : instanced_triangle(prim).material;
   }
+  // Whether triangle `prim` shades smooth: its mesh (or prototype) has vertex normals.
+  bool smooth(uint32_t prim) const {
+    return prim < mesh.size() ? mesh.has_shading_normals() : instanced_smooth(prim);
+  }
+  // Triangle `prim`'s corners in world space with their unit vertex normals (smooth(prim) only):
+  // an instance's normals moved by its transform's inverse transpose and normalised, as flattened()
+  // stores them.
+  SmoothCorners corners(uint32_t prim) const {
+    if (prim < mesh.size()) return stored_corners(mesh, prim);
+    return instanced_corners(prim);
+  }
+  // Texture coordinates at barycentrics (u, v) of triangle `prim` ((0, 0) without any).
+  glm::vec2 uv(uint32_t prim, float u, float v) const {
+    return prim < mesh.size() ? mesh.uv(prim, u, v) : instanced_uv(prim, u, v);
+  }
 
  private:
   SurfaceTriangle instanced_triangle(uint32_t prim) const;
+  bool instanced_smooth(uint32_t prim) const;
+  SmoothCorners instanced_corners(uint32_t prim) const;
+  glm::vec2 instanced_uv(uint32_t prim, float u, float v) const;
 };
 
 // Appends an instance of prototype `prototype` placed by `to_world`, numbering its triangles after
@@ -190,7 +235,10 @@ Bounds3 instance_bounds(const Bounds3& prototype_bounds, const Instance& instanc
 Bounds3 scene_bounds(const Scene& scene);
 
 // The same scene with every instance copied into `mesh` (in the scene's triangle numbering), its
-// vertices moved by to_world.apply: the oracle that instanced rendering is tested against.
+// vertices moved by to_world.apply, its vertex normals by Instance::normal_to_world, its texture
+// coordinates kept: the oracle that instanced rendering is tested against. (Where the prototypes
+// have vertex normals and the scene's own mesh has none, the flattened mesh gives its own
+// triangles their face normals at the corners, and shades them smooth.)
 Scene flattened(const Scene& scene);
 // `factor` times the texture `ref` at texture coordinates uv, or `factor` alone without a texture.
 inline glm::vec3 textured(const Scene& scene, const TextureRef& ref, glm::vec3 factor,

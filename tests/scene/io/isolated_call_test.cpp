@@ -5,13 +5,17 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstring>
 #include <new>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "tritrace/error.h"
+#include "tritrace/scene/io/load_progress.h"
 
 namespace tritrace {
 namespace {
@@ -71,12 +75,11 @@ std::string error_of(Work work, ExitCode* code = nullptr) {
 
 TEST(IsolatedCall, AnErrorInTheChildComesBackWithItsSubjectReasonAndExitCode) {
   ExitCode code = ExitCode::kRuntime;
-  EXPECT_EQ(error_of(
-                []() -> IsolatedOutput {
-                  throw Error("texture.png", "is missing", ExitCode::kUsage);
-                },
-                &code),
-            "texture.png: is missing");
+  EXPECT_EQ(
+      error_of(
+          []() -> IsolatedOutput { throw Error("texture.png", "is missing", ExitCode::kUsage); },
+          &code),
+      "texture.png: is missing");
   EXPECT_EQ(code, ExitCode::kUsage);
   EXPECT_EQ(error_of([]() -> IsolatedOutput { throw Error("a", "b"); }, &code), "a: b");
   EXPECT_EQ(code, ExitCode::kRuntime);
@@ -100,6 +103,37 @@ TEST(IsolatedCall, FailuresOfTheChildBecomeOneError) {
     return {};
   });
   EXPECT_EQ(killed.rfind("model.obj: cannot import: the importer crashed (", 0), 0u) << killed;
+}
+
+// The child's progress reaches the caller's LoadProgress while the child runs: another thread of
+// the caller polls it (as the CLI's phase line does) until it sees the child's step.
+TEST(IsolatedCall, TheChildsProgressShowsInTheCallersWhileItRuns) {
+  LoadProgress progress;
+  std::atomic<bool> seen{false}, finished{false};
+  std::thread watcher([&] {
+    while (!finished && !seen) {
+      seen = progress.describe() == "parsing 50%";
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  });
+  {
+    const LoadProgressScope report(&progress);
+    progress.begin("reading", 0);
+    call_isolated(
+        "x",
+        [] {
+          progress_begin("parsing", 10);
+          progress_advance(5);
+          // A second for the watcher, which polls every 5 ms, to see it.
+          std::this_thread::sleep_for(std::chrono::seconds(1));
+          return IsolatedOutput{0, [](uint8_t*) {}};
+        },
+        kLimit);
+  }
+  finished = true;
+  watcher.join();
+  EXPECT_TRUE(seen.load());
+  EXPECT_EQ(progress.describe(), "reading") << "after the call, the caller's own step again";
 }
 
 }  // namespace

@@ -5,10 +5,12 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
 #include "tritrace/error.h"
+#include "tritrace/scene/io/load_progress.h"
 
 namespace tritrace {
 namespace {
@@ -50,9 +52,12 @@ std::string read_input_file(const std::string& path) {
   size_t size = 0;
   const int fd = open_checked(path, size);
   std::string bytes(size, '\0');
+  progress_begin("reading", size);
   size_t got = 0;
   while (got < size) {
-    const ssize_t n = ::read(fd, bytes.data() + got, size - got);
+    // In slices, so that a progress display moves while a big file is read.
+    constexpr size_t kSlice = size_t{16} << 20;
+    const ssize_t n = ::read(fd, bytes.data() + got, std::min(size - got, kSlice));
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
       const int err = n < 0 ? errno : 0;
@@ -61,6 +66,7 @@ std::string read_input_file(const std::string& path) {
                             : std::string("file shrank while being read"));
     }
     got += static_cast<size_t>(n);
+    progress_advance(static_cast<size_t>(n));
   }
   ::close(fd);
   return bytes;

@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "tritrace/error.h"
+#include "tritrace/scene/io/load_progress.h"
 
 namespace tritrace {
 namespace {
@@ -130,6 +131,38 @@ struct Handover {
   }
 };
 
+// A LoadProgress in an anonymous shared mapping, followed by `caller` (when there is one) until
+// stop_following() or destruction.
+class SharedProgress {
+ public:
+  explicit SharedProgress(LoadProgress* caller) : caller_(caller) {
+    if (caller_ == nullptr) return;
+    void* page = ::mmap(nullptr, sizeof(LoadProgress), PROT_READ | PROT_WRITE,
+                        MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+    if (page == MAP_FAILED) return;  // no progress shown: not a reason to fail the import
+    shared_ = new (page) LoadProgress;
+    caller_->follow(shared_);
+  }
+  ~SharedProgress() {
+    stop_following();
+    if (shared_ != nullptr) {
+      shared_->~LoadProgress();
+      ::munmap(shared_, sizeof(LoadProgress));
+    }
+  }
+  SharedProgress(const SharedProgress&) = delete;
+  SharedProgress& operator=(const SharedProgress&) = delete;
+
+  LoadProgress* shared() const { return shared_; }
+  void stop_following() {
+    if (caller_ != nullptr && shared_ != nullptr) caller_->follow(nullptr);
+  }
+
+ private:
+  LoadProgress* caller_;
+  LoadProgress* shared_ = nullptr;
+};
+
 }  // namespace
 
 IsolatedResult& IsolatedResult::operator=(IsolatedResult&& other) noexcept {
@@ -150,6 +183,10 @@ IsolatedResult::~IsolatedResult() {
 IsolatedResult call_isolated(const std::string& subject,
                              const std::function<IsolatedOutput()>& work,
                              uint64_t memory_limit_bytes) {
+  // The child reports its progress to a LoadProgress in memory shared with this process, which
+  // the caller's progress follows meanwhile (its atomics work across the two processes; the step
+  // names are string literals, at the same addresses in both).
+  SharedProgress progress(load_progress());
   Handover shared;
   shared.fd = ::memfd_create("tritrace-import", MFD_CLOEXEC);
   if (shared.fd < 0) {
@@ -159,10 +196,14 @@ IsolatedResult call_isolated(const std::string& subject,
   if (pid < 0) {
     throw Error(subject, std::string("cannot start the importer process: ") + std::strerror(errno));
   }
-  if (pid == 0) child(shared.fd, work, memory_limit_bytes);
+  if (pid == 0) {
+    const LoadProgressScope report(progress.shared());
+    child(shared.fd, work, memory_limit_bytes);
+  }
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
+  progress.stop_following();
   if (WIFSIGNALED(status)) {
     throw Error(subject, std::string("cannot import: the importer crashed (") +
                              strsignal(WTERMSIG(status)) + ")");

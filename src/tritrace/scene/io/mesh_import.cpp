@@ -11,6 +11,7 @@
 #include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/LogStream.hpp>
+#include <assimp/ProgressHandler.hpp>
 #include <cctype>
 #include <cmath>
 #include <cstring>
@@ -29,6 +30,7 @@
 #include "tritrace/error.h"
 #include "tritrace/scene/io/input_file.h"
 #include "tritrace/scene/io/isolated_call.h"
+#include "tritrace/scene/io/load_progress.h"
 #include "tritrace/scene/io/ply_reader.h"
 #include "tritrace/scene/io/triangle_filter.h"
 
@@ -337,10 +339,31 @@ class LogWatch final : public Assimp::LogStream {
 
 // Runs in the importer process (import_isolated), which has assimp's global logger to itself.
 // `directory` is where external textures are looked for (empty for a model read from memory).
+// assimp's progress (a fraction: half for reading the file, half for post-processing) as the
+// "importing" step of the calling thread's LoadProgress.
+class ImportProgress final : public Assimp::ProgressHandler {
+ public:
+  explicit ImportProgress(LoadProgress& progress) : progress_(progress) {}
+  bool Update(float fraction) override {
+    if (fraction >= 0.0f) {
+      progress_.set(static_cast<uint64_t>(std::min(fraction, 1.0f) * kImportSteps));
+    }
+    return true;
+  }
+  static constexpr uint64_t kImportSteps = 1000;
+
+ private:
+  LoadProgress& progress_;
+};
+
 template <typename ReadFn>
 ImportedMesh import_with(const std::string& subject, const std::string& directory, ReadFn&& read) {
   try {
     Assimp::Importer importer;
+    if (LoadProgress* progress = load_progress()) {
+      progress->begin("importing", ImportProgress::kImportSteps);
+      importer.SetProgressHandler(new ImportProgress(*progress));  // the importer deletes it
+    }
     Assimp::DefaultLogger::create(nullptr, Assimp::Logger::NORMAL, 0);
     LogWatch* watch = new LogWatch;  // owned by the logger once attached
     Assimp::DefaultLogger::get()->attachStream(watch, Assimp::Logger::Warn | Assimp::Logger::Err);
@@ -526,6 +549,7 @@ ImportedMesh import_isolated(const std::string& subject, const std::function<Imp
                               }};
       },
       importer_memory_limit());
+  progress_begin("unpacking", 0);
   return from_bytes(result.bytes(), subject);
 }
 

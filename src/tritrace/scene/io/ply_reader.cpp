@@ -16,6 +16,7 @@
 
 #include "tritrace/error.h"
 #include "tritrace/parallel.h"
+#include "tritrace/scene/io/load_progress.h"
 #include "tritrace/scene/io/triangle_filter.h"
 
 namespace tritrace {
@@ -246,8 +247,12 @@ bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out
   const char* vertex_data = bytes.data() + l.body;
   const char* face_data = vertex_data + l.vertices * l.vertex_bytes;
 
+  // Worker threads report to the calling thread's progress.
+  LoadProgress* progress = load_progress();
+  if (progress != nullptr) progress->begin("parsing", l.vertices + l.faces);
   std::vector<glm::vec3> points(l.vertices), normals(l.normals ? l.vertices : 0);
   parallel::for_range(tbb::blocked_range<size_t>(0, l.vertices, 1 << 14), [&](const auto& r) {
+    if (progress != nullptr) progress->advance(r.size());
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const char* rec = vertex_data + i * l.vertex_bytes;
       for (int a = 0; a < l.attributes(); ++a) {
@@ -266,6 +271,7 @@ bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out
   const bool ok = parallel::reduce(
       tbb::blocked_range<size_t>(0, l.faces, 1 << 14), true,
       [&](const auto& r, bool good) {
+        if (progress != nullptr) progress->advance(r.size());
         for (size_t f = r.begin(); good && f != r.end(); ++f) {
           const char* rec = face_data + f * face_bytes;
           if (binary_value<kSwap>(rec, l.count_type) != 3.0) return false;
@@ -308,14 +314,18 @@ bool parse_number(std::string_view s, T& out) {
   return ec == std::errc() && end == s.data() + s.size();
 }
 
+constexpr size_t kProgressStep = 1 << 16;  // elements between progress reports
+
 bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out) {
   // A value takes two characters at least (a digit and a separator), a face line eight.
   const size_t body = bytes.size() - l.body;
   if (l.vertices > body / (2 * l.vertex_properties) || l.faces > body / 8) return false;
   Lines lines(bytes, l.body);
   std::vector<std::string_view> w;
+  progress_begin("parsing", l.vertices + l.faces);
   std::vector<glm::vec3> points(l.vertices), normals(l.normals ? l.vertices : 0);
   for (size_t i = 0; i < l.vertices; ++i) {
+    if (i % kProgressStep == 0) progress_advance(std::min(kProgressStep, l.vertices - i));
     if (!lines.next(w) || w.size() != l.vertex_properties) return false;
     for (int a = 0; a < l.attributes(); ++a) {
       float& value = (a < 3 ? points : normals)[i][a % 3];
@@ -340,6 +350,7 @@ bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out)
   out.corners.resize(3 * l.faces);
   if (l.normals) out.normals.resize(3 * l.faces);
   for (size_t f = 0; f < l.faces; ++f) {
+    if (f % kProgressStep == 0) progress_advance(std::min(kProgressStep, l.faces - f));
     if (!lines.next(w) || w.size() != 4 || w[0] != "3") return false;
     int64_t idx[3];
     for (int k = 0; k < 3; ++k) {

@@ -19,6 +19,7 @@
 #include "tritrace/image/image_io.h"
 #include "tritrace/scene/cornell_box.h"
 #include "tritrace/scene/io/input_file.h"
+#include "tritrace/scene/io/load_progress.h"
 #include "tritrace/scene/io/triangle_filter.h"
 #include "tritrace/scene/procedural.h"
 
@@ -703,7 +704,12 @@ class Parser {
         add_material(m);
       }
     }
+    progress_begin("adding triangles", imported.triangles());
     for (size_t k = 0; k < imported.triangles(); ++k) {
+      constexpr size_t kProgressStep = 1 << 16;
+      if (k % kProgressStep == 0) {
+        progress_advance(std::min(kProgressStep, imported.triangles() - k));
+      }
       if (!material && imported.material[k] >= imported.materials.size()) {
         fail(where, "mesh material index out of range");
       }

@@ -95,11 +95,7 @@ LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& over
   Scene& scene = loaded.scene;
   scene.materials = mesh.materials;
   for (const TextureImage& t : mesh.textures) scene.textures.push_back(Texture::from_srgb8(t));
-  for (size_t k = 0; k < mesh.triangles(); ++k) {
-    add_checked(scene.mesh, mesh.corners[3 * k], mesh.corners[3 * k + 1], mesh.corners[3 * k + 2],
-                mesh.material[k], mesh.normals.empty() ? nullptr : &mesh.normals[3 * k],
-                mesh.uvs.empty() ? nullptr : &mesh.uvs[3 * k], loaded.stats);
-  }
+  add_all_checked(scene.mesh, mesh.corners, mesh.material, mesh.normals, mesh.uvs, loaded.stats);
   loaded.stats.meshes = mesh.meshes;
   if (scene.mesh.empty()) {
     throw Error("", "no geometry: every triangle was degenerate or non-finite (" +

@@ -6,7 +6,9 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <span>
 
 #include "tritrace/geometry/triangle_mesh.h"
 #include "tritrace/scene/io/loaded_scene.h"
@@ -31,5 +33,13 @@ bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint
 // become (0, 0).
 bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t material,
                  const glm::vec3* normals, const glm::vec2* uvs, LoadStats& stats);
+
+// add_checked for every triangle of a loaded mesh (corners three per triangle; normals and uvs
+// three per triangle or empty), in order, into an empty `mesh`: the same mesh and counts as
+// calling it triangle by triangle, computed in parallel. Reports "adding triangles" to the
+// thread's LoadProgress.
+void add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners,
+                     std::span<const uint32_t> material, std::span<const glm::vec3> normals,
+                     std::span<const glm::vec2> uvs, LoadStats& stats);
 
 }  // namespace tritrace
