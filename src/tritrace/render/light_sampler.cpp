@@ -15,8 +15,8 @@ float mean(glm::vec3 c) {
   return (c.x + c.y + c.z) / 3.0f;
 }
 
-float triangle_area(const TriangleMesh& mesh, uint32_t prim) {
-  return 0.5f * glm::length(glm::cross(mesh.e1()[prim], mesh.e2()[prim]));
+float triangle_area(glm::vec3 e1, glm::vec3 e2) {
+  return 0.5f * glm::length(glm::cross(e1, e2));
 }
 
 }  // namespace
@@ -40,28 +40,54 @@ LightSampler::LightSampler(const Scene& scene) {
     lights_.push_back(light);
     power.push_back(p);
   }
-  const TriangleMesh& mesh = scene.mesh;
-  for (uint32_t prim = 0; prim < mesh.size(); ++prim) {
-    const Material& m = scene.materials[mesh.material()[prim]];
-    if (!m.emits()) continue;
-    const float area = triangle_area(mesh, prim);
+  // Emissive triangles in the scene's numbering: the scene's own, then each instance's (in world
+  // space, as the flattened scene would hold them), so that an instanced scene samples its lights
+  // as its flattened copy does.
+  auto add_triangle = [&](uint32_t prim, const SurfaceTriangle& t) {
+    const Material& m = scene.materials[t.material];
+    if (!m.emits()) return;
+    const float area = triangle_area(t.e1, t.e2);
     // Flux of a Lambertian emitter: Le * area * pi per side.
     const float p = mean(m.emission) * area * kPi * (m.two_sided ? 2.0f : 1.0f);
-    if (!(p > 0.0f) || !std::isfinite(p)) continue;
+    if (!(p > 0.0f) || !std::isfinite(p)) return;
     Light light{};
     light.index = prim;
     light.point = false;
     light.two_sided = m.two_sided;
     light.textured = m.emission_texture.present();
-    light.p0 = mesh.v0()[prim];
-    light.e1 = mesh.e1()[prim];
-    light.e2 = mesh.e2()[prim];
-    light.normal = mesh.normal()[prim];
+    light.p0 = t.v0;
+    light.e1 = t.e1;
+    light.e2 = t.e2;
+    light.normal = t.normal;
     light.radiance = m.emission;
     light.extent = triangle_extent(light.e1, light.e2);
     lights_.push_back(light);
     power.push_back(p);
     emissive_prims_.push_back(prim);
+  };
+  const TriangleMesh& mesh = scene.mesh;
+  for (uint32_t prim = 0; prim < mesh.size(); ++prim) {
+    if (scene.materials[mesh.material()[prim]].emits())
+      add_triangle(prim, stored_triangle(mesh, prim));
+  }
+  // Each prototype's emissive triangles, found once; instances then add theirs unless there would
+  // be more than kMaxInstancedLights (a billion-triangle glowing city), which are left to BSDF
+  // sampling alone: unbiased under MIS, noisier.
+  std::vector<std::vector<uint32_t>> emissive_of(scene.prototypes.size());
+  for (size_t p = 0; p < scene.prototypes.size(); ++p) {
+    const TriangleMesh& proto = scene.prototypes[p];
+    for (uint32_t k = 0; k < proto.size(); ++k) {
+      if (scene.materials[proto.material()[k]].emits()) emissive_of[p].push_back(k);
+    }
+  }
+  uint64_t instanced = 0;
+  for (const Instance& inst : scene.instances) instanced += emissive_of[inst.prototype].size();
+  if (instanced <= kMaxInstancedLights) {
+    for (const Instance& inst : scene.instances) {
+      for (uint32_t k : emissive_of[inst.prototype]) {
+        add_triangle(inst.first_prim + k, scene.triangle(inst.first_prim + k));
+      }
+    }
   }
   if (scene.environment_map) {
     environment_ = EnvironmentLight(*scene.environment_map);
@@ -83,7 +109,7 @@ LightSampler::LightSampler(const Scene& scene) {
   for (size_t k = 0; k < lights_.size(); ++k) {
     Light& light = lights_[k];
     if (light.point || light.environment) continue;
-    light.pmf_over_area = table_.pmf(static_cast<uint32_t>(k)) / triangle_area(mesh, light.index);
+    light.pmf_over_area = table_.pmf(static_cast<uint32_t>(k)) / triangle_area(light.e1, light.e2);
     emissive_pmf_over_area_.push_back(light.pmf_over_area);
   }
 }
@@ -124,9 +150,9 @@ LightSample LightSampler::sample(const Scene& scene, glm::vec3 x, float u_select
   if (!(cos_light > 0.0f)) return out;
   out.radiance = light.radiance;
   if (light.textured) {
-    const Material& m = scene.materials[scene.mesh.material()[light.index]];
+    const Material& m = scene.materials[scene.material_of(light.index)];
     out.radiance =
-        textured(scene, m.emission_texture, light.radiance, scene.mesh.uv(light.index, b.y, b.z));
+        textured(scene, m.emission_texture, light.radiance, scene.uv(light.index, b.y, b.z));
   }
   out.pdf = light.pmf_over_area * dist2 / cos_light;
   return out;
@@ -140,7 +166,9 @@ float LightSampler::pdf_triangle(const Scene& scene, uint32_t prim, glm::vec3 x,
       emissive_pmf_over_area_[static_cast<size_t>(it - emissive_prims_.begin())];
   const glm::vec3 d = x - y;
   const float dist2 = glm::dot(d, d);
-  const float cos_light = std::abs(glm::dot(scene.mesh.normal()[prim], d)) / std::sqrt(dist2);
+  const glm::vec3 normal =
+      prim < scene.mesh.size() ? scene.mesh.normal()[prim] : scene.triangle(prim).normal;
+  const float cos_light = std::abs(glm::dot(normal, d)) / std::sqrt(dist2);
   if (!(cos_light > 0.0f)) return 0.0f;
   return pmf_over_area * dist2 / cos_light;
 }

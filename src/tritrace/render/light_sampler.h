@@ -26,6 +26,11 @@ struct LightSample {
   float extent = 0.0f;       // the triangle's largest edge component (for the shadow ray's end)
 };
 
+// Emissive triangles of instances beyond this many are not light-sampled (found by BSDF sampling
+// only, which MIS keeps unbiased): a list of them all could outgrow memory on huge instanced
+// scenes.
+inline constexpr uint64_t kMaxInstancedLights = uint64_t{1} << 22;
+
 class LightSampler {
  public:
   explicit LightSampler(const Scene& scene);
