@@ -3,6 +3,7 @@
 // makes both element arrays readable in parallel chunks. ASCII bodies are read line by line.
 #include "tritrace/scene/io/ply_reader.h"
 
+#include <assimp/types.h>  // aiVector3D and aiMatrix4x4 with their operations
 #include <tbb/blocked_range.h>
 
 #include <algorithm>
@@ -228,13 +229,28 @@ double binary_value(const char* p, Type t) {
 
 // Model files wind front faces counter-clockwise; tritrace stores (a, c, b), as mesh_import.cpp,
 // and the corners' normals in the same order.
+// The assimp path moves every vertex and normal by its scene's node transform, the identity for a
+// PLY file; applied here with assimp's own operations, it keeps the float results that path gives,
+// signed zeros included (x + 0 turns -0 into +0).
+struct NodeTransform {
+  NodeTransform() { normal.Inverse().Transpose(); }
+  aiMatrix4x4 point = aiMatrix4x4() * aiMatrix4x4();
+  aiMatrix3x3 normal{point};
+};
+
 void emit(ImportedMesh& out, size_t face, const std::vector<glm::vec3>& p,
-          const std::vector<glm::vec3>& n, const int64_t idx[3]) {
+          const std::vector<glm::vec3>& n, const int64_t idx[3], const NodeTransform& t) {
   const size_t order[3] = {static_cast<size_t>(idx[0]), static_cast<size_t>(idx[2]),
                            static_cast<size_t>(idx[1])};
   for (int k = 0; k < 3; ++k) {
-    out.corners[3 * face + k] = p[order[k]];
-    if (!n.empty()) out.normals[3 * face + k] = n[order[k]];
+    const glm::vec3 q = p[order[k]];
+    const aiVector3D v = t.point * aiVector3D(q.x, q.y, q.z);
+    out.corners[3 * face + k] = glm::vec3(v.x, v.y, v.z);
+    if (!n.empty()) {
+      const glm::vec3 m = n[order[k]];
+      const aiVector3D w = t.normal * aiVector3D(m.x, m.y, m.z);
+      out.normals[3 * face + k] = glm::vec3(w.x, w.y, w.z);
+    }
   }
 }
 
@@ -267,6 +283,7 @@ bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out
 
   out.corners.resize(3 * l.faces);
   if (l.normals) out.normals.resize(3 * l.faces);
+  const NodeTransform transform;
   const size_t index_bytes = size_of(l.index_type), count_bytes = size_of(l.count_type);
   const bool ok = parallel::reduce(
       tbb::blocked_range<size_t>(0, l.faces, 1 << 14), true,
@@ -281,7 +298,7 @@ bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out
             if (!(v >= 0.0 && v < static_cast<double>(l.vertices))) return false;
             idx[k] = static_cast<int64_t>(v);
           }
-          emit(out, f, points, normals, idx);
+          emit(out, f, points, normals, idx, transform);
         }
         return good;
       },
@@ -349,6 +366,7 @@ bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out)
   }
   out.corners.resize(3 * l.faces);
   if (l.normals) out.normals.resize(3 * l.faces);
+  const NodeTransform transform;
   for (size_t f = 0; f < l.faces; ++f) {
     if (f % kProgressStep == 0) progress_advance(std::min(kProgressStep, l.faces - f));
     if (!lines.next(w) || w.size() != 4 || w[0] != "3") return false;
@@ -357,7 +375,7 @@ bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out)
       if (!parse_number(w[static_cast<size_t>(k) + 1], idx[k])) return false;
       if (idx[k] < 0 || static_cast<uint64_t>(idx[k]) >= l.vertices) return false;
     }
-    emit(out, f, points, normals, idx);
+    emit(out, f, points, normals, idx, transform);
   }
   return true;
 }
