@@ -49,6 +49,12 @@ std::string error_of(const std::string& text) {
   return "";
 }
 
+// The reason of the Error parsing a scene of one triangle and the single material `material`
+// (a JSON object) throws.
+std::string material_error(const std::string& material) {
+  return error_of(R"({"materials": [)" + material + "], " + std::string(kOneTriangle) + "}");
+}
+
 void expect_bits_equal(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); ++i) {
@@ -327,9 +333,7 @@ TEST(SceneFileMaterials, ConductorTakesAComplexIndex) {
   EXPECT_EQ(gold.conductor_k, glm::vec3(3.4f, 2.35f, 1.85f));
   // albedo becomes the reflectance at normal incidence: ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
   EXPECT_NEAR(gold.albedo.x, (0.82 * 0.82 + 3.4 * 3.4) / (1.18 * 1.18 + 3.4 * 3.4), 1e-6);
-  const auto with = [&](const std::string& material) {
-    return error_of(R"({"materials": [)" + material + "], " + std::string(kOneTriangle) + "}");
-  };
+  const auto with = material_error;
   EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "eta": [1, 1, 1]})"),
             "/materials/0: missing \"k\" (a complex index needs both eta and k)");
   EXPECT_EQ(with(R"({"name": "m", "type": "conductor", "k": [1, 1, 1]})"),
@@ -348,10 +352,7 @@ TEST(SceneFileMaterials, ConductorTakesAComplexIndex) {
 }
 
 TEST(SceneFileMaterials, EachRuleHasItsMessage) {
-  const std::string tri = kOneTriangle;
-  const auto with = [&](const std::string& material) {
-    return error_of(R"({"materials": [)" + material + "], " + tri + "}");
-  };
+  const auto with = material_error;
   EXPECT_EQ(with(R"({"name": "m", "type": "metal", "albedo": [1,1,1]})"),
             "/materials/0/type: unknown material type 'metal' (use diffuse, conductor, dielectric "
             "or principled)");
