@@ -61,21 +61,19 @@ BENCHMARK(BM_RayTriangle<Kernel::kWatertight>)->Name("RayTriangle/watertight");
 
 // The same tests as a mesh loop runs them: each ray's per-ray work (PreparedRay) done beforehand,
 // as it is once per ray and amortised over many triangles, and triangles read from the mesh's
-// arrays (vertices for the watertight kernel, v0 and edges for the others).
+// arrays (vertices; the kernels other than the watertight one take their edges as differences).
 template <Kernel K>
 void BM_RayTrianglePrepared(benchmark::State& state) {
   const std::vector<TestCase> cases = random_cases();
-  std::vector<glm::vec3> v0, v1, v2, e1, e2;
+  std::vector<glm::vec3> v0, v1, v2;
   std::vector<PreparedRay<K>> rays;
   for (const TestCase& c : cases) {
     v0.push_back(c.v0);
     v1.push_back(c.v0 + c.e1);
     v2.push_back(c.v0 + c.e2);
-    e1.push_back(c.e1);
-    e2.push_back(c.e2);
     rays.emplace_back(c.ray);
   }
-  const TriangleArrays tris{v0.data(), v1.data(), v2.data(), e1.data(), e2.data()};
+  const TriangleArrays tris{v0.data(), v1.data(), v2.data()};
   int64_t hits = 0;
   for (auto _ : state) {
     for (size_t i = 0; i < cases.size(); ++i) {

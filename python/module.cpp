@@ -299,7 +299,7 @@ py::array_t<float> hit_normals(Hits& hits) {
   const int32_t* p = prim.data();
   float* n = normal.mutable_data();
   const SceneData& data = *hits.scene;
-  const std::vector<glm::vec3>& normals = data.loaded.scene.mesh.normal();
+  const auto& normals = data.loaded.scene.mesh.normal();
   {
     py::gil_scoped_release nogil;
     parallel_chunks(static_cast<size_t>(prim.size()), 1 << 14, [&](size_t begin, size_t end) {

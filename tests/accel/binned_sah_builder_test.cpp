@@ -105,7 +105,7 @@ std::vector<Ray> rays_at_triangles(const TriangleMesh& mesh, int n, float scale,
   for (int i = 0; i < n; ++i) {
     const size_t t = tri(rng);
     const float a = unit(rng), b = unit(rng) * (1.0f - a);
-    const glm::vec3 target = mesh.v0()[t] + a * mesh.e1()[t] + b * mesh.e2()[t];
+    const glm::vec3 target = mesh.v0()[t] + a * mesh.e1(t) + b * mesh.e2(t);
     Ray r;
     r.origin = glm::vec3(pos(rng), pos(rng), pos(rng)) * scale;
     const glm::vec3 d = target - r.origin;

@@ -162,7 +162,7 @@ TEST(RaysFromTriangles, SameHitsAsBrute) {
         const float a = unit(rng), b = unit(rng) * (1.0f - a);
         const size_t s = l % 2 == 0 ? t : tri(rng);  // half from one triangle: coherent origins
         Ray r;
-        r.origin = mesh.v0()[s] + a * mesh.e1()[s] + b * mesh.e2()[s];
+        r.origin = mesh.v0()[s] + a * mesh.e1(s) + b * mesh.e2(s);
         const glm::vec3 to = k % 2 == 0 ? light : glm::vec3(pos(rng), pos(rng), pos(rng));
         const glm::vec3 seg = to - r.origin;
         r.tmax = k % 3 == 0 ? kRayTMax : glm::length(seg);

@@ -68,7 +68,7 @@ TEST_P(BvhVsBrute, MixedMagnitudeSoupSameHitsBitForBit) {
   int rebuilt_differs = 0;  // the case this test is for must really occur
   for (size_t i = 0; i < mesh.size(); ++i) {
     rebuilt_differs +=
-        mesh.v0()[i] + mesh.e1()[i] != mesh.v1()[i] || mesh.v0()[i] + mesh.e2()[i] != mesh.v2()[i];
+        mesh.v0()[i] + mesh.e1(i) != mesh.v1()[i] || mesh.v0()[i] + mesh.e2(i) != mesh.v2()[i];
   }
   ASSERT_GT(rebuilt_differs, 300);
   expect_same_as_brute(mesh, GetParam(), 8000, 10);

@@ -54,7 +54,7 @@ bool near_tie(const TriangleMesh& mesh, Kernel kernel, const Ray& ray, const Hit
   int near = 0;
   for (size_t tri = 0; tri < mesh.size(); ++tri) {
     TriangleHit th;
-    near += intersect_triangle(kernel, around, mesh.v0()[tri], mesh.e1()[tri], mesh.e2()[tri], th);
+    near += intersect_triangle(kernel, around, mesh.v0()[tri], mesh.e1(tri), mesh.e2(tri), th);
   }
   return near > 1;
 }
@@ -104,7 +104,7 @@ std::vector<Ray> interior_aimed_rays(const TriangleMesh& mesh, float extent, int
     const size_t t = tri(rng);
     const float u = bary(rng), v = bary(rng);
     if (u + v > 0.9f) continue;
-    const glm::vec3 target = mesh.v0()[t] + u * mesh.e1()[t] + v * mesh.e2()[t];
+    const glm::vec3 target = mesh.v0()[t] + u * mesh.e1(t) + v * mesh.e2(t);
     Ray r;
     r.origin = glm::vec3(pos(rng), pos(rng), pos(rng));
     const glm::vec3 to = target - r.origin;

@@ -230,7 +230,7 @@ TEST(InstancedAccel, GeneralTransformsHitLikeTheFlattenedSceneWithinRounding) {
   for (int i = 0; i < 4000; ++i) {
     const uint32_t t = tri(rng);
     const float a = 0.1f + 0.35f * unit(rng), b = 0.1f + 0.35f * unit(rng);
-    const glm::vec3 target = flat.mesh.v0()[t] + a * flat.mesh.e1()[t] + b * flat.mesh.e2()[t];
+    const glm::vec3 target = flat.mesh.v0()[t] + a * flat.mesh.e1(t) + b * flat.mesh.e2(t);
     Ray r;
     r.origin = {pos(rng), pos(rng), pos(rng)};
     r.dir = glm::normalize(target - r.origin);

@@ -60,12 +60,12 @@ inline std::vector<Ray> awkward_rays(const TriangleMesh& mesh, int n, uint32_t s
         break;
       case 1: {  // a point on an edge
         const float a = unit(rng);
-        target = mesh.v0()[t] + a * mesh.e1()[t];
+        target = mesh.v0()[t] + a * mesh.e1(t);
         break;
       }
       default: {  // inside (or near) the triangle
         const float a = unit(rng), b = unit(rng) * (1.0f - a);
-        target = mesh.v0()[t] + a * mesh.e1()[t] + b * mesh.e2()[t];
+        target = mesh.v0()[t] + a * mesh.e1(t) + b * mesh.e2(t);
       }
     }
     r.dir = target - r.origin;
@@ -95,7 +95,7 @@ inline std::vector<Ray> coherent_rays(const TriangleMesh& mesh, int packets, uin
   for (int k = 0; k < packets; ++k) {
     const size_t t = tri(rng);
     const glm::vec3 target =
-        k % 2 == 0 ? mesh.vertex(t, k % 3) : mesh.v0()[t] + unit(rng) * mesh.e1()[t];
+        k % 2 == 0 ? mesh.vertex(t, k % 3) : mesh.v0()[t] + unit(rng) * mesh.e1(t);
     const glm::vec3 origin = glm::vec3(pos(rng), pos(rng), pos(rng)) * (k % 3 == 0 ? 3.0f : 1.0f);
     const float spread = (k % 4 == 0 ? 1e-6f : 1e-2f) * (1.0f + glm::length(target - origin));
     const bool towards_light = k % 3 == 2;

@@ -120,12 +120,12 @@ TEST(HugePageAllocator, BigArraysStartOnHugePageBoundaries) {
   // terrain(100000)'s blocks take about 4 MiB: on 2 MiB boundaries, so that transparent huge pages
   // can back them; the small node array keeps the ordinary aligned allocation.
   const bvh::WideBvh w = bvh::build_wide_bvh(make_terrain_scene(100000).mesh);
-  ASSERT_GE(w.block_bytes(), bvh::kHugePageBytes);
-  EXPECT_EQ(reinterpret_cast<uintptr_t>(w.blocks.data()) % bvh::kHugePageBytes, 0u);
+  ASSERT_GE(w.block_bytes(), kHugePageBytes);
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(w.blocks.data()) % kHugePageBytes, 0u);
   EXPECT_EQ(reinterpret_cast<uintptr_t>(w.nodes.data()) % alignof(bvh::WideNode), 0u);
-  std::vector<bvh::WideNode, bvh::HugePageAllocator<bvh::WideNode>> grown;
+  HugePageVector<bvh::WideNode> grown;
   for (int i = 0; i < 20000; ++i) grown.emplace_back();  // through sizes on both sides of 2 MiB
-  EXPECT_EQ(reinterpret_cast<uintptr_t>(grown.data()) % bvh::kHugePageBytes, 0u);
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(grown.data()) % kHugePageBytes, 0u);
 }
 
 }  // namespace

@@ -287,7 +287,7 @@ TEST(LabShadowRays, BatchEqualsScalarBitForBit) {
       return h;
     };
     const glm::vec3 v0 = mesh.v0()[n / 2];
-    const glm::vec3 on_plane = v0 + 0.5f * mesh.e1()[n / 2] + 0.25f * mesh.e2()[n / 2];
+    const glm::vec3 on_plane = v0 + 0.5f * mesh.e1(n / 2) + 0.25f * mesh.e2(n / 2);
     const glm::vec3 lights[] = {scene.lights.at(0).position, v0, on_plane,
                                 glm::vec3(0.3f, 0.9f, 0.2f), glm::vec3(-1e4f, 2e3f, 5e3f)};
     for (const glm::vec3 light : lights) {

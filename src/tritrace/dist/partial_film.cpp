@@ -48,8 +48,8 @@ class Hasher {
     h_ = hash_combine(hash_combine(h_, tail), n);
   }
   template <typename T>
-  void add_vector(const std::vector<T>& v) {
-    add(v.data(), v.size() * sizeof(T));
+  void add_vector(const T& v) {  // any contiguous container
+    add(v.data(), v.size() * sizeof(v[0]));
   }
   void add_value(const auto& v) { add(&v, sizeof v); }
   uint64_t value() const { return h_; }

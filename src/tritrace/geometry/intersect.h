@@ -250,15 +250,12 @@ inline bool intersect_triangle(const Ray& ray, const glm::vec3& v0, const glm::v
   }
 }
 
-// The triangle arrays a loop over a mesh reads (TriangleMesh::arrays()). Each kernel reads only
-// what it needs: the watertight kernel the vertices, the others v0 and the edges; unused loads
-// vanish once the kernel is inlined.
+// The triangle arrays a loop over a mesh reads (TriangleMesh::arrays()): the vertices exactly as
+// given. The watertight kernel reads them; the others read v0 and the edges v1 - v0, v2 - v0.
 struct TriangleArrays {
   const glm::vec3* v0 = nullptr;
   const glm::vec3* v1 = nullptr;
   const glm::vec3* v2 = nullptr;
-  const glm::vec3* e1 = nullptr;
-  const glm::vec3* e2 = nullptr;
 };
 
 // A ray with kernel K's per-ray work done, for loops that test one ray against many triangles:
@@ -269,7 +266,8 @@ class PreparedRay {
  public:
   explicit PreparedRay(const Ray& ray) : ray_(ray) {}
   bool intersect(const TriangleArrays& tris, size_t i, TriangleHit& out) const {
-    return intersect_triangle<K>(ray_, tris.v0[i], tris.e1[i], tris.e2[i], out);
+    const glm::vec3 v0 = tris.v0[i];
+    return intersect_triangle<K>(ray_, v0, tris.v1[i] - v0, tris.v2[i] - v0, out);
   }
 
  private:

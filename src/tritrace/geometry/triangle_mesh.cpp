@@ -25,8 +25,6 @@ void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& 
   v0_.push_back(a);
   v1_.push_back(b);
   v2_.push_back(c);
-  e1_.push_back(e1);
-  e2_.push_back(e2);
   normal_.push_back(face_normal(e1, e2));
   material_.push_back(material);
   if (!corner_normals_.empty()) corner_normals_.insert(corner_normals_.end(), 3, normal_.back());
@@ -76,14 +74,14 @@ glm::vec3 TriangleMesh::shading_normal(size_t tri, float u, float v) const {
 }
 
 void TriangleMesh::reserve(size_t triangles) {
-  for (auto* v : {&v0_, &v1_, &v2_, &e1_, &e2_, &normal_}) v->reserve(triangles);
+  for (auto* v : {&v0_, &v1_, &v2_, &normal_}) v->reserve(triangles);
   material_.reserve(triangles);
   if (!corner_normals_.empty()) corner_normals_.reserve(3 * triangles);
   if (!corner_uvs_.empty()) corner_uvs_.reserve(3 * triangles);
 }
 
 void TriangleMesh::resize(size_t triangles, bool corner_normals, bool corner_uvs) {
-  for (auto* v : {&v0_, &v1_, &v2_, &e1_, &e2_, &normal_}) v->resize(triangles);
+  for (auto* v : {&v0_, &v1_, &v2_, &normal_}) v->resize(triangles);
   material_.resize(triangles);
   corner_normals_.resize(corner_normals ? 3 * triangles : 0);
   corner_uvs_.resize(corner_uvs ? 3 * triangles : 0);
@@ -99,8 +97,6 @@ void TriangleMesh::set(size_t i, const glm::vec3& a, const glm::vec3& b, const g
   v0_[i] = a;
   v1_[i] = b;
   v2_[i] = c;
-  e1_[i] = e1;
-  e2_[i] = e2;
   normal_[i] = face_normal(e1, e2);
   material_[i] = material;
   if (has_shading_normals()) {
@@ -116,8 +112,6 @@ void TriangleMesh::append(const TriangleMesh& other, uint32_t material_offset) {
   v0_.insert(v0_.end(), other.v0_.begin(), other.v0_.end());
   v1_.insert(v1_.end(), other.v1_.begin(), other.v1_.end());
   v2_.insert(v2_.end(), other.v2_.begin(), other.v2_.end());
-  e1_.insert(e1_.end(), other.e1_.begin(), other.e1_.end());
-  e2_.insert(e2_.end(), other.e2_.begin(), other.e2_.end());
   normal_.insert(normal_.end(), other.normal_.begin(), other.normal_.end());
   for (uint32_t m : other.material_) material_.push_back(m + material_offset);
   if (!other.corner_uvs_.empty() || !corner_uvs_.empty()) {

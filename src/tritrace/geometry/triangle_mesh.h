@@ -1,7 +1,8 @@
-// TriangleMesh: triangles stored as structure-of-arrays (v0, e1 = v1 - v0, e2 = v2 - v0, and the
-// vertices v1, v2 themselves for the watertight kernel), the layouts the kernels read, plus the
-// geometric normal and a material id per triangle, and optionally per-corner shading normals and
-// texture coordinates.
+// TriangleMesh: triangles stored as structure-of-arrays (the vertices v0, v1, v2 exactly as given,
+// which the watertight kernel reads; the edges e1 = v1 - v0, e2 = v2 - v0 the other kernels read
+// are recomputed from them, bit for bit what storing them gave), plus the geometric normal and a
+// material id per triangle, and optionally per-corner shading normals and texture coordinates.
+// The arrays live on huge pages (huge_page_allocator.h): a 10-million-triangle mesh is 485 MiB.
 #pragma once
 
 #include <array>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "tritrace/geometry/intersect.h"
+#include "tritrace/huge_page_allocator.h"
 #include "tritrace/math/bounds.h"
 
 namespace tritrace {
@@ -44,24 +46,25 @@ class TriangleMesh {
   size_t size() const { return v0_.size(); }
   bool empty() const { return v0_.empty(); }
 
-  const std::vector<glm::vec3>& v0() const { return v0_; }
+  const HugePageVector<glm::vec3>& v0() const { return v0_; }
   // The vertices exactly as given to add(): v0 + e1 rounds, and the watertight kernel needs
   // neighbouring triangles to see bit-identical shared vertices.
-  const std::vector<glm::vec3>& v1() const { return v1_; }
-  const std::vector<glm::vec3>& v2() const { return v2_; }
-  const std::vector<glm::vec3>& e1() const { return e1_; }
-  const std::vector<glm::vec3>& e2() const { return e2_; }
-  const std::vector<glm::vec3>& normal() const { return normal_; }
-  const std::vector<uint32_t>& material() const { return material_; }
+  const HugePageVector<glm::vec3>& v1() const { return v1_; }
+  const HugePageVector<glm::vec3>& v2() const { return v2_; }
+  // The edges v1 - v0 and v2 - v0 of triangle `tri` (the operations add() always used for them).
+  glm::vec3 e1(size_t tri) const { return v1_[tri] - v0_[tri]; }
+  glm::vec3 e2(size_t tri) const { return v2_[tri] - v0_[tri]; }
+  const HugePageVector<glm::vec3>& normal() const { return normal_; }
+  const HugePageVector<uint32_t>& material() const { return material_; }
   // Three per triangle (corners in the order given to add()), or empty when no triangle has any.
-  const std::vector<glm::vec3>& corner_normals() const { return corner_normals_; }
+  const HugePageVector<glm::vec3>& corner_normals() const { return corner_normals_; }
   bool has_shading_normals() const { return !corner_normals_.empty(); }
   // The corner normals interpolated at barycentrics (u, v) (weights 1 - u - v, u, v for corners
   // 0, 1, 2, as in v0 + u e1 + v e2) and normalised; the geometric normal when the mesh has no
   // shading normals or the interpolation vanishes. Not yet turned to any side.
   glm::vec3 shading_normal(size_t tri, float u, float v) const;
   // Three per triangle, or empty when no triangle has any.
-  const std::vector<glm::vec2>& corner_uvs() const { return corner_uvs_; }
+  const HugePageVector<glm::vec2>& corner_uvs() const { return corner_uvs_; }
   bool has_uvs() const { return !corner_uvs_.empty(); }
   // The corner texture coordinates interpolated at barycentrics (u, v); (0, 0) without any.
   glm::vec2 uv(size_t tri, float u, float v) const;
@@ -69,15 +72,13 @@ class TriangleMesh {
   glm::vec3 vertex(size_t tri, int corner) const;  // corner 0, 1 or 2, exactly as added
   Bounds3 bounds() const;                          // of the whole mesh; all zero when empty
   Bounds3 triangle_bounds(size_t tri) const;
-  TriangleArrays arrays() const {
-    return {v0_.data(), v1_.data(), v2_.data(), e1_.data(), e2_.data()};
-  }
+  TriangleArrays arrays() const { return {v0_.data(), v1_.data(), v2_.data()}; }
 
  private:
-  std::vector<glm::vec3> v0_, v1_, v2_, e1_, e2_, normal_;
-  std::vector<uint32_t> material_;
-  std::vector<glm::vec3> corner_normals_;
-  std::vector<glm::vec2> corner_uvs_;
+  HugePageVector<glm::vec3> v0_, v1_, v2_, normal_;
+  HugePageVector<uint32_t> material_;
+  HugePageVector<glm::vec3> corner_normals_;
+  HugePageVector<glm::vec2> corner_uvs_;
 };
 
 }  // namespace tritrace

@@ -111,7 +111,7 @@ V3 select(VM m, V3 a, V3 b) {
   return {simd::select(m, a.x, b.x), simd::select(m, a.y, b.y), simd::select(m, a.z, b.z)};
 }
 // Lane l reads points[prim[l]], with first[l] = 3 * prim[l] (the float index of its x).
-V3 gather3(const std::vector<glm::vec3>& points, VI first) {
+V3 gather3(const HugePageVector<glm::vec3>& points, VI first) {
   static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
   const float* base = &points[0].x;
   return {simd::gather(base, first), simd::gather(base + 1, first), simd::gather(base + 2, first)};
@@ -163,8 +163,8 @@ void shadow_lanes(const TriangleMesh& mesh, const Hit* hits, int count, glm::vec
   if (same) {
     const size_t p = hits[first_found].prim;
     v0 = splat3(mesh.v0()[p]);
-    e1 = splat3(mesh.e1()[p]);
-    e2 = splat3(mesh.e2()[p]);
+    e1 = splat3(mesh.e1(p));
+    e2 = splat3(mesh.e2(p));
     normal = splat3(mesh.normal()[p]);
   } else {
     // A missed ray's lane reads triangle 0; its results are never used.
@@ -172,8 +172,8 @@ void shadow_lanes(const TriangleMesh& mesh, const Hit* hits, int count, glm::vec
     const VI valid = simd::select(prim == simd::splat_i(-1), simd::splat_i(0), prim);
     const VI first = valid + valid + valid;
     v0 = gather3(mesh.v0(), first);
-    e1 = gather3(mesh.e1(), first);
-    e2 = gather3(mesh.e2(), first);
+    e1 = gather3(mesh.v1(), first) - v0;  // the stored edges' operations, lane by lane
+    e2 = gather3(mesh.v2(), first) - v0;
     normal = gather3(mesh.normal(), first);
   }
   static_assert(kNoHit == static_cast<uint32_t>(-1));

@@ -126,7 +126,7 @@ struct SurfaceTriangle {
 
 // Triangle `prim` of `mesh`, as stored.
 inline SurfaceTriangle stored_triangle(const TriangleMesh& mesh, uint32_t prim) {
-  return {mesh.v0()[prim], mesh.e1()[prim], mesh.e2()[prim], mesh.normal()[prim],
+  return {mesh.v0()[prim], mesh.e1(prim), mesh.e2(prim), mesh.normal()[prim],
           mesh.material()[prim]};
 }
 

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "tritrace/accel/bvh/binned_sah_builder.h"
-#include "tritrace/accel/bvh/huge_page_allocator.h"
 #include "tritrace/geometry/triangle_mesh.h"
+#include "tritrace/huge_page_allocator.h"
 
 namespace tritrace::bvh {
 
@@ -58,9 +58,8 @@ struct alignas(32) TriangleBlock {
 static_assert(sizeof(TriangleBlock) == 320);
 
 struct WideBvh {
-  std::vector<WideNode, HugePageAllocator<WideNode>>
-      nodes;  // nodes[0] is the root; empty when the mesh is
-  std::vector<TriangleBlock, HugePageAllocator<TriangleBlock>> blocks;
+  HugePageVector<WideNode> nodes;  // nodes[0] is the root; empty when the mesh is
+  HugePageVector<TriangleBlock> blocks;
   size_t triangles = 0;
 
   size_t node_bytes() const { return nodes.size() * sizeof(WideNode); }

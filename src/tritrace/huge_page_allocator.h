@@ -1,19 +1,23 @@
-// HugePageAllocator: the allocator of the BVH's node and triangle arrays. Incoherent rays through a
-// big mesh reach nodes and leaves all over tens of MiB, so with 4 KiB pages nearly every visit also
-// misses the TLB; arrays of 2 MiB or more are therefore placed on 2 MiB boundaries and offered to
-// the kernel's transparent huge pages (madvise), which Debian enables on request by default.
+// HugePageAllocator: the allocator of big arrays (the BVH's nodes and triangle blocks, the mesh's
+// triangles, the build's references). Arrays of 2 MiB or more are placed on 2 MiB boundaries and
+// offered to the kernel's transparent huge pages (madvise), which Debian enables on request by
+// default. Two reasons: incoherent rays through a big mesh reach nodes and leaves all over tens of
+// MiB, so with 4 KiB pages nearly every visit also misses the TLB; and the first touch of fresh
+// memory costs about 0.7 s per GiB in 4 KiB pages on the machines measured, 0.14 s in 2 MiB pages
+// (docs/PERFORMANCE.md), which is most of loading and building a big mesh.
 #pragma once
 
 #include <cstddef>
 #include <cstdlib>
 #include <new>
 #include <utility>
+#include <vector>
 
 #if defined(__linux__)
 #include <sys/mman.h>
 #endif
 
-namespace tritrace::bvh {
+namespace tritrace {
 
 inline constexpr size_t kHugePageBytes = size_t{2} << 20;
 
@@ -49,7 +53,8 @@ struct HugePageAllocator {
   }
 
   // Elements made without arguments are default-initialised, not zeroed: a resize of the block
-  // array leaves its 425 MiB (terrain:10m) to be written once, in parallel, by its filler.
+  // array leaves its 425 MiB (terrain:10m) to be written once, in parallel, by its filler (and a
+  // resize of a vector of floats leaves them indeterminate: fill what you resize).
   template <typename U, typename... Args>
   void construct(U* p, Args&&... args) {
     if constexpr (sizeof...(Args) == 0) {
@@ -65,4 +70,8 @@ struct HugePageAllocator {
   }
 };
 
-}  // namespace tritrace::bvh
+// A vector whose elements live on huge pages once it holds 2 MiB or more.
+template <typename T>
+using HugePageVector = std::vector<T, HugePageAllocator<T>>;
+
+}  // namespace tritrace
