@@ -46,11 +46,11 @@ ASAN_EXCLUDE = CliTest.ModelThatCrashesTheImporterIsAnError
 # deliberate process-lifetime allocations LeakSanitizer would otherwise report when it exits.
 # The multi-threaded tests: the renderer's (thread-count and tile-size invariance through brute
 # force, the BVH's packet path and Embree's three modes; the threads it runs; whole images), the
-# parallel SAH build (serial against parallel, with tasks from 64 primitives up) and the Embree
+# parallel SAH and Morton builds (serial against parallel) and the Embree
 # backend, whose build runs on TBB threads; the wide BVH's build (BvhInvariants.*) and the path
 # tracer's multi-threaded renders (PathRender.*).
-TSAN_TESTS = Renderer.*:Placements/*:BinnedSahBuilder.ParallelBuildMakesTheSerialTree:Modes/EmbreeVsBrute.*:EmbreeAccel.*:BvhInvariants.*:PathRender.*
-# They live in six test files, which tests/CMakeLists.txt builds alone as tritrace_tsan_tests.
+TSAN_TESTS = Renderer.*:Placements/*:BinnedSahBuilder.ParallelBuildMakesTheSerialTree:MortonBuilder.ParallelBuildMakesTheSerialTree:Modes/EmbreeVsBrute.*:EmbreeAccel.*:BvhInvariants.*:PathRender.*
+# They live in seven test files, which tests/CMakeLists.txt builds alone as tritrace_tsan_tests.
 
 # The portable build (TRITRACE_NATIVE=OFF: -march=x86-64-v3, AVX2) compiles the AVX2 code paths,
 # which a -march=native build on an AVX-512 machine does not; only the test binary is built, and

@@ -127,6 +127,11 @@ std::string check_accel(const std::string& name) {
   return "unknown acceleration structure '" + name + "' (use " + accel_list() + ")";
 }
 
+std::string check_bvh_build(const std::string& name) {
+  if (parse_bvh_build(name)) return "";
+  return "unknown BVH build '" + name + "' (use sah or morton)";
+}
+
 std::string check_kernel(const std::string& name) {
   if (parse_kernel(name)) return "";
   return "unknown kernel '" + name + "' (use " + kernel_list() + ")";

@@ -44,6 +44,7 @@ std::string kernel_list();  // "inverse|cramer|..."
 std::string accel_list();   // the accels this build has
 std::string check_builtin_scene(const std::string& name);
 std::string check_accel(const std::string& name);
+std::string check_bvh_build(const std::string& name);  // sah or morton
 std::string check_kernel(const std::string& name);
 
 // A checker as a CLI11 validator (no description of its own: --help shows the option's text).

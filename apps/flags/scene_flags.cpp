@@ -43,6 +43,18 @@ void add_scene_flags(CLI::App& app, SceneFlags& flags) {
                      "accel; Embree always uses its own)")
       ->type_name("NAME")
       ->check(checked(check_kernel));
+  app.add_option("--bvh-build", flags.bvh_build,
+                 "How bvh and bvh-single build their tree: sah (binned SAH: slower to build, "
+                 "fastest to trace), morton (Morton codes: several times faster to build, slower "
+                 "to trace) or auto (morton when the render traces fewer rays than the scene has "
+                 "triangles, else sah); the image is the same")
+      ->type_name("NAME")
+      ->capture_default_str()
+      ->check(checked([](std::string& s) {
+        return s == "auto" || parse_bvh_build(s)
+                   ? std::string()
+                   : "unknown BVH build '" + s + "' (use auto, sah or morton)";
+      }));
   app.add_option("--yaw", flags.yaw,
                  "Orbit the camera about the vertical axis through what it looks at, radians "
                  "(default 0)")
@@ -140,6 +152,11 @@ AccelKind accel_kind(const SceneFlags& flags) {
 
 Kernel kernel_choice(const SceneFlags& flags) {
   return flags.kernel.empty() ? default_kernel_for(accel_kind(flags)) : *parse_kernel(flags.kernel);
+}
+
+bvh::BuildMethod bvh_build_choice(const SceneFlags& flags, size_t triangles, double rays) {
+  if (flags.bvh_build == "auto") return bvh_build_for(triangles, rays);
+  return *parse_bvh_build(flags.bvh_build);
 }
 
 int thread_count(const SceneFlags& flags) {

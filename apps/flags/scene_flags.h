@@ -1,6 +1,7 @@
 // The flags that choose a scene and its view (FILE, --scene, --accel, --kernel, --width, --height,
-// --yaw, --distance, --light, --threads), shared by `tritrace render` and `tritrace-view` so that
-// both accept the same values with the same messages and build the same Scene from them.
+// --bvh-build, --yaw, --distance, --light, --threads), shared by `tritrace render` and
+// `tritrace-view` so that both accept the same values with the same messages and build the same
+// Scene from them.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -21,6 +22,7 @@ struct SceneFlags {
   std::string scene;  // a built-in scene name; empty: cornell
   std::string accel = "bvh";
   std::string kernel;  // empty: the accel's default kernel
+  std::string bvh_build = "auto";
   std::string yaw;
   std::string distance;
   std::string light;
@@ -40,6 +42,8 @@ void add_scene_flags(CLI::App& app, SceneFlags& flags);
 SceneOverrides scene_overrides(const SceneFlags& flags);
 AccelKind accel_kind(const SceneFlags& flags);
 Kernel kernel_choice(const SceneFlags& flags);
+// --bvh-build: sah or morton as given; auto: bvh_build_for(triangles, rays).
+bvh::BuildMethod bvh_build_choice(const SceneFlags& flags, size_t triangles, double rays);
 int thread_count(const SceneFlags& flags);  // 0: all cores
 // The scene's integrator settings with the flags given applied over them.
 IntegratorSpec integrator_spec(const SceneFlags& flags, const LoadedScene& loaded);

@@ -32,7 +32,6 @@ constexpr double kBruteBudgetSeconds = 3.0;
 constexpr double kBruteNsPerTest = 4.0;  // Möller–Trumbore, measured in docs/PERFORMANCE.md
 // Rays a path traces on average, for that estimate: camera ray, bounces and shadow rays. Measured
 // on cornell-area at 16 spp (RenderStats rays over samples): 4.8.
-constexpr double kPathRaysPerSample = 5.0;
 
 // The path tracer's samples per pixel when --spp is not given: enough that bounces dominate the
 // frame, few enough that every accel of a run takes seconds.
@@ -42,8 +41,9 @@ struct Record {
   std::string scene;
   size_t triangles = 0;
   std::string accel;
-  std::string kernel;   // "embree" for Embree's own
-  bool robust = false;  // Embree with RTC_SCENE_FLAG_ROBUST
+  std::string kernel;     // "embree" for Embree's own
+  std::string bvh_build;  // bvh and bvh-single: "sah" or "morton"; empty for the others
+  bool robust = false;    // Embree with RTC_SCENE_FLAG_ROBUST
   double build_ms = 0.0;
   double bytes_per_tri = 0.0;
   double copy_bytes_per_tri = 0.0;
@@ -75,6 +75,7 @@ nlohmann::json to_json(const Record& r) {
                       {"triangles", r.triangles},
                       {"accel", r.accel},
                       {"kernel", r.kernel},
+                      {"bvh_build", r.bvh_build},
                       {"robust", r.robust},
                       {"build_ms", r.build_ms},
                       {"bytes_per_tri", r.bytes_per_tri},
@@ -156,6 +157,12 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
                   "(default: each one's own, as in render)")
       ->type_name("NAME")
       ->check(checked(check_kernel));
+  sub->add_option("--bvh-build", args.bvh_builds,
+                  "How bvh and bvh-single build their tree, repeatable: one row per build: sah "
+                  "(binned SAH) or morton (Morton codes: faster to build, slower to trace); "
+                  "default sah")
+      ->type_name("NAME")
+      ->check(checked(check_bvh_build));
   sub->add_option("--json", args.json, "Also write the records as a JSON array to PATH")
       ->type_name("PATH");
   sub->add_flag("-q,--quiet", args.quiet, "Print only the table");
@@ -236,61 +243,77 @@ int run_bench(const BenchArgs& args) {
       } else {
         kernels.assign(chosen_kernels.begin(), chosen_kernels.end());
       }
+      std::vector<std::optional<bvh::BuildMethod>> builds = {std::nullopt};
+      if (kind == AccelKind::kBvh || kind == AccelKind::kBvhSingle) {
+        builds = {bvh::BuildMethod::kBinnedSah};
+        if (!args.bvh_builds.empty()) builds.clear();
+        for (const std::string& name : args.bvh_builds) {
+          const bvh::BuildMethod b = *parse_bvh_build(name);
+          if (std::find(builds.begin(), builds.end(), b) == builds.end()) builds.push_back(b);
+        }
+      }
       for (const std::optional<Kernel> kernel : kernels) {
-        Record r;
-        r.scene = scene_name;
-        r.triangles = static_cast<size_t>(scene.drawn_triangles());
-        r.accel = std::string(accel_name(kind));
-        r.kernel = kernel ? std::string(kernel_name(*kernel)) : "embree";
-        r.robust = kind == AccelKind::kEmbreeRobust;
-        r.threads = threads;
-        r.width = width;
-        r.height = height;
-        r.integrator = std::string(integrator_name(spec.kind));
-        r.spp = spec.spp;
-        if (kind == AccelKind::kBrute) {
-          const double rays_per_pixel = path ? kPathRaysPerSample * spec.spp : 2.0;
-          const double estimate = rays_per_pixel * width * height *
-                                  static_cast<double>(scene.drawn_triangles()) * kBruteNsPerTest *
-                                  1e-9 / threads;
-          if (estimate > kBruteBudgetSeconds) {
-            char line[160];
-            std::snprintf(
-                line, sizeof(line), "%-13s %10zu %-13s %-15s skipped: about %.0f s per frame",
-                scene_name.c_str(), r.triangles, r.accel.c_str(), r.kernel.c_str(), estimate);
-            skipped.emplace_back(line);
-            continue;
+        for (const std::optional<bvh::BuildMethod> build : builds) {
+          Record r;
+          r.scene = scene_name;
+          r.triangles = static_cast<size_t>(scene.drawn_triangles());
+          r.accel = std::string(accel_name(kind));
+          if (build) {
+            r.bvh_build = std::string(bvh_build_name(*build));
+            if (*build != bvh::BuildMethod::kBinnedSah) r.accel += "/" + r.bvh_build;
           }
+          r.kernel = kernel ? std::string(kernel_name(*kernel)) : "embree";
+          r.robust = kind == AccelKind::kEmbreeRobust;
+          r.threads = threads;
+          r.width = width;
+          r.height = height;
+          r.integrator = std::string(integrator_name(spec.kind));
+          r.spp = spec.spp;
+          if (kind == AccelKind::kBrute) {
+            const double estimate = expected_rays(spec, static_cast<uint64_t>(width) * height) *
+                                    static_cast<double>(scene.drawn_triangles()) * kBruteNsPerTest *
+                                    1e-9 / threads;
+            if (estimate > kBruteBudgetSeconds) {
+              char line[160];
+              std::snprintf(
+                  line, sizeof(line), "%-13s %10zu %-13s %-15s skipped: about %.0f s per frame",
+                  scene_name.c_str(), r.triangles, r.accel.c_str(), r.kernel.c_str(), estimate);
+              skipped.emplace_back(line);
+              continue;
+            }
+          }
+          AccelInfo info;
+          // Embree ignores the kernel.
+          const std::unique_ptr<Accel> accel =
+              make_accel(kind, scene, kernel.value_or(kDefaultKernel), &info,
+                         build.value_or(bvh::BuildMethod::kBinnedSah));
+          r.build_ms = info.build_ms;
+          r.bytes_per_tri =
+              static_cast<double>(info.structure_bytes) / std::max<size_t>(1, r.triangles);
+          r.copy_bytes_per_tri =
+              static_cast<double>(info.triangle_copy_bytes) / std::max<size_t>(1, r.triangles);
+          const std::unique_ptr<Integrator> integrator = make_integrator(spec, scene);
+          std::vector<double> ms;
+          uint64_t rays = 0, samples = 0;
+          for (int i = 0; i <= reps; ++i) {  // frame 0 warms caches and threads up, untimed
+            RenderStats stats;
+            render(
+                scene, *accel, *integrator,
+                {.threads = threads, .spp = spec.spp, .seed = spec.seed, .sampler = spec.sampler},
+                &stats);
+            if (i == 0) continue;
+            ms.push_back(stats.milliseconds);
+            rays += stats.rays;
+            samples += stats.samples;
+          }
+          r.frame_ms_median = median(ms);
+          r.frame_ms_min = *std::min_element(ms.begin(), ms.end());
+          r.frame_ms_max = *std::max_element(ms.begin(), ms.end());
+          // Rays per frame are the same every frame; the rate uses the median frame.
+          r.mrays_per_s = static_cast<double>(rays) / reps / (r.frame_ms_median * 1e3);
+          r.mpaths_per_s = static_cast<double>(samples) / reps / (r.frame_ms_median * 1e3);
+          records.push_back(r);
         }
-        AccelInfo info;
-        // Embree ignores the kernel.
-        const std::unique_ptr<Accel> accel =
-            make_accel(kind, scene, kernel.value_or(kDefaultKernel), &info);
-        r.build_ms = info.build_ms;
-        r.bytes_per_tri =
-            static_cast<double>(info.structure_bytes) / std::max<size_t>(1, r.triangles);
-        r.copy_bytes_per_tri =
-            static_cast<double>(info.triangle_copy_bytes) / std::max<size_t>(1, r.triangles);
-        const std::unique_ptr<Integrator> integrator = make_integrator(spec, scene);
-        std::vector<double> ms;
-        uint64_t rays = 0, samples = 0;
-        for (int i = 0; i <= reps; ++i) {  // frame 0 warms caches and threads up, untimed
-          RenderStats stats;
-          render(scene, *accel, *integrator,
-                 {.threads = threads, .spp = spec.spp, .seed = spec.seed, .sampler = spec.sampler},
-                 &stats);
-          if (i == 0) continue;
-          ms.push_back(stats.milliseconds);
-          rays += stats.rays;
-          samples += stats.samples;
-        }
-        r.frame_ms_median = median(ms);
-        r.frame_ms_min = *std::min_element(ms.begin(), ms.end());
-        r.frame_ms_max = *std::max_element(ms.begin(), ms.end());
-        // Rays per frame are the same every frame; the rate uses the median frame.
-        r.mrays_per_s = static_cast<double>(rays) / reps / (r.frame_ms_median * 1e3);
-        r.mpaths_per_s = static_cast<double>(samples) / reps / (r.frame_ms_median * 1e3);
-        records.push_back(r);
       }
     }
     // Ratios against the fastest non-robust Embree mode of this scene (Embree at its fastest), and

@@ -22,9 +22,10 @@ struct BenchArgs {
   std::string height;  // empty: 1080 (path: 256)
   std::string spp;     // path only; empty: 16
   std::string reps = "5";
-  std::string threads;               // empty: all cores
-  std::vector<std::string> kernels;  // empty: each accel's default kernel
-  std::string json;                  // empty: no JSON file
+  std::string threads;                  // empty: all cores
+  std::vector<std::string> kernels;     // empty: each accel's default kernel
+  std::vector<std::string> bvh_builds;  // empty: sah
+  std::string json;                     // empty: no JSON file
   bool quiet = false;
 };
 

@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -250,8 +251,11 @@ class Viewer {
               cli::building_phase(cli::accel_kind(options_.scene), loaded_.scene.drawn_triangles());
           phase_start = Clock::now();
         }
+        // The viewer traces frame after frame: auto means the tree that traces fastest.
         accel_ = make_accel(cli::accel_kind(options_.scene), loaded_.scene,
-                            cli::kernel_choice(options_.scene));
+                            cli::kernel_choice(options_.scene), nullptr,
+                            cli::bvh_build_choice(options_.scene, loaded_.scene.stored_triangles(),
+                                                  std::numeric_limits<double>::infinity()));
       } catch (...) {
         error = std::current_exception();
       }

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <random>
 #include <set>
+#include <tuple>
 #include <vector>
 
 #include "test_rays.h"
@@ -22,10 +23,17 @@ namespace {
 using bvh::kLeafBit;
 using bvh::WideBvh;
 
+bvh::BuildConfig with_method(bvh::BuildMethod method) {
+  bvh::BuildConfig config;
+  config.method = method;
+  return config;
+}
+
 void expect_same_as_brute(const TriangleMesh& mesh, Kernel kernel, int rays_count, uint32_t seed,
-                          BvhTraversal traversal = BvhTraversal::kAuto, bool coherent = false) {
+                          BvhTraversal traversal = BvhTraversal::kAuto, bool coherent = false,
+                          bvh::BuildMethod method = bvh::BuildMethod::kBinnedSah) {
   const BruteForceAccel brute(mesh, kernel);
-  const BvhAccel accel(mesh, kernel, {}, traversal);
+  const BvhAccel accel(mesh, kernel, with_method(method), traversal);
   const std::vector<Ray> rays =
       coherent ? coherent_rays(mesh, rays_count / 16, seed) : awkward_rays(mesh, rays_count, seed);
   std::vector<Hit> want(rays.size()), got(rays.size());
@@ -49,18 +57,27 @@ void expect_same_as_brute(const TriangleMesh& mesh, Kernel kernel, int rays_coun
   EXPECT_GT(hits, rays_count / 5) << "too few hits for the comparison to mean much";
 }
 
-class BvhVsBrute : public ::testing::TestWithParam<Kernel> {};
+// Every kernel through the trees of both builds.
+class BvhVsBrute : public ::testing::TestWithParam<std::tuple<Kernel, bvh::BuildMethod>> {
+ protected:
+  Kernel kernel() const { return std::get<0>(GetParam()); }
+  bvh::BuildMethod method() const { return std::get<1>(GetParam()); }
+  void expect_same(const TriangleMesh& mesh, int rays_count, uint32_t seed,
+                   bool coherent = false) const {
+    expect_same_as_brute(mesh, kernel(), rays_count, seed, BvhTraversal::kAuto, coherent, method());
+  }
+};
 
 TEST_P(BvhVsBrute, CornellBoxSameHitsBitForBit) {
-  expect_same_as_brute(make_cornell_box().mesh, GetParam(), 20000, 1);
+  expect_same(make_cornell_box().mesh, 20000, 1);
 }
 
 TEST_P(BvhVsBrute, TerrainSameHitsBitForBit) {
-  expect_same_as_brute(make_terrain_scene(20000).mesh, GetParam(), 4000, 2);
+  expect_same(make_terrain_scene(20000).mesh, 4000, 2);
 }
 
 TEST_P(BvhVsBrute, RandomSoupSameHitsBitForBit) {
-  expect_same_as_brute(random_soup(3000, 3), GetParam(), 4000, 4);
+  expect_same(random_soup(3000, 3), 4000, 4);
 }
 
 TEST_P(BvhVsBrute, MixedMagnitudeSoupSameHitsBitForBit) {
@@ -71,20 +88,19 @@ TEST_P(BvhVsBrute, MixedMagnitudeSoupSameHitsBitForBit) {
         mesh.v0()[i] + mesh.e1(i) != mesh.v1()[i] || mesh.v0()[i] + mesh.e2(i) != mesh.v2()[i];
   }
   ASSERT_GT(rebuilt_differs, 300);
-  expect_same_as_brute(mesh, GetParam(), 8000, 10);
-  expect_same_as_brute(mesh, GetParam(), 8000, 11, BvhTraversal::kAuto, true);
+  expect_same(mesh, 8000, 10);
+  expect_same(mesh, 8000, 11, true);
 }
 
 TEST_P(BvhVsBrute, CoherentPacketsSameHitsBitForBit) {
-  expect_same_as_brute(make_cornell_box().mesh, GetParam(), 16000, 5, BvhTraversal::kAuto, true);
-  expect_same_as_brute(make_terrain_scene(20000).mesh, GetParam(), 8000, 6, BvhTraversal::kAuto,
-                       true);
-  expect_same_as_brute(random_soup(3000, 7), GetParam(), 8000, 8, BvhTraversal::kAuto, true);
+  expect_same(make_cornell_box().mesh, 16000, 5, true);
+  expect_same(make_terrain_scene(20000).mesh, 8000, 6, true);
+  expect_same(random_soup(3000, 7), 8000, 8, true);
 }
 
-void expect_same_image_as_brute(const Scene& scene, Kernel kernel) {
+void expect_same_image_as_brute(const Scene& scene, Kernel kernel, bvh::BuildMethod method) {
   const BruteForceAccel brute(scene.mesh, kernel);
-  const BvhAccel accel(scene.mesh, kernel);
+  const BvhAccel accel(scene.mesh, kernel, with_method(method));
   const Image a = render(scene, brute, LabIntegrator{}, {});
   const Image b = render(scene, accel, LabIntegrator{}, {});
   EXPECT_EQ(
@@ -93,12 +109,12 @@ void expect_same_image_as_brute(const Scene& scene, Kernel kernel) {
 
 TEST_P(BvhVsBrute, TerrainImageIsIdentical) {
   expect_same_image_as_brute(make_terrain_scene(20000, {.width = 64, .height = 48, .yaw = -0.3}),
-                             GetParam());
+                             kernel(), method());
 }
 
 TEST_P(BvhVsBrute, CornellImageIsIdentical) {
-  expect_same_image_as_brute(make_cornell_box({.width = 200, .height = 200, .yaw = 0.4}),
-                             GetParam());
+  expect_same_image_as_brute(make_cornell_box({.width = 200, .height = 200, .yaw = 0.4}), kernel(),
+                             method());
 }
 
 // kAuto uses packets for Möller–Trumbore; the single-ray path must agree as well.
@@ -111,17 +127,24 @@ TEST(BvhSingleRayTraversal, SameHitsBitForBit) {
                        BvhTraversal::kSingle);
 }
 
-INSTANTIATE_TEST_SUITE_P(AllKernels, BvhVsBrute, ::testing::ValuesIn(kAllKernels),
+INSTANTIATE_TEST_SUITE_P(AllKernels, BvhVsBrute,
+                         ::testing::Combine(::testing::ValuesIn(kAllKernels),
+                                            ::testing::Values(bvh::BuildMethod::kBinnedSah,
+                                                              bvh::BuildMethod::kMorton)),
                          [](const auto& info) {
-                           std::string name(kernel_name(info.param));
+                           std::string name(kernel_name(std::get<0>(info.param)));
                            std::erase(name, '-');
+                           if (std::get<1>(info.param) == bvh::BuildMethod::kMorton) {
+                             name += "_morton";
+                           }
                            return name;
                          });
 
 // Walks the tree: every triangle in exactly one leaf lane, leaves within the size limit, every
 // child's box inside its parent's slot box.
-void check_invariants(const TriangleMesh& mesh) {
-  const WideBvh tree = bvh::build_wide_bvh(mesh);
+void check_invariants(const TriangleMesh& mesh,
+                      bvh::BuildMethod method = bvh::BuildMethod::kBinnedSah) {
+  const WideBvh tree = bvh::build_wide_bvh(mesh, with_method(method));
   ASSERT_EQ(tree.triangles, mesh.size());
   if (mesh.empty()) {
     EXPECT_TRUE(tree.nodes.empty());
@@ -170,25 +193,31 @@ void check_invariants(const TriangleMesh& mesh) {
 
 TEST(BvhInvariants, CornellBox) {
   check_invariants(make_cornell_box().mesh);
+  check_invariants(make_cornell_box().mesh, bvh::BuildMethod::kMorton);
 }
 TEST(BvhInvariants, Terrain) {
   check_invariants(make_terrain_scene(50000).mesh);
+  check_invariants(make_terrain_scene(50000).mesh, bvh::BuildMethod::kMorton);
 }
 TEST(BvhInvariants, RandomSoup) {
   check_invariants(random_soup(5000, 9));
+  check_invariants(random_soup(5000, 9), bvh::BuildMethod::kMorton);
 }
 TEST(BvhInvariants, EmptyMesh) {
   check_invariants(TriangleMesh{});
+  check_invariants(TriangleMesh{}, bvh::BuildMethod::kMorton);
 }
 
 TEST(BvhInvariants, ManyIdenticalTrianglesStayShallowEnough) {
   TriangleMesh m;  // no plane separates identical centroids: the builder must still terminate
   for (int i = 0; i < 5000; ++i) m.add({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0);
-  check_invariants(m);
-  const BvhAccel accel(m, kDefaultKernel);
-  Ray r;
-  r.origin = {0.2f, 0.2f, -1.0f};
-  EXPECT_EQ(accel.intersect(r).prim, 0u);  // the tie goes to the first triangle
+  for (bvh::BuildMethod method : {bvh::BuildMethod::kBinnedSah, bvh::BuildMethod::kMorton}) {
+    check_invariants(m, method);
+    const BvhAccel accel(m, kDefaultKernel, with_method(method));
+    Ray r;
+    r.origin = {0.2f, 0.2f, -1.0f};
+    EXPECT_EQ(accel.intersect(r).prim, 0u);  // the tie goes to the first triangle
+  }
 }
 
 TEST(BvhAccel, EmptyAndSingleTriangleScenes) {

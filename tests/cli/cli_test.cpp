@@ -307,6 +307,21 @@ TEST_F(CliTest, EveryKernelRenders) {
   ExpectOnlyFiles(work_, {"cramer.png", "inverse.png", "moller-trumbore.png"});
 }
 
+// The two BVH builds make different trees with the same hits, so the same image; auto picks one.
+TEST_F(CliTest, EveryBvhBuildWritesTheSameImage) {
+  for (const std::string build : {"sah", "morton", "auto"}) {
+    SCOPED_TRACE(build);
+    RenderQuietly(
+        {"--scene", "terrain:20000", "--width", "48", "--height", "32", "--bvh-build", build},
+        build + ".png");
+  }
+  const std::string sah = ReadFile(work_ / "sah.png");
+  EXPECT_FALSE(sah.empty());
+  EXPECT_TRUE(sah == ReadFile(work_ / "morton.png"));
+  EXPECT_TRUE(sah == ReadFile(work_ / "auto.png"));
+  ExpectOnlyFiles(work_, {"auto.png", "morton.png", "sah.png"});
+}
+
 TEST_F(CliTest, FarLightChangesTheImage) {
   const std::string base = RenderQuietly({"--width", "64", "--height", "64"}, "default.png");
   const std::string far =
@@ -351,8 +366,9 @@ TEST_F(CliTest, HelpListsEveryFlagAndExitsZero) {
   const RunResult r = Run({"render", "--help"});
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_EQ(r.err, "");
-  for (const std::string flag : {"-o", "--output", "--width", "--height", "--kernel", "--yaw",
-                                 "--distance", "--light", "--threads", "-q", "--quiet", "--help"}) {
+  for (const std::string flag :
+       {"-o", "--output", "--width", "--height", "--kernel", "--bvh-build", "--yaw", "--distance",
+        "--light", "--threads", "-q", "--quiet", "--help"}) {
     EXPECT_NE(r.out.find(flag), std::string::npos) << flag << " missing from:\n" << r.out;
   }
   for (const std::string kernel : {"inverse", "cramer", "moller-trumbore"}) {
@@ -449,6 +465,11 @@ INSTANTIATE_TEST_SUITE_P(
         ErrorCase{"ThreadsNotANumber", {"--threads", "many"}, 2, "--threads", kThreadRange},
         ErrorCase{"UnknownKernel", {"--kernel", "foo"}, 2, "--kernel", "unknown kernel 'foo'"},
         ErrorCase{"KernelMissingValue", {"--kernel"}, 2, "--kernel", "missing value"},
+        ErrorCase{"UnknownBvhBuild",
+                  {"--bvh-build", "lbvh"},
+                  2,
+                  "--bvh-build",
+                  "unknown BVH build 'lbvh' (use auto, sah or morton)"},
         ErrorCase{"UnknownScene", {"--scene", "teapot"}, 2, "--scene", "unknown scene 'teapot'"},
         ErrorCase{"TerrainWithoutCount", {"--scene", "terrain:"}, 2, "--scene", "unknown scene"},
         ErrorCase{"UnknownAccel", {"--accel", "kdtree"}, 2, "--accel", "unknown acceleration"},
@@ -693,6 +714,28 @@ TEST_F(CliTest, BenchRepeatedKernelGivesARowPerKernel) {
 
 // tritrace bench --integrator path: the path tracer's workload (cornell-area by default), with
 // paths per second beside rays per second for every accel, in the table and the records.
+// --bvh-build gives bvh a row per build, named in the table and the records; other accels one.
+TEST_F(CliTest, BenchRepeatedBvhBuildGivesARowPerBuild) {
+  const RunResult r = Run({"bench", "--scene", "cornell", "--width", "32", "--height", "18",
+                           "--reps", "1", "--json", "b.json", "--accel", "bvh", "--accel", "brute",
+                           "--bvh-build", "sah", "--bvh-build", "morton"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json records = nlohmann::json::parse(ReadFile(work_ / "b.json"));
+  std::vector<std::pair<std::string, std::string>> rows;
+  for (const nlohmann::json& rec : records) {
+    rows.emplace_back(rec["accel"].get<std::string>(), rec["bvh_build"].get<std::string>());
+  }
+  const std::vector<std::pair<std::string, std::string>> want = {
+      {"bvh", "sah"}, {"bvh/morton", "morton"}, {"brute", ""}};
+  EXPECT_EQ(rows, want);
+  EXPECT_NE(r.out.find("bvh/morton"), std::string::npos) << r.out;
+  const RunResult bad = Run({"bench", "--bvh-build", "auto"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--bvh-build"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("unknown BVH build 'auto' (use sah or morton)"), std::string::npos)
+      << bad.err;
+}
+
 TEST_F(CliTest, BenchWithThePathTracerReportsPathsPerSecond) {
   const RunResult r = Run({"bench", "--integrator", "path", "--width", "32", "--height", "24",
                            "--spp", "2", "--reps", "2", "--json", "p.json"});

@@ -20,6 +20,12 @@ constexpr AccelKind kAll[] = {AccelKind::kBvh,          AccelKind::kBrute,     A
                               AccelKind::kEmbreeSingle, AccelKind::kBvhSingle, AccelKind::kEmbree8,
                               AccelKind::kEmbreeRobust};
 
+// bvh_build_for's threshold. Measured on 2 cores (docs/PERFORMANCE.md): the Morton build saves
+// about 90-150 ns per triangle and its tree costs 2-12 ns more per coherent lab ray, about 75 ns
+// more per path-traced ray (terrain:1m); at one ray per triangle it wins for the lab's rays by far
+// and breaks about even for the path tracer's.
+constexpr double kMortonRaysPerTriangle = 1.0;
+
 bool is_embree(AccelKind kind) {
   return kind == AccelKind::kEmbree || kind == AccelKind::kEmbreeSingle ||
          kind == AccelKind::kEmbree8 || kind == AccelKind::kEmbreeRobust;
@@ -77,8 +83,24 @@ Kernel default_kernel_for(AccelKind /*kind*/) {
   return kDefaultKernel;
 }
 
+std::string_view bvh_build_name(bvh::BuildMethod method) {
+  return method == bvh::BuildMethod::kMorton ? "morton" : "sah";
+}
+
+std::optional<bvh::BuildMethod> parse_bvh_build(std::string_view name) {
+  if (name == "sah") return bvh::BuildMethod::kBinnedSah;
+  if (name == "morton") return bvh::BuildMethod::kMorton;
+  return std::nullopt;
+}
+
+bvh::BuildMethod bvh_build_for(size_t triangles, double rays) {
+  return rays < kMortonRaysPerTriangle * static_cast<double>(triangles)
+             ? bvh::BuildMethod::kMorton
+             : bvh::BuildMethod::kBinnedSah;
+}
+
 std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kernel kernel,
-                                  AccelInfo* info) {
+                                  AccelInfo* info, bvh::BuildMethod build) {
   const auto start = std::chrono::steady_clock::now();
   std::unique_ptr<Accel> accel;
   AccelInfo local;
@@ -88,8 +110,10 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kern
       break;
     case AccelKind::kBvh:
     case AccelKind::kBvhSingle: {
+      bvh::BuildConfig config = bvh::default_build_config(mesh.size());
+      config.method = build;
       auto bvh = std::make_unique<BvhAccel>(
-          mesh, kernel, bvh::default_build_config(mesh.size()),
+          mesh, kernel, config,
           kind == AccelKind::kBvh ? BvhTraversal::kAuto : BvhTraversal::kSingle);
       local.structure_bytes = bvh->tree().node_bytes();
       local.triangle_copy_bytes = bvh->tree().block_bytes();
@@ -123,8 +147,8 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kern
 }
 
 std::unique_ptr<Accel> make_accel(AccelKind kind, const Scene& scene, Kernel kernel,
-                                  AccelInfo* info) {
-  if (!scene.has_instances()) return make_accel(kind, scene.mesh, kernel, info);
+                                  AccelInfo* info, bvh::BuildMethod build) {
+  if (!scene.has_instances()) return make_accel(kind, scene.mesh, kernel, info, build);
   if (is_embree(kind)) {
     throw Error("--accel", std::string(accel_name(kind)) +
                                ": instanced scenes are not supported by the Embree backend (use "
@@ -134,7 +158,7 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const Scene& scene, Kernel ker
   AccelInfo total;
   auto per_mesh = [&](const TriangleMesh& mesh) {
     AccelInfo one;
-    std::unique_ptr<Accel> accel = make_accel(kind, mesh, kernel, &one);
+    std::unique_ptr<Accel> accel = make_accel(kind, mesh, kernel, &one, build);
     total.structure_bytes += one.structure_bytes;
     total.triangle_copy_bytes += one.triangle_copy_bytes;
     return accel;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "tritrace/accel/accel.h"
+#include "tritrace/accel/bvh/binned_sah_builder.h"
 #include "tritrace/geometry/intersect.h"
 #include "tritrace/geometry/triangle_mesh.h"
 #include "tritrace/scene/scene.h"
@@ -37,6 +38,17 @@ std::string_view embree_version();
 // whatever is asked.
 Kernel default_kernel_for(AccelKind kind);
 
+// How bvh and bvh-single make their tree (Embree and brute force ignore it): "sah" (binned SAH,
+// the tree to trace many rays through) or "morton" (several times faster to build, slower to
+// trace).
+std::string_view bvh_build_name(bvh::BuildMethod method);
+std::optional<bvh::BuildMethod> parse_bvh_build(std::string_view name);
+
+// The build that brings a render of about `rays` rays through `triangles` triangles to its end
+// soonest: Morton codes where the rays are too few for the SAH tree's faster tracing to win back
+// its longer build (measured in docs/PERFORMANCE.md, "A Morton-code build"), else the binned SAH.
+bvh::BuildMethod bvh_build_for(size_t triangles, double rays);
+
 struct AccelInfo {
   double build_ms = 0.0;
   size_t structure_bytes = 0;      // the structure itself, beyond the scene's triangle data
@@ -46,13 +58,15 @@ struct AccelInfo {
 // Builds the structure over `mesh` (which must outlive it). The kernel applies to brute and bvh;
 // Embree uses its own. Throws Error(name, reason) when the backend is not built in.
 std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kernel kernel,
-                                  AccelInfo* info = nullptr);
+                                  AccelInfo* info = nullptr,
+                                  bvh::BuildMethod build = bvh::BuildMethod::kBinnedSah);
 
 // The structure for a whole scene (which must outlive it): make_accel over scene.mesh when it has
 // no instances, else an InstancedAccel with one structure of `kind` per prototype (brute: every
 // instance in turn, the oracle; bvh, bvh-single: a binned SAH tree over the instances). Embree
 // backends refuse instanced scenes: Error("--accel", ...).
 std::unique_ptr<Accel> make_accel(AccelKind kind, const Scene& scene, Kernel kernel,
-                                  AccelInfo* info = nullptr);
+                                  AccelInfo* info = nullptr,
+                                  bvh::BuildMethod build = bvh::BuildMethod::kBinnedSah);
 
 }  // namespace tritrace

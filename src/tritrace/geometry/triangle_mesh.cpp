@@ -136,18 +136,6 @@ void TriangleMesh::append(const TriangleMesh& other, uint32_t material_offset) {
   }
 }
 
-glm::vec3 TriangleMesh::vertex(size_t tri, int corner) const {
-  if (corner == 1) return v1_[tri];
-  if (corner == 2) return v2_[tri];
-  return v0_[tri];
-}
-
-Bounds3 TriangleMesh::triangle_bounds(size_t tri) const {
-  Bounds3 b = Bounds3::empty();
-  for (int c = 0; c < 3; ++c) b.extend(vertex(tri, c));
-  return b;
-}
-
 Bounds3 TriangleMesh::bounds() const {
   if (empty()) return {};
   Bounds3 b = Bounds3::empty();

@@ -69,9 +69,16 @@ class TriangleMesh {
   // The corner texture coordinates interpolated at barycentrics (u, v); (0, 0) without any.
   glm::vec2 uv(size_t tri, float u, float v) const;
 
-  glm::vec3 vertex(size_t tri, int corner) const;  // corner 0, 1 or 2, exactly as added
-  Bounds3 bounds() const;                          // of the whole mesh; all zero when empty
-  Bounds3 triangle_bounds(size_t tri) const;
+  // Corner 0, 1 or 2, exactly as added (inline: the BVH builds read every vertex through it).
+  glm::vec3 vertex(size_t tri, int corner) const {
+    return corner == 1 ? v1_[tri] : corner == 2 ? v2_[tri] : v0_[tri];
+  }
+  Bounds3 bounds() const;  // of the whole mesh; all zero when empty
+  Bounds3 triangle_bounds(size_t tri) const {
+    Bounds3 b = Bounds3::empty();
+    for (int c = 0; c < 3; ++c) b.extend(vertex(tri, c));
+    return b;
+  }
   TriangleArrays arrays() const { return {v0_.data(), v1_.data(), v2_.data()}; }
 
  private:

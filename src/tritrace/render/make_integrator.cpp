@@ -17,4 +17,10 @@ std::unique_ptr<Integrator> make_integrator(const IntegratorSpec& spec, const Sc
   return std::make_unique<PathIntegrator>(scene, settings);
 }
 
+double expected_rays(const IntegratorSpec& spec, uint64_t pixels) {
+  const double per_pixel =
+      spec.kind == IntegratorSpec::Kind::kPath ? kPathRaysPerSample * spec.spp : 2.0;
+  return per_pixel * static_cast<double>(pixels);
+}
+
 }  // namespace tritrace

@@ -532,7 +532,7 @@ class Builder {
 
 }  // namespace
 
-BinaryBvh build_binned_sah(size_t count, const BoxSource& boxes, const BuildConfig& config) {
+void check_build_config(size_t count, const BuildConfig& config) {
   // Refused rather than clamped, so that a caller never silently gets a tree other than the one it
   // configured; the wide BVH would lose every lane of a leaf past the eighth.
   if (config.max_leaf_size == 0 || config.max_leaf_size > kMaxLeafSize) {
@@ -543,9 +543,13 @@ BinaryBvh build_binned_sah(size_t count, const BoxSource& boxes, const BuildConf
   }
   if (config.block_size == 0) throw std::invalid_argument("BuildConfig::block_size must be >= 1");
   if (count > std::numeric_limits<uint32_t>::max()) {
-    throw std::invalid_argument("build_binned_sah: " + std::to_string(count) +
+    throw std::invalid_argument("build: " + std::to_string(count) +
                                 " primitives; at most 2^32 - 1 are indexed");
   }
+}
+
+BinaryBvh build_binned_sah(size_t count, const BoxSource& boxes, const BuildConfig& config) {
+  check_build_config(count, config);
   return Builder(count, boxes, config).build();
 }
 

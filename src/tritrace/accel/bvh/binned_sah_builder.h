@@ -17,12 +17,18 @@ namespace tritrace::bvh {
 // (wide_bvh.h), which has no room for a ninth.
 inline constexpr uint32_t kMaxLeafSize = 8;
 
+// How the binary tree is made: the binned SAH (the tree to trace many rays through), or Morton
+// codes (morton_builder.h: several times faster to build, slower to trace).
+enum class BuildMethod { kBinnedSah, kMorton };
+
 struct BuildConfig {
-  int bins = 16;  // clamped to [2, 32]
+  BuildMethod method = BuildMethod::kBinnedSah;
+  int bins = 16;  // clamped to [2, 32]; binned SAH only
   // Leaves hold at most this many primitives, 1 to kMaxLeafSize.
   uint32_t max_leaf_size = kMaxLeafSize;
-  // The SAH prices a leaf per started block of `block_size` primitives (at least 1), since a SIMD
-  // block costs the same whether it holds one triangle or eight.
+  // The SAH prices a leaf (these and the settings below are the binned SAH's) per started block of
+  // `block_size` primitives (at least 1), since a SIMD block costs the same whether it holds one
+  // triangle or eight.
   uint32_t block_size = 8;
   float traversal_cost = 1.0f;  // one node visit
   float block_cost = 1.2f;      // one block of triangle tests, relative to a node visit
@@ -56,6 +62,10 @@ struct BinaryBvh {
   std::vector<BinaryNode> nodes;     // nodes[0] is the root; empty for no primitives
   std::vector<uint32_t> prim_index;  // leaves index into this permutation of the primitives
 };
+
+// Throws std::invalid_argument when `config` cannot be built (max_leaf_size 0 or above
+// kMaxLeafSize, block_size 0) or `count` primitives cannot be indexed in 32 bits.
+void check_build_config(size_t count, const BuildConfig& config);
 
 // Builds over the primitives' bounding boxes. Boxes must be non-empty and finite; boxes at any
 // finite magnitude (surface areas that overflow float, extents too small for 1 / extent) still

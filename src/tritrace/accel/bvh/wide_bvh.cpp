@@ -15,6 +15,7 @@
 #include <cmath>
 #include <limits>
 
+#include "tritrace/accel/bvh/morton_builder.h"
 #include "tritrace/geometry/hit.h"
 #include "tritrace/parallel.h"
 
@@ -269,13 +270,12 @@ WideBvh build_wide_bvh(const TriangleMesh& mesh, const BuildConfig& config) {
       },
       [](float a, float b) { return std::max(a, b); });
   const float pad = magnitude * kBoxPadding;
-  const BinaryBvh tree = build_binned_sah(
-      mesh.size(),
-      [&](size_t begin, size_t end, Bounds3* out) {
-        for (size_t i = begin; i != end; ++i)
-          out[i - begin] = widened_triangle_bounds(mesh, i, pad);
-      },
-      config);
+  const BoxSource boxes = [&](size_t begin, size_t end, Bounds3* out) {
+    for (size_t i = begin; i != end; ++i) out[i - begin] = widened_triangle_bounds(mesh, i, pad);
+  };
+  const BinaryBvh tree = config.method == BuildMethod::kMorton
+                             ? build_morton(mesh.size(), boxes, config)
+                             : build_binned_sah(mesh.size(), boxes, config);
   return collapse_binary_bvh(tree, mesh);
 }
 
