@@ -88,7 +88,7 @@ struct alignas(32) PrimRef {
   float lo[3];
   uint32_t id;
   float hi[3];
-  float unused = 0.0f;
+  float unused;  // no initialiser: the array of references is first written in parallel
 };
 static_assert(sizeof(PrimRef) == 32);
 
@@ -203,8 +203,8 @@ class Builder {
         boxes(first, last, batch);
         for (size_t i = first; i != last; ++i) {
           const Bounds3& b = batch[i - first];
-          refs_[i] =
-              PrimRef{{b.lo.x, b.lo.y, b.lo.z}, static_cast<uint32_t>(i), {b.hi.x, b.hi.y, b.hi.z}};
+          refs_[i] = PrimRef{
+              {b.lo.x, b.lo.y, b.lo.z}, static_cast<uint32_t>(i), {b.hi.x, b.hi.y, b.hi.z}, 0.0f};
         }
       }
     });
@@ -525,9 +525,9 @@ class Builder {
   }
 
   BuildConfig config_;
-  int block_shift_ = -1;  // log2(block_size) when that is a power of two, else -1
-  std::vector<PrimRef> refs_;
-  tbb::concurrent_vector<BinaryNode> nodes_;
+  int block_shift_ = -1;          // log2(block_size) when that is a power of two, else -1
+  HugePageVector<PrimRef> refs_;  // left uninitialised by its allocator until the boxes come
+  tbb::concurrent_vector<BinaryNode, HugePageAllocator<BinaryNode>> nodes_;
 };
 
 }  // namespace

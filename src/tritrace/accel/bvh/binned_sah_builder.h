@@ -9,6 +9,7 @@
 #include <span>
 #include <vector>
 
+#include "tritrace/huge_page_allocator.h"
 #include "tritrace/math/bounds.h"
 
 namespace tritrace::bvh {
@@ -58,9 +59,10 @@ struct BinaryNode {
   bool is_leaf() const { return count > 0; }
 };
 
+// On huge pages, as every array of a big build: at ten million primitives these are 150 MiB.
 struct BinaryBvh {
-  std::vector<BinaryNode> nodes;     // nodes[0] is the root; empty for no primitives
-  std::vector<uint32_t> prim_index;  // leaves index into this permutation of the primitives
+  HugePageVector<BinaryNode> nodes;     // nodes[0] is the root; empty for no primitives
+  HugePageVector<uint32_t> prim_index;  // leaves index into this permutation of the primitives
 };
 
 // Throws std::invalid_argument when `config` cannot be built (max_leaf_size 0 or above

@@ -109,9 +109,10 @@ class CollapsePlan {
   int split(uint32_t n, int slots) const { return split_[n][slots - 1]; }
 
  private:
-  std::vector<std::array<float, kWidth>> cost_;
-  std::vector<std::array<uint8_t, kWidth>> split_;
-  std::vector<uint8_t> wide_split_;
+  // Every entry is written by the sweep before it is read, so the arrays start uninitialised.
+  HugePageVector<std::array<float, kWidth>> cost_;
+  HugePageVector<std::array<uint8_t, kWidth>> split_;
+  HugePageVector<uint8_t> wide_split_;
 };
 
 class Collapser {
