@@ -36,7 +36,7 @@ struct ImportedMesh {
   // image once however many materials use it.
   std::vector<TextureImage> textures;
   HugePageVector<uint32_t> material;  // one per triangle, an index into `materials`
-  std::vector<Material> materials;  // the file's, in its order
+  std::vector<Material> materials;    // the file's, in its order
   std::vector<std::string> material_names;
   size_t meshes = 0;  // mesh instances (a mesh used by two nodes counts twice)
 
