@@ -80,11 +80,19 @@ void TriangleMesh::reserve(size_t triangles) {
   if (!corner_uvs_.empty()) corner_uvs_.reserve(3 * triangles);
 }
 
-void TriangleMesh::resize(size_t triangles, bool corner_normals, bool corner_uvs) {
-  for (auto* v : {&v0_, &v1_, &v2_, &normal_}) v->resize(triangles);
-  material_.resize(triangles);
-  corner_normals_.resize(corner_normals ? 3 * triangles : 0);
-  corner_uvs_.resize(corner_uvs ? 3 * triangles : 0);
+void TriangleMesh::grow(size_t more, bool corner_normals, bool corner_uvs) {
+  const size_t held = size();
+  const bool normals = corner_normals || has_shading_normals();
+  const bool uvs = corner_uvs || has_uvs();
+  if (corner_normals && corner_normals_.empty()) {
+    corner_normals_.reserve(3 * (held + more));
+    for (const glm::vec3& n : normal_) corner_normals_.insert(corner_normals_.end(), 3, n);
+  }
+  if (corner_uvs && corner_uvs_.empty()) corner_uvs_.assign(3 * held, glm::vec2(0.0f));
+  for (auto* v : {&v0_, &v1_, &v2_, &normal_}) v->resize(held + more);
+  material_.resize(held + more);
+  if (normals) corner_normals_.resize(3 * (held + more));
+  if (uvs) corner_uvs_.resize(3 * (held + more));
 }
 
 void TriangleMesh::set(size_t i, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,

@@ -36,9 +36,11 @@ class TriangleMesh {
   void append(const TriangleMesh& other, uint32_t material_offset);
 
   void reserve(size_t triangles);
-  // Room for exactly `triangles` triangles (with corner normals, with corner texture coordinates),
-  // each then filled by set(): how a loader adds many triangles in parallel instead of add().
-  void resize(size_t triangles, bool corner_normals, bool corner_uvs);
+  // Room for `more` triangles after those held, each then filled by set(): how a loader adds many
+  // triangles in parallel instead of add(). Corner normals (texture coordinates) are kept where
+  // the mesh has them and made where `corner_normals` (`corner_uvs`) asks, the held triangles then
+  // getting their geometric normal ((0, 0)) at each corner, as add() gives them.
+  void grow(size_t more, bool corner_normals, bool corner_uvs);
   // Stores triangle i exactly as add() with the same arguments would have (normals and uvs may be
   // given only when resize() made room for them).
   void set(size_t i, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, uint32_t material,

@@ -54,8 +54,9 @@ int ulps(float a, float b) {
 }
 
 // Float steps by which two arrays of float vectors differ at most (their sizes must match).
-template <typename V>
-int most_ulps(const std::vector<V>& got, const std::vector<V>& want, size_t* differing = nullptr) {
+template <typename Got, typename Want>
+int most_ulps(const Got& got, const Want& want, size_t* differing = nullptr) {
+  using V = typename Got::value_type;
   int most = 0;
   for (size_t i = 0; i < got.size() && i < want.size(); ++i) {
     for (int a = 0; a < V::length(); ++a) {

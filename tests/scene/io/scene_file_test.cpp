@@ -9,12 +9,17 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <numbers>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include "tritrace/error.h"
 #include "tritrace/scene/cornell_box.h"
 #include "tritrace/scene/io/scene_loader.h"
+#include "tritrace/scene/io/transform.h"
+#include "tritrace/scene/io/triangle_filter.h"
 #include "tritrace/scene/procedural.h"
 
 #ifndef TRITRACE_SOURCE_DIR
@@ -59,6 +64,94 @@ void expect_bits_equal(const HugePageVector<glm::vec3>& a, const HugePageVector<
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); ++i) {
     EXPECT_EQ(std::memcmp(&a[i], &b[i], sizeof(glm::vec3)), 0) << "triangle " << i;
+  }
+}
+
+// A mesh file's triangles as the importer gives them: a grid of quads with two materials, vertex
+// normals (some zero) and texture coordinates, some triangles degenerate and some non-finite.
+ImportedMesh grid_mesh(size_t side) {
+  ImportedMesh m;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (size_t i = 0; i < side; ++i) {
+    for (size_t j = 0; j < side; ++j) {
+      const float x = static_cast<float>(i) * 0.01f, z = static_cast<float>(j) * 0.01f;
+      const float y = std::sin(x * 7.0f) * std::cos(z * 5.0f);
+      glm::vec3 p[3] = {{x, y, z}, {x + 0.01f, y, z}, {x, y * 0.5f, z + 0.01f}};
+      if ((i * side + j) % 97 == 0) p[2] = p[0];
+      if ((i * side + j) % 89 == 0) p[1].x = nan;
+      for (int k = 0; k < 3; ++k) {
+        m.corners.push_back(p[k]);
+        m.normals.push_back((i + j + k) % 13 == 0 ? glm::vec3(0.0f) : glm::vec3(y, 1.0f, x - z));
+        m.uvs.push_back(glm::vec2(x, z + static_cast<float>(k)));
+      }
+      m.material.push_back(static_cast<uint32_t>((i + j) % 2));
+    }
+  }
+  m.materials = {Material{.albedo = glm::vec3(0.2f)}, Material{.albedo = glm::vec3(0.7f)}};
+  m.material_names = {"a", "b"};
+  m.meshes = 1;
+  return m;
+}
+
+// The scene file's mesh files are added in parallel (add_all_checked); the oracle here adds them
+// triangle by triangle with add_checked, after the generator's triangles in the scene's mesh and
+// into an instanced mesh's prototype, moved and renumbered as the file asks.
+TEST(SceneFile, MeshFilesAddAsTriangleByTriangle) {
+  const ImportedMesh file = grid_mesh(300);  // 90000 triangles: more than one parallel chunk
+  SceneFileOptions options;
+  options.read_mesh = [&](const std::string&) { return file; };
+  const LoadedScene loaded = parse_scene_json(R"({"materials": [{"name": "m", "albedo": [1, 0, 0]}],
+    "meshes": [{"generator": "cornell"},
+      {"file": "a.ply", "transform": {"translate": [1, 2, 3], "scale": [2, -0.5, 1]}},
+      {"file": "b.ply", "material": "m", "transform": {"scale": 3},
+       "instances": [{}, {"translate": [0, 0, 4]}]}]})",
+                                              "test.json", options);
+  const Scene cornell = make_builtin_scene("cornell");
+  const auto one_by_one = [&](TriangleMesh& mesh, const Transform& t,
+                              std::optional<uint32_t> material, uint32_t offset, LoadStats& stats) {
+    for (size_t k = 0; k < file.triangles(); ++k) {
+      glm::vec3 v[3], n[3];
+      for (size_t i = 0; i < 3; ++i) {
+        v[i] = t.apply(file.corners[3 * k + i]);
+        n[i] = t.apply_normal(file.normals[3 * k + i]);
+      }
+      add_checked(mesh, v[0], v[1], v[2], material ? *material : offset + file.material[k], n,
+                  &file.uvs[3 * k], stats);
+    }
+  };
+  TriangleMesh want, prototype;
+  want.append(cornell.mesh, 1);
+  LoadStats stats;
+  Transform moved;
+  moved.translate = glm::vec3(1, 2, 3);
+  moved.scale = glm::vec3(2, -0.5f, 1);
+  const uint32_t offset = static_cast<uint32_t>(1 + cornell.materials.size());
+  one_by_one(want, moved, std::nullopt, offset, stats);
+  Transform scaled;
+  scaled.scale = glm::vec3(3.0f);
+  one_by_one(prototype, scaled, 0u, 0, stats);
+
+  const Scene& got = loaded.scene;
+  EXPECT_EQ(got.materials.size(), offset + file.materials.size());
+  EXPECT_EQ(loaded.stats.dropped_degenerate, stats.dropped_degenerate);
+  EXPECT_EQ(loaded.stats.dropped_non_finite, stats.dropped_non_finite);
+  ASSERT_GT(stats.dropped_degenerate, 0u);
+  ASSERT_GT(stats.dropped_non_finite, 0u);
+  ASSERT_EQ(got.prototypes.size(), 1u);
+  EXPECT_EQ(got.instances.size(), 2u);
+  for (const auto& [g, w] :
+       {std::pair(&got.mesh, &want), std::pair(&got.prototypes[0], &prototype)}) {
+    ASSERT_EQ(g->size(), w->size());
+    expect_bits_equal(g->v0(), w->v0());
+    expect_bits_equal(g->v1(), w->v1());
+    expect_bits_equal(g->v2(), w->v2());
+    expect_bits_equal(g->normal(), w->normal());
+    expect_bits_equal(g->corner_normals(), w->corner_normals());
+    EXPECT_EQ(g->material(), w->material());
+    ASSERT_EQ(g->corner_uvs().size(), w->corner_uvs().size());
+    EXPECT_EQ(std::memcmp(g->corner_uvs().data(), w->corner_uvs().data(),
+                          w->corner_uvs().size() * sizeof(glm::vec2)),
+              0);
   }
 }
 

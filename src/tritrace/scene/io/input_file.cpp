@@ -2,12 +2,14 @@
 #include "tritrace/scene/io/input_file.h"
 
 #include <fcntl.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <utility>
 
 #include "tritrace/error.h"
 #include "tritrace/scene/io/load_progress.h"
@@ -70,6 +72,38 @@ std::string read_input_file(const std::string& path) {
   }
   ::close(fd);
   return bytes;
+}
+
+MappedFile::MappedFile(const std::string& path) {
+  size_t size = 0;
+  const int fd = open_checked(path, size);
+  progress_begin("reading", size);
+  // MAP_POPULATE maps every page of the page cache in one call, instead of a fault per 64 KiB
+  // while the parsers read; where the file is not cached it reads it now, which is the step the
+  // progress names.
+  void* p = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+  const int err = errno;
+  ::close(fd);
+  if (p == MAP_FAILED) throw Error(path, std::string("cannot map: ") + std::strerror(err));
+  progress_advance(size);
+  data_ = static_cast<const char*>(p);
+  size_ = size;
+}
+
+MappedFile::~MappedFile() {
+  if (data_ != nullptr) ::munmap(const_cast<char*>(data_), size_);
+}
+
+MappedFile::MappedFile(MappedFile&& other) noexcept
+    : data_(std::exchange(other.data_, nullptr)), size_(std::exchange(other.size_, 0)) {}
+
+MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
+  if (this != &other) {
+    if (data_ != nullptr) ::munmap(const_cast<char*>(data_), size_);
+    data_ = std::exchange(other.data_, nullptr);
+    size_ = std::exchange(other.size_, 0);
+  }
+  return *this;
 }
 
 }  // namespace tritrace

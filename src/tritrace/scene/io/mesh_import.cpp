@@ -168,14 +168,14 @@ void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t mate
                  const std::string& subject, ImportedMesh& out) {
   const bool has_uvs = mesh.HasTextureCoords(0);
   const bool uvs = has_uvs || !out.uvs.empty();
-  if (uvs) out.uvs.resize(out.corners.size());
+  if (uvs) out.uvs.resize(out.corners.size(), glm::vec2(0.0f));
   // Normals move with the inverse transpose of the transform's linear part (which keeps them
   // perpendicular to the surface under non-uniform scales); they are normalised later.
   aiMatrix3x3 normal_transform(transform);
   normal_transform.Inverse().Transpose();
   // Earlier meshes without normals get zero vectors (add_checked makes them geometric normals).
   const bool normals = mesh.HasNormals() || !out.normals.empty();
-  if (normals) out.normals.resize(out.corners.size());
+  if (normals) out.normals.resize(out.corners.size(), glm::vec3(0.0f));
   for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
     const aiFace& face = mesh.mFaces[f];
     if (face.mNumIndices != 3) continue;  // points and lines carry no surface
@@ -364,8 +364,8 @@ class Bytes {
     put<uint64_t>(values.size());
     put_raw(values.data(), values.size_bytes());
   }
-  template <typename T>
-  void put_array(const std::vector<T>& values) {
+  template <typename T, typename Allocator>
+  void put_array(const std::vector<T, Allocator>& values) {
     put_array(std::span<const T>(values));
   }
   uint64_t size() const { return size_; }
@@ -392,13 +392,18 @@ class Unbytes {
   }
   template <typename T>
   std::vector<T> get_array() {
+    std::vector<T> values;
+    get_array(values);
+    return values;
+  }
+  template <typename T, typename Allocator>
+  void get_array(std::vector<T, Allocator>& values) {
     const uint64_t n = get<uint64_t>();
     if (n > (in_.size() - pos_) / sizeof(T)) throw std::runtime_error("truncated");
-    std::vector<T> values(n);
+    values.resize(n);
     // memcpy from or to a null pointer is undefined even for 0 bytes (an empty vector's data()).
     if (n > 0) std::memcpy(values.data(), in_.data() + pos_, n * sizeof(T));
     pos_ += n * sizeof(T);
-    return values;
   }
 
  private:
@@ -432,8 +437,8 @@ ImportedMesh from_bytes(std::span<const uint8_t> bytes, const std::string& subje
   try {
     Unbytes in(bytes);
     ImportedMesh mesh;
-    mesh.corners = in.get_array<glm::vec3>();
-    mesh.material = in.get_array<uint32_t>();
+    in.get_array(mesh.corners);
+    in.get_array(mesh.material);
     mesh.materials = in.get_array<Material>();
     const uint64_t names = in.get<uint64_t>();
     for (uint64_t i = 0; i < names; ++i) {
@@ -441,11 +446,11 @@ ImportedMesh from_bytes(std::span<const uint8_t> bytes, const std::string& subje
       mesh.material_names.emplace_back(name.begin(), name.end());
     }
     mesh.meshes = static_cast<size_t>(in.get<uint64_t>());
-    mesh.normals = in.get_array<glm::vec3>();
+    in.get_array(mesh.normals);
     if (!mesh.normals.empty() && mesh.normals.size() != mesh.corners.size()) {
       throw std::runtime_error("normals");
     }
-    mesh.uvs = in.get_array<glm::vec2>();
+    in.get_array(mesh.uvs);
     if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.corners.size()) {
       throw std::runtime_error("uvs");
     }
@@ -505,8 +510,9 @@ ImportedMesh import_isolated(const std::string& subject, const std::function<Imp
 ImportedMesh import_mesh_file(const std::string& path) {
   check_input_file(path);
   if (is_ply(path) || is_obj(path)) {
-    const std::string bytes = read_input_file(path);
-    if (std::optional<ImportedMesh> mesh = read_natively(bytes, path, path, model_folder(path))) {
+    const MappedFile file(path);
+    if (std::optional<ImportedMesh> mesh =
+            read_natively(file.bytes(), path, path, model_folder(path))) {
       return std::move(*mesh);
     }
   }

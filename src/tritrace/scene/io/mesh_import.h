@@ -13,25 +13,30 @@
 #include <string>
 #include <vector>
 
+#include "tritrace/huge_page_allocator.h"
 #include "tritrace/scene/scene.h"
 
 namespace tritrace {
 
 inline constexpr glm::vec3 kNeutralGrey{0.6f, 0.6f, 0.6f};
 
+// The per-triangle arrays live on huge pages, as the mesh they are added to: for a big mesh they
+// are hundreds of MiB written once, and in 4 KiB pages their first touch (zeroing and a fault per
+// page) took longer than reading the file (docs/PERFORMANCE.md). Their resize() leaves new
+// elements uninitialised (huge_page_allocator.h): give a value or write them all.
 struct ImportedMesh {
-  std::vector<glm::vec3> corners;  // three per triangle, node transforms applied
+  HugePageVector<glm::vec3> corners;  // three per triangle, node transforms applied
   // The file's vertex normals at those corners (node transforms applied), or empty when no mesh of
   // the file has normals; a mesh without them among others that have them gets zero vectors, which
   // add_checked replaces by the geometric normal.
-  std::vector<glm::vec3> normals;
+  HugePageVector<glm::vec3> normals;
   // Texture coordinates (u, v) of the first set at the corners, or empty when no mesh has any.
-  std::vector<glm::vec2> uvs;
+  HugePageVector<glm::vec2> uvs;
   // The textures the materials refer to (TextureRef::index into this list), each file or embedded
   // image once however many materials use it.
   std::vector<TextureImage> textures;
-  std::vector<uint32_t> material;   // one per triangle, an index into `materials`
-  std::vector<Material> materials;  // the file's, in its order
+  HugePageVector<uint32_t> material;  // one per triangle, an index into `materials`
+  std::vector<Material> materials;    // the file's, in its order
   std::vector<std::string> material_names;
   size_t meshes = 0;  // mesh instances (a mesh used by two nodes counts twice)
 

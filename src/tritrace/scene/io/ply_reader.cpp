@@ -238,8 +238,8 @@ struct NodeTransform {
   aiMatrix3x3 normal{point};
 };
 
-void emit(ImportedMesh& out, size_t face, const std::vector<glm::vec3>& p,
-          const std::vector<glm::vec3>& n, const int64_t idx[3], const NodeTransform& t) {
+void emit(ImportedMesh& out, size_t face, const HugePageVector<glm::vec3>& p,
+          const HugePageVector<glm::vec3>& n, const int64_t idx[3], const NodeTransform& t) {
   const size_t order[3] = {static_cast<size_t>(idx[0]), static_cast<size_t>(idx[2]),
                            static_cast<size_t>(idx[1])};
   for (int k = 0; k < 3; ++k) {
@@ -266,7 +266,7 @@ bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out
   // Worker threads report to the calling thread's progress.
   LoadProgress* progress = load_progress();
   if (progress != nullptr) progress->begin("parsing", l.vertices + l.faces);
-  std::vector<glm::vec3> points(l.vertices), normals(l.normals ? l.vertices : 0);
+  HugePageVector<glm::vec3> points(l.vertices), normals(l.normals ? l.vertices : 0);
   parallel::for_range(tbb::blocked_range<size_t>(0, l.vertices, 1 << 14), [&](const auto& r) {
     if (progress != nullptr) progress->advance(r.size());
     for (size_t i = r.begin(); i != r.end(); ++i) {
@@ -340,7 +340,7 @@ bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out)
   Lines lines(bytes, l.body);
   std::vector<std::string_view> w;
   progress_begin("parsing", l.vertices + l.faces);
-  std::vector<glm::vec3> points(l.vertices), normals(l.normals ? l.vertices : 0);
+  HugePageVector<glm::vec3> points(l.vertices), normals(l.normals ? l.vertices : 0);
   for (size_t i = 0; i < l.vertices; ++i) {
     if (i % kProgressStep == 0) progress_advance(std::min(kProgressStep, l.vertices - i));
     if (!lines.next(w) || w.size() != l.vertex_properties) return false;

@@ -19,7 +19,7 @@
 #include "tritrace/image/image_io.h"
 #include "tritrace/scene/cornell_box.h"
 #include "tritrace/scene/io/input_file.h"
-#include "tritrace/scene/io/load_progress.h"
+#include "tritrace/scene/io/transform.h"
 #include "tritrace/scene/io/triangle_filter.h"
 #include "tritrace/scene/procedural.h"
 
@@ -107,16 +107,6 @@ glm::mat3 rotation_xyz_degrees(glm::vec3 degrees) {
   return rz * ry * rx;
 }
 
-struct Transform {
-  glm::vec3 translate{0.0f};
-  glm::mat3 rotate{1.0f};
-  glm::vec3 scale{1.0f};
-
-  glm::vec3 apply(glm::vec3 p) const { return translate + rotate * (scale * p); }
-  // The inverse transpose of rotate * diag(scale) (rotate is orthonormal), unnormalised.
-  glm::vec3 apply_normal(glm::vec3 n) const { return rotate * (n / scale); }
-};
-
 class Parser {
  public:
   Parser(std::string_view text, const std::string& path, const SceneFileOptions& options)
@@ -149,6 +139,10 @@ class Parser {
  private:
   [[noreturn]] void fail(const std::string& where, const std::string& reason) const {
     throw Error(path_, where.empty() ? reason : where + ": " + reason);
+  }
+
+  [[noreturn]] void fail_too_many_triangles(const std::string& where) const {
+    fail(where, "the scene has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
   }
 
   const Json& object(const Json& j, const std::string& where) const {
@@ -502,7 +496,7 @@ class Parser {
            const std::optional<Transform>& t, const std::string& where,
            const glm::vec3* normals = nullptr, const glm::vec2* uvs = nullptr) {
     if (stored_triangles_ >= kMaxSceneTriangles) {
-      fail(where, "the scene has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
+      fail_too_many_triangles(where);
     }
     glm::vec3 moved[3];
     if (t) {
@@ -657,7 +651,7 @@ class Parser {
     if (!t && !material) {
       // Copied as stored, so that a generated scene is bit-identical to the built-in one.
       if (stored_triangles_ + g.size() > kMaxSceneTriangles) {
-        fail(where, "the scene has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
+        fail_too_many_triangles(where);
       }
       target().append(g, offset);
       stored_triangles_ += g.size();
@@ -704,20 +698,25 @@ class Parser {
         add_material(m);
       }
     }
-    progress_begin("adding triangles", imported.triangles());
-    for (size_t k = 0; k < imported.triangles(); ++k) {
-      constexpr size_t kProgressStep = 1 << 16;
-      if (k % kProgressStep == 0) {
-        progress_advance(std::min(kProgressStep, imported.triangles() - k));
-      }
-      if (!material && imported.material[k] >= imported.materials.size()) {
+    AddOptions options;
+    options.transform = t;
+    options.material = material;
+    options.material_offset = offset;
+    options.materials = imported.materials.size();
+    options.stored = stored_triangles_;
+    options.max_triangles = kMaxSceneTriangles;
+    TriangleMesh& mesh = target();
+    const size_t before = mesh.size();
+    switch (add_all_checked(mesh, imported.corners, imported.material, imported.normals,
+                            imported.uvs, options, out_.stats)) {
+      case AddResult::kOk:
+        break;
+      case AddResult::kMaterialOutOfRange:
         fail(where, "mesh material index out of range");
-      }
-      add(imported.corners[3 * k], imported.corners[3 * k + 1], imported.corners[3 * k + 2],
-          material ? *material : offset + imported.material[k], t, where,
-          imported.normals.empty() ? nullptr : &imported.normals[3 * k],
-          imported.uvs.empty() ? nullptr : &imported.uvs[3 * k]);
+      case AddResult::kTooManyTriangles:
+        fail_too_many_triangles(where);
     }
+    stored_triangles_ += mesh.size() - before;
     out_.stats.meshes += imported.meshes > 0 ? imported.meshes - 1 : 0;
   }
 

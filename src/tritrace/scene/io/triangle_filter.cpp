@@ -85,18 +85,29 @@ bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint
   return true;
 }
 
-void add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners,
-                     std::span<const uint32_t> material, std::span<const glm::vec3> normals,
-                     std::span<const glm::vec2> uvs, LoadStats& stats) {
-  assert(mesh.empty() && corners.size() == 3 * material.size() &&
+AddResult add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners,
+                          std::span<const uint32_t> material, std::span<const glm::vec3> normals,
+                          std::span<const glm::vec2> uvs, const AddOptions& options,
+                          LoadStats& stats) {
+  assert(corners.size() == 3 * material.size() &&
          (normals.empty() || normals.size() == corners.size()) &&
          (uvs.empty() || uvs.size() == corners.size()));
   const size_t n = material.size();
+  const Transform* transform = options.transform ? &*options.transform : nullptr;
+  // Triangle k's corners as add() is given them.
+  const auto corners_of = [&](size_t k, glm::vec3(&v)[3]) {
+    for (size_t i = 0; i < 3; ++i) {
+      v[i] = transform != nullptr ? transform->apply(corners[3 * k + i]) : corners[3 * k + i];
+    }
+  };
+  const bool check_ids = !options.material;
   constexpr size_t kChunk = size_t{1} << 16;
   const size_t chunks = (n + kChunk - 1) / kChunk;
-  // First pass: what each chunk keeps and drops; then each chunk's first place in the mesh.
+  // First pass: what each chunk keeps and drops, and its first material id out of range; then
+  // each chunk's first place in the mesh.
   struct Counts {
     size_t kept = 0, degenerate = 0, non_finite = 0;
+    size_t bad_material = std::numeric_limits<size_t>::max();
   };
   std::vector<Counts> counts(chunks);
   // The workers report to the caller's progress, a unit per triangle and pass.
@@ -105,10 +116,15 @@ void add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners,
   const tbb::blocked_range<size_t> all_chunks(0, chunks, 1);
   parallel::for_range(all_chunks, [&](const tbb::blocked_range<size_t>& r) {
     for (size_t c = r.begin(); c != r.end(); ++c) {
-      if (progress != nullptr) progress->advance(std::min(n, (c + 1) * kChunk) - c * kChunk);
+      const size_t end = std::min(n, (c + 1) * kChunk);
+      if (progress != nullptr) progress->advance(end - c * kChunk);
       Counts& out = counts[c];
-      for (size_t k = c * kChunk; k < std::min(n, (c + 1) * kChunk); ++k) {
-        switch (check_triangle(corners[3 * k], corners[3 * k + 1], corners[3 * k + 2])) {
+      for (size_t k = c * kChunk; k < end; ++k) {
+        if (check_ids && material[k] >= options.materials)
+          out.bad_material = std::min(out.bad_material, k);
+        glm::vec3 v[3];
+        corners_of(k, v);
+        switch (check_triangle(v[0], v[1], v[2])) {
           case TriangleCheck::kOk:
             ++out.kept;
             break;
@@ -124,31 +140,75 @@ void add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners,
   });
   std::vector<size_t> first(chunks);
   size_t kept = 0;
+  size_t bad_material = std::numeric_limits<size_t>::max();
+  size_t too_many = std::numeric_limits<size_t>::max();  // the first triangle met when full
   for (size_t c = 0; c < chunks; ++c) {
     first[c] = kept;
+    bad_material = std::min(bad_material, counts[c].bad_material);
+    if (too_many == std::numeric_limits<size_t>::max() &&
+        options.stored + kept + counts[c].kept >= options.max_triangles) {
+      // The scene fills up in this chunk, or is full at the next one's start: find the triangle.
+      size_t in_scene = options.stored + kept;
+      for (size_t k = c * kChunk; k < std::min(n, (c + 1) * kChunk); ++k) {
+        if (in_scene >= options.max_triangles) {
+          too_many = k;
+          break;
+        }
+        glm::vec3 v[3];
+        corners_of(k, v);
+        in_scene += check_triangle(v[0], v[1], v[2]) == TriangleCheck::kOk ? 1 : 0;
+      }
+      if (too_many == std::numeric_limits<size_t>::max() && c + 1 < chunks) {
+        too_many = (c + 1) * kChunk;
+      }
+    }
     kept += counts[c].kept;
-    stats.dropped_degenerate += counts[c].degenerate;
-    stats.dropped_non_finite += counts[c].non_finite;
   }
-  mesh.resize(kept, !normals.empty(), !uvs.empty());
+  if (bad_material < n && bad_material <= too_many) return AddResult::kMaterialOutOfRange;
+  if (too_many < n) return AddResult::kTooManyTriangles;
+  for (const Counts& c : counts) {
+    stats.dropped_degenerate += c.degenerate;
+    stats.dropped_non_finite += c.non_finite;
+  }
+  const size_t held = mesh.size();
+  mesh.grow(kept, !normals.empty() && kept > 0, !uvs.empty() && kept > 0);
   // Second pass: each chunk fills its places, exactly as add_checked would have in order.
   parallel::for_range(all_chunks, [&](const tbb::blocked_range<size_t>& r) {
     for (size_t c = r.begin(); c != r.end(); ++c) {
-      size_t place = first[c];
+      size_t place = held + first[c];
       const size_t end = std::min(n, (c + 1) * kChunk);
       for (size_t k = c * kChunk; k < end; ++k) {
-        const glm::vec3 a = corners[3 * k], b = corners[3 * k + 1], d = corners[3 * k + 2];
-        if (check_triangle(a, b, d) != TriangleCheck::kOk) continue;
+        glm::vec3 v[3];
+        corners_of(k, v);
+        if (check_triangle(v[0], v[1], v[2]) != TriangleCheck::kOk) continue;
         std::array<glm::vec3, 3> unit;
-        if (!normals.empty()) unit = checked_normals(a, b, d, &normals[3 * k]);
+        if (!normals.empty()) {
+          glm::vec3 moved[3];
+          for (size_t i = 0; i < 3; ++i) {
+            moved[i] = transform != nullptr ? transform->apply_normal(normals[3 * k + i])
+                                            : normals[3 * k + i];
+          }
+          unit = checked_normals(v[0], v[1], v[2], moved);
+        }
         std::array<glm::vec2, 3> t;
         if (!uvs.empty()) t = checked_uvs(&uvs[3 * k]);
-        mesh.set(place++, a, b, d, material[k], normals.empty() ? nullptr : &unit,
+        const uint32_t id =
+            options.material ? *options.material : options.material_offset + material[k];
+        mesh.set(place++, v[0], v[1], v[2], id, normals.empty() ? nullptr : &unit,
                  uvs.empty() ? nullptr : &t);
       }
       if (progress != nullptr) progress->advance(end - c * kChunk);
     }
   });
+  return AddResult::kOk;
+}
+
+void add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners,
+                     std::span<const uint32_t> material, std::span<const glm::vec3> normals,
+                     std::span<const glm::vec2> uvs, LoadStats& stats) {
+  [[maybe_unused]] const AddResult result =
+      add_all_checked(mesh, corners, material, normals, uvs, AddOptions{}, stats);
+  assert(result == AddResult::kOk);
 }
 
 }  // namespace tritrace

@@ -8,10 +8,13 @@
 #include <cstdint>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <limits>
+#include <optional>
 #include <span>
 
 #include "tritrace/geometry/triangle_mesh.h"
 #include "tritrace/scene/io/loaded_scene.h"
+#include "tritrace/scene/io/transform.h"
 
 namespace tritrace {
 
@@ -34,10 +37,35 @@ bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint
 bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint32_t material,
                  const glm::vec3* normals, const glm::vec2* uvs, LoadStats& stats);
 
+// How add_all_checked adds a loaded mesh: a scene file's transform and material choice for the
+// mesh, and the scene's triangle limit. The defaults add the mesh as it is.
+struct AddOptions {
+  // Moves the corners with apply() and the file's normals with apply_normal(), before the checks.
+  std::optional<Transform> transform;
+  std::optional<uint32_t> material;  // every triangle's material, in place of the file's
+  uint32_t material_offset = 0;      // added to the file's material ids
+  // The file's material count: a larger id is an error (not checked with `material`).
+  size_t materials = std::numeric_limits<size_t>::max();
+  // The scene holds `stored` triangles before this mesh and may hold at most `max_triangles`: a
+  // triangle (kept or dropped) met when the scene is full is an error.
+  size_t stored = 0;
+  size_t max_triangles = std::numeric_limits<size_t>::max();
+};
+
+// The first error adding the triangles one by one would meet: the material id is checked before
+// the limit, triangle after triangle.
+enum class AddResult { kOk, kMaterialOutOfRange, kTooManyTriangles };
+
 // add_checked for every triangle of a loaded mesh (corners three per triangle; normals and uvs
-// three per triangle or empty), in order, into an empty `mesh`: the same mesh and counts as
-// calling it triangle by triangle, computed in parallel. Reports "adding triangles" to the
-// thread's LoadProgress.
+// three per triangle or empty), in order, after the triangles `mesh` holds: the same mesh and
+// counts as calling it triangle by triangle, computed in parallel. On an error nothing is added
+// or counted. Reports "adding triangles" to the thread's LoadProgress.
+[[nodiscard]] AddResult add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners,
+                                        std::span<const uint32_t> material,
+                                        std::span<const glm::vec3> normals,
+                                        std::span<const glm::vec2> uvs, const AddOptions& options,
+                                        LoadStats& stats);
+// The same with the default options, which meet no error.
 void add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners,
                      std::span<const uint32_t> material, std::span<const glm::vec3> normals,
                      std::span<const glm::vec2> uvs, LoadStats& stats);
