@@ -107,10 +107,9 @@ void check_tree(const BinaryBvh& tree, const std::vector<Bounds3>& boxes, uint32
       for (uint32_t k = n.first; k < n.first + n.count; ++k) ++seen[tree.prim_index[k]];
       continue;
     }
-    for (uint32_t c : {n.first, n.right}) {
-      EXPECT_GT(c, i) << "children come after their parent";
-      todo.push_back(c);
-    }
+    EXPECT_EQ(n.first, i + 1) << "depth first: the left child follows its parent";
+    EXPECT_GT(n.right, n.first);
+    for (uint32_t c : {n.first, n.right}) todo.push_back(c);
   }
   EXPECT_EQ(visited, tree.nodes.size()) << "unreachable nodes";
   EXPECT_LE(short_leaves, 1u) << "only the last run of the curve may be short";
@@ -156,21 +155,14 @@ TEST(MortonBuilder, ParallelBuildMakesTheSerialTree) {
   const BinaryBvh parallel = build(boxes);
   check_tree(parallel, boxes, bvh::kMaxLeafSize);
   EXPECT_TRUE(parallel.prim_index == serial.prim_index);
+  // Numbered depth first, so the arrays themselves are the same.
   ASSERT_EQ(parallel.nodes.size(), serial.nodes.size());
-  // The same shape and boxes, walked side by side (the numbering of nodes may differ).
-  std::vector<std::pair<uint32_t, uint32_t>> todo{{0, 0}};
   int differences = 0;
-  while (!todo.empty()) {
-    const auto [i, j] = todo.back();
-    todo.pop_back();
+  for (size_t i = 0; i < serial.nodes.size(); ++i) {
     const bvh::BinaryNode& x = parallel.nodes[i];
-    const bvh::BinaryNode& y = serial.nodes[j];
-    if (x.is_leaf() != y.is_leaf() || x.bounds.lo != y.bounds.lo || x.bounds.hi != y.bounds.hi ||
-        (x.is_leaf() && (x.first != y.first || x.count != y.count))) {
-      ++differences;
-      continue;
-    }
-    if (!x.is_leaf()) todo.insert(todo.end(), {{x.first, y.first}, {x.right, y.right}});
+    const bvh::BinaryNode& y = serial.nodes[i];
+    differences += x.bounds.lo != y.bounds.lo || x.bounds.hi != y.bounds.hi || x.count != y.count ||
+                   x.first != y.first || (!x.is_leaf() && x.right != y.right);
   }
   EXPECT_EQ(differences, 0);
 }

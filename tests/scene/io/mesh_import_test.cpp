@@ -89,12 +89,12 @@ StlFacts read_binary_stl(const std::string& path) {
 
 glm::vec3 imported_lo(const ImportedMesh& m) {
   glm::vec3 lo(std::numeric_limits<float>::max());
-  for (const glm::vec3& c : m.corners) lo = glm::min(lo, c);
+  for (size_t k = 0; k < 3 * m.triangles(); ++k) lo = glm::min(lo, m.corner(k));
   return lo;
 }
 glm::vec3 imported_hi(const ImportedMesh& m) {
   glm::vec3 hi(-std::numeric_limits<float>::max());
-  for (const glm::vec3& c : m.corners) hi = glm::max(hi, c);
+  for (size_t k = 0; k < 3 * m.triangles(); ++k) hi = glm::max(hi, m.corner(k));
   return hi;
 }
 

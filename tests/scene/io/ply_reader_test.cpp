@@ -36,9 +36,17 @@ std::string slurp(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
+// The native reader's mesh, in the corner form for comparison (it reads into the indexed form).
 std::optional<ImportedMesh> native(const std::string& path) {
   const std::string bytes = slurp(path);
-  return read_ply_triangles(std::span<const char>(bytes.data(), bytes.size()), path);
+  std::optional<ImportedMesh> mesh =
+      read_ply_triangles(std::span<const char>(bytes.data(), bytes.size()), path);
+  if (mesh) {
+    EXPECT_TRUE(mesh->indexed());
+    EXPECT_EQ(mesh->indices.size(), 3 * mesh->triangles());
+    mesh->expand_corners();
+  }
+  return mesh;
 }
 
 // Float steps between a and b (both finite, same sign here).
@@ -47,7 +55,9 @@ int ulps(float a, float b) {
 }
 
 // The same mesh; corners bit for bit, or within `max_ulps` float steps where given.
-void expect_same(const ImportedMesh& got, const ImportedMesh& want, int max_ulps = 0) {
+void expect_same(ImportedMesh got, ImportedMesh want, int max_ulps = 0) {
+  got.expand_corners();
+  want.expand_corners();
   ASSERT_EQ(got.corners.size(), want.corners.size());
   if (max_ulps == 0) {
     EXPECT_EQ(std::memcmp(got.corners.data(), want.corners.data(),

@@ -5,10 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <numeric>
 #include <random>
 #include <utility>
 #include <vector>
@@ -95,6 +97,40 @@ TEST(AddAllChecked, GivesTheMeshAndCountsOfAddingOneByOne) {
       EXPECT_EQ(got.has_uvs(), uvs);
     }
   }
+}
+
+// The indexed form (the native PLY reader's: shared vertices, three indices per triangle) adds
+// what the corner form with the same corners adds, one by one.
+TEST(AddAllChecked, IndexedCornersGiveTheMeshOfTheirCorners) {
+  const Loaded m = random_mesh(70'000, true, false, 21u);
+  // Every corner a vertex of its own, in a shuffled order, plus vertices no triangle uses.
+  std::vector<glm::vec3> positions(m.corners.size() + 100, glm::vec3(7.0f));
+  std::vector<uint32_t> indices(m.corners.size());
+  std::vector<uint32_t> slot(positions.size());
+  std::iota(slot.begin(), slot.end(), 0u);
+  std::shuffle(slot.begin(), slot.end(), std::mt19937(5));
+  for (size_t k = 0; k < m.corners.size(); ++k) {
+    indices[k] = slot[k];
+    positions[slot[k]] = m.corners[k];
+  }
+  TriangleMesh want;
+  LoadStats want_stats;
+  for (size_t k = 0; k < m.material.size(); ++k) {
+    add_checked(want, m.corners[3 * k], m.corners[3 * k + 1], m.corners[3 * k + 2], m.material[k],
+                &m.normals[3 * k], nullptr, want_stats);
+  }
+  TriangleMesh got;
+  LoadStats got_stats;
+  add_all_checked(got, CornerView(positions, indices), m.material, m.normals, m.uvs, got_stats);
+  ASSERT_GT(want_stats.dropped_degenerate, 100u);
+  EXPECT_EQ(got_stats.dropped_degenerate, want_stats.dropped_degenerate);
+  EXPECT_EQ(got_stats.dropped_non_finite, want_stats.dropped_non_finite);
+  ASSERT_EQ(got.size(), want.size());
+  EXPECT_TRUE(same_bits(got.v0(), want.v0()));
+  EXPECT_TRUE(same_bits(got.v1(), want.v1()));
+  EXPECT_TRUE(same_bits(got.v2(), want.v2()));
+  EXPECT_TRUE(same_bits(got.normal(), want.normal()));
+  EXPECT_TRUE(same_bits(got.corner_normals(), want.corner_normals()));
 }
 
 // The scene file's way of adding a mesh file before add_all_checked (the oracle): triangle by

@@ -3,11 +3,11 @@
 // are distinct and the sort's result is unique); the keys sorted by a least-significant-digit
 // radix sort over the code bits; then ranges split top-down at the highest bit in which their
 // first and last codes differ (a binary search in the sorted codes), in tasks for large ranges,
-// with every node's box the union of its children's, computed on the way back up.
+// each node written at its depth-first place, with its box the union of its children's, computed
+// on the way back up.
 #include "tritrace/accel/bvh/morton_builder.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/concurrent_vector.h>
 
 #include <algorithm>
 #include <array>
@@ -131,22 +131,23 @@ void radix_sort(HugePageVector<uint64_t>& keys) {
 
 class Builder {
  public:
-  Builder(const HugePageVector<uint64_t>& keys, const BoxSource& boxes, uint32_t max_leaf_size)
-      : keys_(keys), boxes_(boxes), max_leaf_size_(max_leaf_size) {}
+  Builder(const HugePageVector<uint64_t>& keys, const BoxSource& boxes, uint32_t max_leaf_size,
+          BinaryBvh& out)
+      : keys_(keys), boxes_(boxes), max_leaf_size_(max_leaf_size), nodes_(out.nodes) {}
 
-  BinaryBvh build() {
-    BinaryBvh out;
+  // Every range starts at a multiple of the leaf size, so a subtree over n primitives has exactly
+  // ceil(n / leaf size) leaves and twice that less one nodes: the tree is laid out in depth-first
+  // order as it is built, each node's place known from its range alone, the same whatever the
+  // threads.
+  void build(BinaryBvh& out) {
     const uint32_t n = static_cast<uint32_t>(keys_.size());
-    if (n == 0) return out;
-    nodes_.reserve(2 * (n / std::max(1u, max_leaf_size_ / 2)) + 1);
-    nodes_.grow_by(1);
+    if (n == 0) return;
+    nodes_.resize(subtree_nodes(n));
     build_node(0, 0, n);
-    out.nodes.assign(nodes_.begin(), nodes_.end());
     out.prim_index.resize(n);
     parallel::for_range(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const auto& r) {
       for (size_t i = r.begin(); i != r.end(); ++i) out.prim_index[i] = prim_of(keys_[i]);
     });
-    return out;
   }
 
  private:
@@ -178,7 +179,12 @@ class Builder {
     return std::clamp(rounded, begin + leaf, (end - 1) / leaf * leaf);
   }
 
-  // Fills node `index` with the subtree of keys [begin, end) and returns its box.
+  uint32_t subtree_nodes(uint32_t count) const {
+    return 2 * ((count + max_leaf_size_ - 1) / max_leaf_size_) - 1;
+  }
+
+  // Fills node `index` and the nodes after it with the subtree of keys [begin, end) and returns
+  // its box.
   Bounds3 build_node(uint32_t index, uint32_t begin, uint32_t end) {
     const uint32_t count = end - begin;
     if (count <= max_leaf_size_) {
@@ -196,31 +202,31 @@ class Builder {
       return bounds;
     }
     const uint32_t mid = split(begin, end);
-    const uint32_t left = static_cast<uint32_t>(nodes_.grow_by(2) - nodes_.begin());
+    const uint32_t left = index + 1, right = left + subtree_nodes(mid - begin);
     Bounds3 left_bounds, right_bounds;
     if (count >= kParallelThreshold) {
       parallel::TaskGroup group;
       group.run([&] { left_bounds = build_node(left, begin, mid); });
-      right_bounds = build_node(left + 1, mid, end);
+      right_bounds = build_node(right, mid, end);
       group.wait();
     } else {
       left_bounds = build_node(left, begin, mid);
-      right_bounds = build_node(left + 1, mid, end);
+      right_bounds = build_node(right, mid, end);
     }
     Bounds3 bounds = left_bounds;
     bounds.extend(right_bounds);
-    BinaryNode& node = nodes_[index];  // concurrent_vector never moves its elements
+    BinaryNode& node = nodes_[index];
     node.bounds = bounds;
     node.count = 0;
     node.first = left;
-    node.right = left + 1;
+    node.right = right;
     return bounds;
   }
 
   const HugePageVector<uint64_t>& keys_;
   const BoxSource& boxes_;
   uint32_t max_leaf_size_;
-  tbb::concurrent_vector<BinaryNode, HugePageAllocator<BinaryNode>> nodes_;
+  HugePageVector<BinaryNode>& nodes_;
 };
 
 }  // namespace
@@ -257,7 +263,9 @@ BinaryBvh build_morton(size_t count, const BoxSource& boxes, const BuildConfig& 
     });
   });
   radix_sort(keys);
-  return Builder(keys, boxes, config.max_leaf_size).build();
+  BinaryBvh out;
+  Builder(keys, boxes, config.max_leaf_size, out).build(out);
+  return out;
 }
 
 }  // namespace tritrace::bvh

@@ -16,8 +16,8 @@ namespace tritrace::bvh {
 // config.max_leaf_size primitives consecutive along the curve (the last may hold fewer), every
 // node's box the union of its primitives' boxes, children after their parent in `nodes` (as
 // build_binned_sah makes them, so that collapse_binary_bvh takes either). Primitives whose centres
-// share a Morton cell (10 bits per axis) stay in their index order. The same tree whatever the
-// thread count (only the order in which nodes are numbered may differ, as with build_binned_sah).
+// share a Morton cell (10 bits per axis) stay in their index order. Nodes are numbered depth
+// first (a left subtree before its right), so the array is the same whatever the thread count.
 // Throws std::invalid_argument as build_binned_sah does for a bad max_leaf_size or count.
 [[nodiscard]] BinaryBvh build_morton(size_t count, const BoxSource& boxes,
                                      const BuildConfig& config = {});

@@ -6,6 +6,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <tbb/blocked_range.h>
 #include <unistd.h>
 #include <algorithm>
 #include <assimp/DefaultLogger.hpp>
@@ -28,6 +29,7 @@
 #include <utility>
 
 #include "tritrace/error.h"
+#include "tritrace/parallel.h"
 #include "tritrace/scene/io/input_file.h"
 #include "tritrace/scene/io/isolated_call.h"
 #include "tritrace/scene/io/load_progress.h"
@@ -492,7 +494,8 @@ ImportedMesh import_isolated(const std::string& subject, const std::function<Imp
   const IsolatedResult result = call_isolated(
       subject,
       [&] {
-        auto mesh = std::make_shared<const ImportedMesh>(fn());
+        auto mesh = std::make_shared<ImportedMesh>(fn());
+        mesh->expand_corners();  // the hand-over carries the corner form
         Bytes counter;
         put_mesh(*mesh, counter);
         return IsolatedOutput{counter.size(), [mesh](uint8_t* out) {
@@ -506,6 +509,16 @@ ImportedMesh import_isolated(const std::string& subject, const std::function<Imp
 }
 
 }  // namespace
+
+void ImportedMesh::expand_corners() {
+  if (!indexed()) return;
+  corners.resize(indices.size());
+  parallel::for_range(tbb::blocked_range<size_t>(0, indices.size(), 1 << 16), [&](const auto& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) corners[k] = positions[indices[k]];
+  });
+  positions = {};
+  indices = {};
+}
 
 ImportedMesh import_mesh_file(const std::string& path) {
   check_input_file(path);

@@ -11,6 +11,7 @@
 #include <charconv>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <string_view>
 #include <type_traits>
 #include <vector>
@@ -238,20 +239,33 @@ struct NodeTransform {
   aiMatrix3x3 normal{point};
 };
 
-void emit(ImportedMesh& out, size_t face, const HugePageVector<glm::vec3>& p,
-          const HugePageVector<glm::vec3>& n, const int64_t idx[3], const NodeTransform& t) {
-  const size_t order[3] = {static_cast<size_t>(idx[0]), static_cast<size_t>(idx[2]),
-                           static_cast<size_t>(idx[1])};
+// Face `face` as indices of its corners in tritrace's order, and with the file's normals those
+// normals at its corners.
+void emit(ImportedMesh& out, size_t face, const HugePageVector<glm::vec3>& n, const int64_t idx[3],
+          const NodeTransform& t) {
+  const uint32_t order[3] = {static_cast<uint32_t>(idx[0]), static_cast<uint32_t>(idx[2]),
+                             static_cast<uint32_t>(idx[1])};
   for (int k = 0; k < 3; ++k) {
-    const glm::vec3 q = p[order[k]];
-    const aiVector3D v = t.point * aiVector3D(q.x, q.y, q.z);
-    out.corners[3 * face + k] = glm::vec3(v.x, v.y, v.z);
+    out.indices[3 * face + k] = order[k];
     if (!n.empty()) {
       const glm::vec3 m = n[order[k]];
       const aiVector3D w = t.normal * aiVector3D(m.x, m.y, m.z);
       out.normals[3 * face + k] = glm::vec3(w.x, w.y, w.z);
     }
   }
+}
+
+// The file's vertices, each moved by the node transform once (the assimp path moves every corner,
+// with the same operations on the same vertex), become the mesh's positions.
+void move_points(HugePageVector<glm::vec3>& points, const NodeTransform& t, ImportedMesh& out) {
+  parallel::for_range(tbb::blocked_range<size_t>(0, points.size(), 1 << 16), [&](const auto& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const glm::vec3 q = points[i];
+      const aiVector3D v = t.point * aiVector3D(q.x, q.y, q.z);
+      points[i] = glm::vec3(v.x, v.y, v.z);
+    }
+  });
+  out.positions = std::move(points);
 }
 
 template <bool kSwap>
@@ -281,7 +295,7 @@ bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out
     }
   });
 
-  out.corners.resize(3 * l.faces);
+  out.indices.resize(3 * l.faces);
   if (l.normals) out.normals.resize(3 * l.faces);
   const NodeTransform transform;
   const size_t index_bytes = size_of(l.index_type), count_bytes = size_of(l.count_type);
@@ -298,11 +312,12 @@ bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out
             if (!(v >= 0.0 && v < static_cast<double>(l.vertices))) return false;
             idx[k] = static_cast<int64_t>(v);
           }
-          emit(out, f, points, normals, idx, transform);
+          emit(out, f, normals, idx, transform);
         }
         return good;
       },
       [](bool a, bool b) { return a && b; });
+  if (ok) move_points(points, transform, out);
   return ok;
 }
 
@@ -364,7 +379,7 @@ bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out)
       }
     }
   }
-  out.corners.resize(3 * l.faces);
+  out.indices.resize(3 * l.faces);
   if (l.normals) out.normals.resize(3 * l.faces);
   const NodeTransform transform;
   for (size_t f = 0; f < l.faces; ++f) {
@@ -375,8 +390,9 @@ bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out)
       if (!parse_number(w[static_cast<size_t>(k) + 1], idx[k])) return false;
       if (idx[k] < 0 || static_cast<uint64_t>(idx[k]) >= l.vertices) return false;
     }
-    emit(out, f, points, normals, idx, transform);
+    emit(out, f, normals, idx, transform);
   }
+  move_points(points, transform, out);
   return true;
 }
 
@@ -389,6 +405,8 @@ std::optional<ImportedMesh> read_ply_triangles(std::span<const char> bytes,
   // Every element takes at least a byte: counts beyond the file are damage, not an allocation.
   const size_t body = bytes.size() - layout->body;
   if (layout->vertices > body || layout->faces > body) return std::nullopt;
+  // Corners are 32-bit indices (a file of 2^32 vertices is beyond kMaxInputBytes anyway).
+  if (layout->vertices > std::numeric_limits<uint32_t>::max()) return std::nullopt;
   if (layout->faces > kMaxSceneTriangles) {
     throw Error(subject, "has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
   }

@@ -1,6 +1,7 @@
 // A native reader for triangle meshes in PLY (ASCII, binary little- and big-endian): the fast
 // path for the big scanned and generated meshes that PLY usually carries, straight from the file's
-// bytes into an ImportedMesh, in parallel over vertices and faces. It takes only what it can read
+// bytes into an ImportedMesh (its indexed form: the file's vertices and three indices per
+// triangle), in parallel over vertices and faces. It takes only what it can read
 // exactly as the assimp path does (a vertex element with scalar x, y, z among any other scalar
 // properties, then a face element holding nothing but one index list of three per face); every
 // other file, well-formed or not, is left to assimp, whose results and errors it then gives.

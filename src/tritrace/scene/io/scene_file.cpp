@@ -707,7 +707,7 @@ class Parser {
     options.max_triangles = kMaxSceneTriangles;
     TriangleMesh& mesh = target();
     const size_t before = mesh.size();
-    switch (add_all_checked(mesh, imported.corners, imported.material, imported.normals,
+    switch (add_all_checked(mesh, imported.corner_view(), imported.material, imported.normals,
                             imported.uvs, options, out_.stats)) {
       case AddResult::kOk:
         break;

@@ -95,7 +95,8 @@ LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& over
   Scene& scene = loaded.scene;
   scene.materials = mesh.materials;
   for (const TextureImage& t : mesh.textures) scene.textures.push_back(Texture::from_srgb8(t));
-  add_all_checked(scene.mesh, mesh.corners, mesh.material, mesh.normals, mesh.uvs, loaded.stats);
+  add_all_checked(scene.mesh, mesh.corner_view(), mesh.material, mesh.normals, mesh.uvs,
+                  loaded.stats);
   loaded.stats.meshes = mesh.meshes;
   if (scene.mesh.empty()) {
     throw Error("", "no geometry: every triangle was degenerate or non-finite (" +

@@ -85,7 +85,7 @@ bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint
   return true;
 }
 
-AddResult add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners,
+AddResult add_all_checked(TriangleMesh& mesh, CornerView corners,
                           std::span<const uint32_t> material, std::span<const glm::vec3> normals,
                           std::span<const glm::vec2> uvs, const AddOptions& options,
                           LoadStats& stats) {
@@ -203,9 +203,9 @@ AddResult add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners
   return AddResult::kOk;
 }
 
-void add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners,
-                     std::span<const uint32_t> material, std::span<const glm::vec3> normals,
-                     std::span<const glm::vec2> uvs, LoadStats& stats) {
+void add_all_checked(TriangleMesh& mesh, CornerView corners, std::span<const uint32_t> material,
+                     std::span<const glm::vec3> normals, std::span<const glm::vec2> uvs,
+                     LoadStats& stats) {
   [[maybe_unused]] const AddResult result =
       add_all_checked(mesh, corners, material, normals, uvs, AddOptions{}, stats);
   assert(result == AddResult::kOk);

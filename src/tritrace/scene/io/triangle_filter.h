@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <concepts>
 #include <cstddef>
 #include <cstdint>
 #include <glm/vec2.hpp>
@@ -56,18 +57,38 @@ struct AddOptions {
 // the limit, triangle after triangle.
 enum class AddResult { kOk, kMaterialOutOfRange, kTooManyTriangles };
 
+// A loaded mesh's corners, three per triangle: stored one by one, or as indices into the file's
+// vertices (ImportedMesh's two forms).
+struct CornerView {
+  // Implicit, so that any array of corners passes as it is.
+  template <typename Corners>
+  requires std::convertible_to<const Corners&, std::span<const glm::vec3>> CornerView(
+      const Corners& each)  // NOLINT(google-explicit-constructor)
+      : corners(std::span<const glm::vec3>(each)) {}
+  CornerView(std::span<const glm::vec3> vertices, std::span<const uint32_t> three_per_triangle)
+      : positions(vertices), indices(three_per_triangle) {}
+  glm::vec3 operator[](size_t k) const {
+    return indices.empty() ? corners[k] : positions[indices[k]];
+  }
+  size_t size() const { return indices.empty() ? corners.size() : indices.size(); }
+
+  std::span<const glm::vec3> corners;
+  std::span<const glm::vec3> positions;
+  std::span<const uint32_t> indices;
+};
+
 // add_checked for every triangle of a loaded mesh (corners three per triangle; normals and uvs
 // three per triangle or empty), in order, after the triangles `mesh` holds: the same mesh and
 // counts as calling it triangle by triangle, computed in parallel. On an error nothing is added
 // or counted. Reports "adding triangles" to the thread's LoadProgress.
-[[nodiscard]] AddResult add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners,
+[[nodiscard]] AddResult add_all_checked(TriangleMesh& mesh, CornerView corners,
                                         std::span<const uint32_t> material,
                                         std::span<const glm::vec3> normals,
                                         std::span<const glm::vec2> uvs, const AddOptions& options,
                                         LoadStats& stats);
 // The same with the default options, which meet no error.
-void add_all_checked(TriangleMesh& mesh, std::span<const glm::vec3> corners,
-                     std::span<const uint32_t> material, std::span<const glm::vec3> normals,
-                     std::span<const glm::vec2> uvs, LoadStats& stats);
+void add_all_checked(TriangleMesh& mesh, CornerView corners, std::span<const uint32_t> material,
+                     std::span<const glm::vec3> normals, std::span<const glm::vec2> uvs,
+                     LoadStats& stats);
 
 }  // namespace tritrace
