@@ -17,6 +17,7 @@
 
 #include "tritrace/accel/bvh/morton_builder.h"
 #include "tritrace/geometry/hit.h"
+#include "tritrace/math/next_float.h"
 #include "tritrace/parallel.h"
 
 namespace tritrace::bvh {
@@ -38,10 +39,9 @@ Bounds3 widened_triangle_bounds(const TriangleMesh& mesh, size_t tri, float pad)
     // triangle whose box area overflows float is still a real triangle that brute force can hit.
     return Bounds3{glm::vec3(0.0f), glm::vec3(0.0f)};
   }
-  constexpr float inf = std::numeric_limits<float>::infinity();
   for (int a = 0; a < 3; ++a) {
-    b.lo[a] = std::nextafter(b.lo[a] - pad, -inf);
-    b.hi[a] = std::nextafter(b.hi[a] + pad, inf);
+    b.lo[a] = next_float_down(b.lo[a] - pad);
+    b.hi[a] = next_float_up(b.hi[a] + pad);
   }
   return b;
 }
