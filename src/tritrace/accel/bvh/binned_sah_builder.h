@@ -19,7 +19,7 @@ namespace tritrace::bvh {
 inline constexpr uint32_t kMaxLeafSize = 8;
 
 // How the binary tree is made: the binned SAH (the tree to trace many rays through), or Morton
-// codes (morton_builder.h: several times faster to build, slower to trace).
+// codes (morton_builder.h: 1.6-3.3x faster to build on big meshes, slower to trace).
 enum class BuildMethod { kBinnedSah, kMorton };
 
 struct BuildConfig {
