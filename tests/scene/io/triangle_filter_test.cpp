@@ -65,6 +65,17 @@ bool same_bits(const HugePageVector<T>& a, const HugePageVector<T>& b) {
          (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
+// Every array of the two meshes, bit for bit.
+void expect_same_triangles(const TriangleMesh& got, const TriangleMesh& want) {
+  EXPECT_TRUE(same_bits(got.v0(), want.v0()));
+  EXPECT_TRUE(same_bits(got.v1(), want.v1()));
+  EXPECT_TRUE(same_bits(got.v2(), want.v2()));
+  EXPECT_TRUE(same_bits(got.normal(), want.normal()));
+  EXPECT_TRUE(same_bits(got.material(), want.material()));
+  EXPECT_TRUE(same_bits(got.corner_normals(), want.corner_normals()));
+  EXPECT_TRUE(same_bits(got.corner_uvs(), want.corner_uvs()));
+}
+
 TEST(AddAllChecked, GivesTheMeshAndCountsOfAddingOneByOne) {
   for (const bool normals : {false, true}) {
     for (const bool uvs : {false, true}) {
@@ -86,13 +97,7 @@ TEST(AddAllChecked, GivesTheMeshAndCountsOfAddingOneByOne) {
       EXPECT_EQ(got_stats.dropped_degenerate, want_stats.dropped_degenerate);
       EXPECT_EQ(got_stats.dropped_non_finite, want_stats.dropped_non_finite);
       ASSERT_EQ(got.size(), want.size());
-      EXPECT_TRUE(same_bits(got.v0(), want.v0()));
-      EXPECT_TRUE(same_bits(got.v1(), want.v1()));
-      EXPECT_TRUE(same_bits(got.v2(), want.v2()));
-      EXPECT_TRUE(same_bits(got.normal(), want.normal()));
-      EXPECT_TRUE(same_bits(got.material(), want.material()));
-      EXPECT_TRUE(same_bits(got.corner_normals(), want.corner_normals()));
-      EXPECT_TRUE(same_bits(got.corner_uvs(), want.corner_uvs()));
+      expect_same_triangles(got, want);
       EXPECT_EQ(got.has_shading_normals(), normals);
       EXPECT_EQ(got.has_uvs(), uvs);
     }
@@ -126,11 +131,7 @@ TEST(AddAllChecked, IndexedCornersGiveTheMeshOfTheirCorners) {
   EXPECT_EQ(got_stats.dropped_degenerate, want_stats.dropped_degenerate);
   EXPECT_EQ(got_stats.dropped_non_finite, want_stats.dropped_non_finite);
   ASSERT_EQ(got.size(), want.size());
-  EXPECT_TRUE(same_bits(got.v0(), want.v0()));
-  EXPECT_TRUE(same_bits(got.v1(), want.v1()));
-  EXPECT_TRUE(same_bits(got.v2(), want.v2()));
-  EXPECT_TRUE(same_bits(got.normal(), want.normal()));
-  EXPECT_TRUE(same_bits(got.corner_normals(), want.corner_normals()));
+  expect_same_triangles(got, want);
 }
 
 // The scene file's way of adding a mesh file before add_all_checked (the oracle): triangle by
@@ -165,13 +166,7 @@ AddResult add_one_by_one(TriangleMesh& mesh, const Loaded& m, const AddOptions& 
 
 void expect_same_mesh(const TriangleMesh& got, const TriangleMesh& want) {
   ASSERT_EQ(got.size(), want.size());
-  EXPECT_TRUE(same_bits(got.v0(), want.v0()));
-  EXPECT_TRUE(same_bits(got.v1(), want.v1()));
-  EXPECT_TRUE(same_bits(got.v2(), want.v2()));
-  EXPECT_TRUE(same_bits(got.normal(), want.normal()));
-  EXPECT_TRUE(same_bits(got.material(), want.material()));
-  EXPECT_TRUE(same_bits(got.corner_normals(), want.corner_normals()));
-  EXPECT_TRUE(same_bits(got.corner_uvs(), want.corner_uvs()));
+  expect_same_triangles(got, want);
 }
 
 // A mesh already holding a few triangles (with corner normals and uvs or not), as a scene's mesh
