@@ -131,22 +131,23 @@ void radix_sort(HugePageVector<uint64_t>& keys) {
 
 class Builder {
  public:
+  // Builds into `out`.
   Builder(const HugePageVector<uint64_t>& keys, const BoxSource& boxes, uint32_t max_leaf_size,
           BinaryBvh& out)
-      : keys_(keys), boxes_(boxes), max_leaf_size_(max_leaf_size), nodes_(out.nodes) {}
+      : keys_(keys), boxes_(boxes), max_leaf_size_(max_leaf_size), out_(out) {}
 
   // Every range starts at a multiple of the leaf size, so a subtree over n primitives has exactly
   // ceil(n / leaf size) leaves and twice that less one nodes: the tree is laid out in depth-first
   // order as it is built, each node's place known from its range alone, the same whatever the
   // threads.
-  void build(BinaryBvh& out) {
+  void build() {
     const uint32_t n = static_cast<uint32_t>(keys_.size());
     if (n == 0) return;
-    nodes_.resize(subtree_nodes(n));
+    out_.nodes.resize(subtree_nodes(n));
     build_node(0, 0, n);
-    out.prim_index.resize(n);
+    out_.prim_index.resize(n);
     parallel::for_range(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const auto& r) {
-      for (size_t i = r.begin(); i != r.end(); ++i) out.prim_index[i] = prim_of(keys_[i]);
+      for (size_t i = r.begin(); i != r.end(); ++i) out_.prim_index[i] = prim_of(keys_[i]);
     });
   }
 
@@ -195,7 +196,7 @@ class Builder {
         boxes_(p, p + 1, &b);
         bounds.extend(b);
       }
-      BinaryNode& node = nodes_[index];
+      BinaryNode& node = out_.nodes[index];
       node.bounds = bounds;
       node.count = count;
       node.first = begin;
@@ -215,7 +216,7 @@ class Builder {
     }
     Bounds3 bounds = left_bounds;
     bounds.extend(right_bounds);
-    BinaryNode& node = nodes_[index];
+    BinaryNode& node = out_.nodes[index];
     node.bounds = bounds;
     node.count = 0;
     node.first = left;
@@ -226,7 +227,7 @@ class Builder {
   const HugePageVector<uint64_t>& keys_;
   const BoxSource& boxes_;
   uint32_t max_leaf_size_;
-  HugePageVector<BinaryNode>& nodes_;
+  BinaryBvh& out_;
 };
 
 }  // namespace
@@ -264,7 +265,7 @@ BinaryBvh build_morton(size_t count, const BoxSource& boxes, const BuildConfig& 
   });
   radix_sort(keys);
   BinaryBvh out;
-  Builder(keys, boxes, config.max_leaf_size, out).build(out);
+  Builder(keys, boxes, config.max_leaf_size, out).build();
   return out;
 }
 
