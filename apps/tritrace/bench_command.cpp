@@ -249,7 +249,7 @@ int run_bench(const BenchArgs& args) {
         if (!args.bvh_builds.empty()) builds.clear();
         for (const std::string& name : args.bvh_builds) {
           const bvh::BuildMethod b = *parse_bvh_build(name);
-          if (std::find(builds.begin(), builds.end(), b) == builds.end()) builds.push_back(b);
+          if (std::find(builds.begin(), builds.end(), b) == builds.end()) builds.emplace_back(b);
         }
       }
       for (const std::optional<Kernel> kernel : kernels) {

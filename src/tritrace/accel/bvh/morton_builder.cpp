@@ -160,7 +160,7 @@ class Builder {
     const uint32_t first = code_of(keys_[begin]), last = code_of(keys_[end - 1]);
     uint32_t at = begin + (end - begin) / 2;
     if (first != last) {
-      const uint32_t bit = 1u << (31 - std::countl_zero(first ^ last));
+      const uint32_t bit = std::bit_floor(first ^ last);  // the highest differing bit
       // The codes share every bit above `bit` and are sorted, so those without it come first.
       uint32_t lo = begin + 1, hi = end - 1;  // the answer lies in [lo, hi]
       while (lo < hi) {
