@@ -304,6 +304,43 @@ TEST_F(PlyFiles, EveryLayoutReadsAsAssimpReadsIt) {
   }
 }
 
+// ASCII bodies are read in parallel chunks of 4 MiB, each parsing the lines that start in it: a
+// file of several chunks (lines across every boundary), with Windows line ends, no line break at
+// the end, or lines after the last element, reads exactly as the text's numbers through strtof.
+TEST_F(PlyFiles, AsciiFilesOfManyChunksReadExactly) {
+  std::vector<std::array<double, 3>> points;
+  std::vector<std::array<int64_t, 3>> faces;
+  random_mesh(400000, 12, points, faces);
+  const std::string text = write_ply("ascii", {{"float", "x"}, {"float", "y"}, {"float", "z"}},
+                                     "uchar", "int", points, faces);
+  ASSERT_GT(text.size(), size_t{12} << 20);
+  std::string crlf;
+  for (char c : text) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  // A line break as the last byte of the first chunk, so that the second starts with a line.
+  std::string on_boundary = text;
+  const size_t body = on_boundary.find("end_header\n") + 11;
+  const size_t last_byte = body + (size_t{4} << 20) - 1;
+  const size_t before = on_boundary.rfind('\n', last_byte);
+  on_boundary.insert(before, last_byte - before, ' ');  // spaces at a line's end are separators
+  ASSERT_EQ(on_boundary[last_byte], '\n');
+  std::string no_final_break = text;
+  ASSERT_EQ(no_final_break.back(), '\n');
+  no_final_break.pop_back();
+  for (const auto& [name, bytes] : {std::pair{"plain", text}, std::pair{"crlf", crlf},
+                                    std::pair{"unterminated", no_final_break},
+                                    std::pair{"trailing", text + "junk after the faces\n\n"},
+                                    std::pair{"boundary", on_boundary}}) {
+    SCOPED_TRACE(name);
+    const std::string path = file(std::string(name) + ".ply", bytes);
+    const std::optional<ImportedMesh> mine = native(path);
+    ASSERT_TRUE(mine.has_value());
+    expect_same(*mine, ascii_by_strtof(path, 0));
+  }
+  // One face line short: the text ends before the last element, and assimp gets the file.
+  std::string short_text = no_final_break.substr(0, no_final_break.rfind('\n'));
+  EXPECT_FALSE(native(file("short.ply", short_text)).has_value());
+}
+
 // Negative zeros: the assimp path's identity node transform turns -0 into +0 (x + 0), and the
 // native reader must give the same bits (found on the 10M-triangle sphere, 9,483 such coordinates).
 TEST_F(PlyFiles, NegativeZerosComeOutAsAssimpGivesThem) {

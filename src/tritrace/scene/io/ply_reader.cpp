@@ -1,6 +1,7 @@
 // The PLY header is parsed into a small layout description; binary bodies are then read with fixed
 // strides (every face is checked to have three indices, so face records have one size too), which
-// makes both element arrays readable in parallel chunks. ASCII bodies are read line by line.
+// makes both element arrays readable in parallel chunks. ASCII bodies are read in parallel chunks
+// of lines, each line's element known from a count of the line breaks before it.
 #include "tritrace/scene/io/ply_reader.h"
 
 #include <assimp/types.h>  // aiVector3D and aiMatrix4x4 with their operations
@@ -82,8 +83,8 @@ struct Layout {
 };
 
 // Splits a header line into whitespace-separated words.
-std::vector<std::string_view> words(std::string_view line) {
-  std::vector<std::string_view> out;
+void split_words(std::string_view line, std::vector<std::string_view>& out) {
+  out.clear();
   size_t i = 0;
   while (i < line.size()) {
     while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
@@ -91,6 +92,10 @@ std::vector<std::string_view> words(std::string_view line) {
     while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
     if (i > start) out.push_back(line.substr(start, i - start));
   }
+}
+std::vector<std::string_view> words(std::string_view line) {
+  std::vector<std::string_view> out;
+  split_words(line, out);
   return out;
 }
 
@@ -321,76 +326,130 @@ bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out
   return ok;
 }
 
-// ASCII: one element per line, exactly its values.
-class Lines {
- public:
-  Lines(std::span<const char> bytes, size_t pos) : text_(bytes.data(), bytes.size()), pos_(pos) {}
-  // The next line's words into w; false at the end of the text.
-  bool next(std::vector<std::string_view>& w) {
-    if (pos_ >= text_.size()) return false;
-    size_t end = text_.find('\n', pos_);
-    if (end == std::string_view::npos) end = text_.size();
-    w = words(text_.substr(pos_, end - pos_));
-    pos_ = end + 1;
-    return true;
-  }
-
- private:
-  std::string_view text_;
-  size_t pos_;
-};
-
+// ASCII: one element per line, exactly its values. Lines are numbered by counting the line breaks
+// of byte chunks in parallel; then each chunk parses the lines that start in it, a vertex or a face
+// by its number, so that chunks never wait on one another.
 template <typename T>
 bool parse_number(std::string_view s, T& out) {
   const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
   return ec == std::errc() && end == s.data() + s.size();
 }
 
-constexpr size_t kProgressStep = 1 << 16;  // elements between progress reports
+// Vertex i's attributes from its line's words.
+bool parse_vertex(const std::vector<std::string_view>& w, const Layout& l, glm::vec3& point,
+                  glm::vec3* normal) {
+  if (w.size() != l.vertex_properties) return false;
+  for (int a = 0; a < l.attributes(); ++a) {
+    float& value = (a < 3 ? point : *normal)[a % 3];
+    if (l.xyz_property[a] < 0) {
+      value = 0.0f;
+      continue;
+    }
+    const std::string_view s = w[static_cast<size_t>(l.xyz_property[a])];
+    if (is_integer(l.xyz_type[a])) {
+      int64_t v = 0;
+      if (!parse_number(s, v)) return false;
+      value = static_cast<float>(v);
+    } else if (l.xyz_type[a] == Type::kFloat32) {
+      if (!parse_number(s, value)) return false;
+    } else {
+      double v = 0.0;
+      if (!parse_number(s, v)) return false;
+      value = static_cast<float>(v);
+    }
+  }
+  return true;
+}
+
+// A face line's three vertex indices, in range.
+bool parse_face(const std::vector<std::string_view>& w, const Layout& l, int64_t idx[3]) {
+  if (w.size() != 4 || w[0] != "3") return false;
+  for (int k = 0; k < 3; ++k) {
+    if (!parse_number(w[static_cast<size_t>(k) + 1], idx[k])) return false;
+    if (idx[k] < 0 || static_cast<uint64_t>(idx[k]) >= l.vertices) return false;
+  }
+  return true;
+}
 
 bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out) {
   // A value takes two characters at least (a digit and a separator), a face line eight.
   const size_t body = bytes.size() - l.body;
   if (l.vertices > body / (2 * l.vertex_properties) || l.faces > body / 8) return false;
-  Lines lines(bytes, l.body);
-  std::vector<std::string_view> w;
-  progress_begin("parsing", l.vertices + l.faces);
+  const std::string_view text(bytes.data(), bytes.size());
+  const size_t elements = l.vertices + l.faces;
+  LoadProgress* progress = load_progress();
+  if (progress != nullptr) progress->begin("parsing", 2 * body);
+
+  // Chunk c holds the lines that start in [start(c), start(c + 1)); a line starts at the body's
+  // first byte and after every line break, except at the end of the text.
+  constexpr size_t kChunkBytes = size_t{1} << 22;
+  const size_t chunks = (body + kChunkBytes - 1) / kChunkBytes;
+  auto start = [&](size_t c) { return l.body + std::min(body, c * kChunkBytes); };
+  std::vector<size_t> first_line(chunks + 1, 0);
+  parallel::for_range(tbb::blocked_range<size_t>(0, chunks, 1), [&](const auto& r) {
+    for (size_t c = r.begin(); c != r.end(); ++c) {
+      size_t lines = c == 0 ? 1 : 0;
+      // Breaks at i in [start(c) - 1, start(c + 1) - 1) start lines in chunk c (but not at the
+      // end).
+      const size_t from = c == 0 ? l.body : start(c) - 1, to = start(c + 1) - 1;
+      for (size_t i = from; i < to; ++i) lines += text[i] == '\n' ? 1 : 0;
+      first_line[c + 1] = lines;
+      if (progress != nullptr) progress->advance(start(c + 1) - start(c));
+    }
+  });
+  for (size_t c = 0; c < chunks; ++c) first_line[c + 1] += first_line[c];
+  if (first_line[chunks] < elements) return false;  // the text ends before the last element
+
   HugePageVector<glm::vec3> points(l.vertices), normals(l.normals ? l.vertices : 0);
-  for (size_t i = 0; i < l.vertices; ++i) {
-    if (i % kProgressStep == 0) progress_advance(std::min(kProgressStep, l.vertices - i));
-    if (!lines.next(w) || w.size() != l.vertex_properties) return false;
-    for (int a = 0; a < l.attributes(); ++a) {
-      float& value = (a < 3 ? points : normals)[i][a % 3];
-      if (l.xyz_property[a] < 0) {
-        value = 0.0f;
-        continue;
-      }
-      const std::string_view s = w[static_cast<size_t>(l.xyz_property[a])];
-      if (is_integer(l.xyz_type[a])) {
-        int64_t v = 0;
-        if (!parse_number(s, v)) return false;
-        value = static_cast<float>(v);
-      } else if (l.xyz_type[a] == Type::kFloat32) {
-        if (!parse_number(s, value)) return false;
-      } else {
-        double v = 0.0;
-        if (!parse_number(s, v)) return false;
-        value = static_cast<float>(v);
-      }
-    }
-  }
   out.indices.resize(3 * l.faces);
-  if (l.normals) out.normals.resize(3 * l.faces);
+  const bool ok = parallel::reduce(
+      tbb::blocked_range<size_t>(0, chunks, 1), true,
+      [&](const auto& r, bool good) {
+        std::vector<std::string_view> w;
+        for (size_t c = r.begin(); good && c != r.end(); ++c) {
+          size_t line = first_line[c];
+          size_t pos = start(c);
+          if (c > 0) {
+            // The first line starting in this chunk starts after the first break at or after
+            // start(c) - 1.
+            const size_t br = text.find('\n', start(c) - 1);
+            pos = br == std::string_view::npos ? text.size() : br + 1;
+          }
+          while (good && line < std::min(elements, first_line[c + 1]) && pos < start(c + 1)) {
+            size_t end = text.find('\n', pos);
+            if (end == std::string_view::npos) end = text.size();
+            split_words(text.substr(pos, end - pos), w);
+            if (line < l.vertices) {
+              good = parse_vertex(w, l, points[line], l.normals ? &normals[line] : nullptr);
+            } else {
+              int64_t idx[3];
+              good = parse_face(w, l, idx);
+              if (good) {
+                uint32_t* corners = &out.indices[3 * (line - l.vertices)];
+                corners[0] = static_cast<uint32_t>(idx[0]);
+                corners[1] = static_cast<uint32_t>(idx[2]);
+                corners[2] = static_cast<uint32_t>(idx[1]);
+              }
+            }
+            ++line;
+            pos = end + 1;
+          }
+          if (progress != nullptr) progress->advance(start(c + 1) - start(c));
+        }
+        return good;
+      },
+      [](bool a, bool b) { return a && b; });
+  if (!ok) return false;
   const NodeTransform transform;
-  for (size_t f = 0; f < l.faces; ++f) {
-    if (f % kProgressStep == 0) progress_advance(std::min(kProgressStep, l.faces - f));
-    if (!lines.next(w) || w.size() != 4 || w[0] != "3") return false;
-    int64_t idx[3];
-    for (int k = 0; k < 3; ++k) {
-      if (!parse_number(w[static_cast<size_t>(k) + 1], idx[k])) return false;
-      if (idx[k] < 0 || static_cast<uint64_t>(idx[k]) >= l.vertices) return false;
-    }
-    emit(out, f, normals, idx, transform);
+  if (l.normals) {
+    out.normals.resize(3 * l.faces);
+    parallel::for_range(tbb::blocked_range<size_t>(0, 3 * l.faces, 1 << 16), [&](const auto& r) {
+      for (size_t k = r.begin(); k != r.end(); ++k) {
+        const glm::vec3 m = normals[out.indices[k]];
+        const aiVector3D w = transform.normal * aiVector3D(m.x, m.y, m.z);
+        out.normals[k] = glm::vec3(w.x, w.y, w.z);
+      }
+    });
   }
   move_points(points, transform, out);
   return true;
