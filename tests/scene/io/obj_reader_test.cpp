@@ -40,11 +40,18 @@ std::string slurp(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
+// The native reader's mesh, in the corner form for comparison (it reads into the indexed form).
 std::optional<ImportedMesh> native(const std::string& path) {
   const std::string bytes = slurp(path);
   const std::string folder = fs::path(path).parent_path().string();
-  return read_obj_triangles(std::span<const char>(bytes.data(), bytes.size()), path,
-                            folder.empty() ? "." : folder);
+  std::optional<ImportedMesh> mesh = read_obj_triangles(
+      std::span<const char>(bytes.data(), bytes.size()), path, folder.empty() ? "." : folder);
+  if (mesh) {
+    EXPECT_TRUE(mesh->indexed());
+    EXPECT_EQ(mesh->indices.size(), 3 * mesh->triangles());
+    mesh->expand_corners();
+  }
+  return mesh;
 }
 
 int ulps(float a, float b) {
@@ -85,7 +92,9 @@ void expect_same_material(const Material& g, const Material& w) {
 
 // Everything equal; the float arrays bit for bit, or within `max_ulps` float steps where given
 // (assimp's decimal parser is not correctly rounded).
-void expect_same(const ImportedMesh& got, const ImportedMesh& want, int max_ulps = 0) {
+void expect_same(ImportedMesh got, ImportedMesh want, int max_ulps = 0) {
+  got.expand_corners();
+  want.expand_corners();
   ASSERT_EQ(got.corners.size(), want.corners.size());
   ASSERT_EQ(got.normals.size(), want.normals.size());
   ASSERT_EQ(got.uvs.size(), want.uvs.size());

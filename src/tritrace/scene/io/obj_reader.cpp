@@ -725,7 +725,7 @@ std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
   const bool any_uvs =
       !replay.texcoords.empty() &&
       std::any_of(replay.runs.begin(), replay.runs.end(), [](const Run& r) { return r.uvs; });
-  out.corners.resize(3 * triangles);
+  out.indices.resize(3 * triangles);
   out.material.resize(triangles);
   if (any_normals) out.normals.resize(3 * triangles);
   if (any_uvs) out.uvs.resize(3 * triangles);
@@ -753,10 +753,20 @@ std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
   }
 
   // The node transform of assimp's OBJ scenes is the identity, but applying it as the assimp path
-  // does keeps its float results, signed zeros included.
+  // does keeps its float results, signed zeros included. The vertices are moved once each (the
+  // assimp path moves every corner, with the same operations on the same vertex) and the triangles
+  // index them: 12 bytes per triangle instead of a copy of every corner.
   const aiMatrix4x4 transform = aiMatrix4x4() * aiMatrix4x4();
   aiMatrix3x3 normal_transform(transform);
   normal_transform.Inverse().Transpose();
+  out.positions.resize(replay.positions.size());
+  parallel::for_range(tbb::blocked_range<size_t>(0, replay.positions.size(), 1 << 16),
+                      [&](const auto& range) {
+                        for (size_t i = range.begin(); i != range.end(); ++i) {
+                          const aiVector3D v = transform * replay.positions[i];
+                          out.positions[i] = glm::vec3(v.x, v.y, v.z);
+                        }
+                      });
   parallel::for_range(tbb::blocked_range<size_t>(0, faces, 1 << 14), [&](const auto& range) {
     size_t run = static_cast<size_t>(
         std::upper_bound(runs.begin(), runs.end(), range.begin(),
@@ -776,12 +786,12 @@ std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
       for (size_t t = 0; t + 2 < n; ++t) {
         const size_t order[3] = {static_cast<size_t>(start), (start + t + 1) % 4,
                                  (start + t + 2) % 4};
-        glm::vec3 corner[3], normal[3] = {};
+        uint32_t corner[3];
+        glm::vec3 normal[3] = {};
         glm::vec2 uv[3] = {};
         for (int k = 0; k < 3; ++k) {
           const Corner& c = replay.corners[first + (n == 4 ? order[k] : order[k] % 3)];
-          const aiVector3D v = transform * replay.positions[c.v];
-          corner[k] = glm::vec3(v.x, v.y, v.z);
+          corner[k] = static_cast<uint32_t>(c.v);
           if (normals) {
             const aiVector3D nv =
                 normal_transform * (c.vn != kAbsent ? replay.normals[c.vn] : aiVector3D());
@@ -792,9 +802,9 @@ std::optional<ImportedMesh> read_obj_triangles(std::span<const char> bytes,
         }
         const size_t i = tri + t;
         // The assimp path's winding: the second and third corners swap (mesh_import.cpp).
-        out.corners[3 * i] = corner[0];
-        out.corners[3 * i + 1] = corner[2];
-        out.corners[3 * i + 2] = corner[1];
+        out.indices[3 * i] = corner[0];
+        out.indices[3 * i + 1] = corner[2];
+        out.indices[3 * i + 2] = corner[1];
         if (any_normals) {
           out.normals[3 * i] = normal[0];
           out.normals[3 * i + 1] = normal[2];
