@@ -567,8 +567,13 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   {
     py::gil_scoped_release nogil;
     std::unique_ptr<Accel> own;
-    if (!prebuilt)
-      own = make_accel(cli::accel_kind(flags), data->loaded.scene.mesh, cli::kernel_choice(flags));
+    if (!prebuilt) {
+      // The tree `tritrace render` would build for this render (the image is the same either way).
+      const TriangleMesh& mesh = data->loaded.scene.mesh;
+      const uint64_t pixels = static_cast<uint64_t>(view.camera.width()) * view.camera.height();
+      own = make_accel(cli::accel_kind(flags), mesh, cli::kernel_choice(flags), nullptr,
+                       cli::bvh_build_choice(flags, mesh.size(), expected_rays(spec, pixels)));
+    }
     const Accel& tracer = prebuilt ? *prebuilt->accel : *own;
     ViewLock lock(*data, view);
     const std::unique_ptr<Integrator> shading = make_integrator(spec, lock.scene());
