@@ -27,8 +27,8 @@ inline constexpr glm::vec3 kNeutralGrey{0.6f, 0.6f, 0.6f};
 // elements uninitialised (huge_page_allocator.h): give a value or write them all.
 struct ImportedMesh {
   // The corners, node transforms applied, in one of two forms: three per triangle in `corners`, or
-  // (the native PLY reader's, `corners` empty) three indices per triangle into the file's vertices
-  // `positions`, which spares a copy of every corner: 12 instead of 36 bytes per triangle.
+  // (the native PLY and OBJ readers', `corners` empty) three indices per triangle into the file's
+  // vertices `positions`, which spares a copy of every corner: 12 instead of 36 bytes per triangle.
   HugePageVector<glm::vec3> corners;
   HugePageVector<glm::vec3> positions;
   HugePageVector<uint32_t> indices;
