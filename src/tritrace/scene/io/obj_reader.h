@@ -1,9 +1,9 @@
 // A native reader for Wavefront OBJ (+ MTL) through Debian's tinyobjloader: the fast path for big
 // OBJ meshes, straight from the file's bytes into an ImportedMesh (its indexed form) with the
-// triangles, order, normals, texture coordinates and materials that the assimp path gives. It takes only what it can
-// reproduce exactly (triangles and quads, one name per object and group, plain MTL keys), reading
-// pieces of the file in parallel; every
-// other file, well-formed or not, is left to assimp, whose results and errors it then gives.
+// triangles, order, normals, texture coordinates and materials that the assimp path gives. It takes
+// only what it can reproduce exactly (triangles and quads, one name per object and group, plain MTL
+// keys), reading pieces of the file in parallel; every other file, well-formed or not, is left to
+// assimp, whose results and errors it then gives.
 #pragma once
 
 #include <cstddef>
