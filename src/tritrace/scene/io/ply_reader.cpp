@@ -244,25 +244,19 @@ struct NodeTransform {
   aiMatrix3x3 normal{point};
 };
 
-// Face `face` as indices of its corners in tritrace's order, and with the file's normals those
-// normals at its corners.
-void emit(ImportedMesh& out, size_t face, const HugePageVector<glm::vec3>& n, const int64_t idx[3],
-          const NodeTransform& t) {
-  const uint32_t order[3] = {static_cast<uint32_t>(idx[0]), static_cast<uint32_t>(idx[2]),
-                             static_cast<uint32_t>(idx[1])};
-  for (int k = 0; k < 3; ++k) {
-    out.indices[3 * face + k] = order[k];
-    if (!n.empty()) {
-      const glm::vec3 m = n[order[k]];
-      const aiVector3D w = t.normal * aiVector3D(m.x, m.y, m.z);
-      out.normals[3 * face + k] = glm::vec3(w.x, w.y, w.z);
-    }
-  }
+// Face `face`'s corners as indices into the file's vertices, in tritrace's order.
+void emit(ImportedMesh& out, size_t face, const int64_t idx[3]) {
+  out.indices[3 * face] = static_cast<uint32_t>(idx[0]);
+  out.indices[3 * face + 1] = static_cast<uint32_t>(idx[2]);
+  out.indices[3 * face + 2] = static_cast<uint32_t>(idx[1]);
 }
 
-// The file's vertices, each moved by the node transform once (the assimp path moves every corner,
-// with the same operations on the same vertex), become the mesh's positions.
-void move_points(HugePageVector<glm::vec3>& points, const NodeTransform& t, ImportedMesh& out) {
+// Once every face is emitted: the file's vertices, each moved by the node transform once (the
+// assimp path moves every corner, with the same operations on the same vertex), become the mesh's
+// positions, and with the file's normals each corner gets its vertex's normal, moved likewise.
+void finish(HugePageVector<glm::vec3>& points, const HugePageVector<glm::vec3>& normals,
+            ImportedMesh& out) {
+  const NodeTransform t;
   parallel::for_range(tbb::blocked_range<size_t>(0, points.size(), 1 << 16), [&](const auto& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const glm::vec3 q = points[i];
@@ -271,6 +265,16 @@ void move_points(HugePageVector<glm::vec3>& points, const NodeTransform& t, Impo
     }
   });
   out.positions = std::move(points);
+  if (normals.empty()) return;
+  out.normals.resize(out.indices.size());
+  parallel::for_range(tbb::blocked_range<size_t>(0, out.indices.size(), 1 << 16),
+                      [&](const auto& r) {
+                        for (size_t k = r.begin(); k != r.end(); ++k) {
+                          const glm::vec3 m = normals[out.indices[k]];
+                          const aiVector3D w = t.normal * aiVector3D(m.x, m.y, m.z);
+                          out.normals[k] = glm::vec3(w.x, w.y, w.z);
+                        }
+                      });
 }
 
 template <bool kSwap>
@@ -301,8 +305,6 @@ bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out
   });
 
   out.indices.resize(3 * l.faces);
-  if (l.normals) out.normals.resize(3 * l.faces);
-  const NodeTransform transform;
   const size_t index_bytes = size_of(l.index_type), count_bytes = size_of(l.count_type);
   const bool ok = parallel::reduce(
       tbb::blocked_range<size_t>(0, l.faces, 1 << 14), true,
@@ -317,12 +319,12 @@ bool read_binary(std::span<const char> bytes, const Layout& l, ImportedMesh& out
             if (!(v >= 0.0 && v < static_cast<double>(l.vertices))) return false;
             idx[k] = static_cast<int64_t>(v);
           }
-          emit(out, f, normals, idx, transform);
+          emit(out, f, idx);
         }
         return good;
       },
       [](bool a, bool b) { return a && b; });
-  if (ok) move_points(points, transform, out);
+  if (ok) finish(points, normals, out);
   return ok;
 }
 
@@ -424,12 +426,7 @@ bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out)
             } else {
               int64_t idx[3];
               good = parse_face(w, l, idx);
-              if (good) {
-                uint32_t* corners = &out.indices[3 * (line - l.vertices)];
-                corners[0] = static_cast<uint32_t>(idx[0]);
-                corners[1] = static_cast<uint32_t>(idx[2]);
-                corners[2] = static_cast<uint32_t>(idx[1]);
-              }
+              if (good) emit(out, line - l.vertices, idx);
             }
             ++line;
             pos = end + 1;
@@ -440,18 +437,7 @@ bool read_ascii(std::span<const char> bytes, const Layout& l, ImportedMesh& out)
       },
       [](bool a, bool b) { return a && b; });
   if (!ok) return false;
-  const NodeTransform transform;
-  if (l.normals) {
-    out.normals.resize(3 * l.faces);
-    parallel::for_range(tbb::blocked_range<size_t>(0, 3 * l.faces, 1 << 16), [&](const auto& r) {
-      for (size_t k = r.begin(); k != r.end(); ++k) {
-        const glm::vec3 m = normals[out.indices[k]];
-        const aiVector3D w = transform.normal * aiVector3D(m.x, m.y, m.z);
-        out.normals[k] = glm::vec3(w.x, w.y, w.z);
-      }
-    });
-  }
-  move_points(points, transform, out);
+  finish(points, normals, out);
   return true;
 }
 
