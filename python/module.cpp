@@ -570,9 +570,8 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
     if (!prebuilt) {
       // The tree `tritrace render` would build for this render (the image is the same either way).
       const TriangleMesh& mesh = data->loaded.scene.mesh;
-      const uint64_t pixels = static_cast<uint64_t>(view.camera.width()) * view.camera.height();
       own = make_accel(cli::accel_kind(flags), mesh, cli::kernel_choice(flags), nullptr,
-                       cli::bvh_build_choice(flags, mesh.size(), expected_rays(spec, pixels)));
+                       cli::bvh_build_choice(flags, mesh.size(), spec, view.camera));
     }
     const Accel& tracer = prebuilt ? *prebuilt->accel : *own;
     ViewLock lock(*data, view);

@@ -6,6 +6,7 @@
 
 #include <limits>
 #include "tritrace/error.h"
+#include "tritrace/render/make_integrator.h"
 #include "tritrace/scene/io/scene_loader.h"
 #include "tritrace/scene/procedural.h"
 
@@ -158,6 +159,12 @@ Kernel kernel_choice(const SceneFlags& flags) {
 bvh::BuildMethod bvh_build_choice(const SceneFlags& flags, size_t triangles, double rays) {
   if (flags.bvh_build == "auto") return bvh_build_for(triangles, rays);
   return *parse_bvh_build(flags.bvh_build);
+}
+
+bvh::BuildMethod bvh_build_choice(const SceneFlags& flags, size_t triangles,
+                                  const IntegratorSpec& spec, const Camera& camera) {
+  const uint64_t pixels = static_cast<uint64_t>(camera.width()) * camera.height();
+  return bvh_build_choice(flags, triangles, expected_rays(spec, pixels));
 }
 
 int thread_count(const SceneFlags& flags) {

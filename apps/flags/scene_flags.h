@@ -10,6 +10,7 @@
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/geometry/intersect.h"
 #include "tritrace/render/film.h"
+#include "tritrace/scene/camera.h"
 #include "tritrace/scene/io/loaded_scene.h"
 
 namespace tritrace::cli {
@@ -44,6 +45,9 @@ AccelKind accel_kind(const SceneFlags& flags);
 Kernel kernel_choice(const SceneFlags& flags);
 // --bvh-build: sah or morton as given; auto: bvh_build_for(triangles, rays).
 bvh::BuildMethod bvh_build_choice(const SceneFlags& flags, size_t triangles, double rays);
+// The same for one render of `camera`'s image with `spec` (expected_rays).
+bvh::BuildMethod bvh_build_choice(const SceneFlags& flags, size_t triangles,
+                                  const IntegratorSpec& spec, const Camera& camera);
 int thread_count(const SceneFlags& flags);  // 0: all cores
 // The scene's integrator settings with the flags given applied over them.
 IntegratorSpec integrator_spec(const SceneFlags& flags, const LoadedScene& loaded);

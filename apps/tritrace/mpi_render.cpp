@@ -152,10 +152,9 @@ void setup(const RenderArgs& args, RankSetup& s) {
   s.options.filter = filter_choice(args.scene);
   const AccelKind accel = accel_kind(args.scene);
   const Kernel kernel = kernel_choice(args.scene);
-  const uint64_t pixels = static_cast<uint64_t>(scene.camera.width()) * scene.camera.height();
-  s.accel = make_accel(
-      accel, scene, kernel, nullptr,
-      bvh_build_choice(args.scene, scene.stored_triangles(), expected_rays(s.spec, pixels)));
+  s.accel =
+      make_accel(accel, scene, kernel, nullptr,
+                 bvh_build_choice(args.scene, scene.stored_triangles(), s.spec, scene.camera));
   s.integrator = make_integrator(s.spec, scene);
   s.aovs = aovs_of(args.aovs);
   s.identity =

@@ -276,10 +276,9 @@ int run_render(const RenderArgs& args) {
   render_options.sampler = spec.sampler;
   render_options.filter = filter_choice(args.scene);
   PhaseLine building(stderr, terminal, building_phase(accel_kind, scene.drawn_triangles()));
-  const uint64_t pixels = static_cast<uint64_t>(scene.camera.width()) * scene.camera.height();
-  const std::unique_ptr<Accel> accel = make_accel(
-      accel_kind, scene, kernel, nullptr,
-      bvh_build_choice(args.scene, scene.stored_triangles(), expected_rays(spec, pixels)));
+  const std::unique_ptr<Accel> accel =
+      make_accel(accel_kind, scene, kernel, nullptr,
+                 bvh_build_choice(args.scene, scene.stored_triangles(), spec, scene.camera));
   building.done();
   const std::unique_ptr<Integrator> integrator = make_integrator(spec, scene);
   ProgressBar bar(stderr);
