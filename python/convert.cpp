@@ -3,7 +3,7 @@
 
 #include <algorithm>
 
-#include "flags/flag_values.h"
+#include "tritrace/job/setting_values.h"
 
 namespace tritrace::python {
 namespace {
@@ -31,7 +31,7 @@ std::optional<std::string> number_text(const py::handle& value) {
   if (is_bool(value)) return std::nullopt;
   if (PyFloat_Check(value.ptr()) ||
       py::isinstance(value, py::module_::import("numpy").attr("floating"))) {
-    return cli::format_double(value.cast<double>());
+    return format_double(value.cast<double>());
   }
   return std::nullopt;
 }
@@ -109,7 +109,7 @@ void FlagTexts::add_int(const char* flag, const py::object& value, const char* n
   const std::string key = keyword(flag, name);
   const std::optional<std::string> text = integer_text(value);
   if (!text) raise_type_error(key + ": must be an int, got " + type_name(value));
-  args_.push_back(std::string(flag) + "=" + *text);
+  args_.emplace_back(flag, *text);
 }
 
 void FlagTexts::add_number(const char* flag, const py::object& value, const char* name) {
@@ -117,55 +117,53 @@ void FlagTexts::add_number(const char* flag, const py::object& value, const char
   const std::string key = keyword(flag, name);
   const std::optional<std::string> text = number_text(value);
   if (!text) raise_type_error(key + ": must be a number, got " + type_name(value));
-  args_.push_back(std::string(flag) + "=" + *text);
+  args_.emplace_back(flag, *text);
 }
 
 void FlagTexts::add_vec3(const char* flag, const py::object& value, const char* name) {
   if (value.is_none()) return;
   const std::string key = keyword(flag, name);
-  args_.push_back(std::string(flag) + "=" + vec3_text(key.c_str(), value));
+  args_.emplace_back(flag, vec3_text(key.c_str(), value));
 }
 
 void FlagTexts::add_string(const char* flag, const py::object& value, const char* name) {
   if (value.is_none()) return;
   const std::string key = keyword(flag, name);
-  args_.push_back(std::string(flag) + "=" + string_arg(key.c_str(), value));
+  args_.emplace_back(flag, string_arg(key.c_str(), value));
 }
 
-cli::SceneFlags FlagTexts::parse() const {
-  CLI::App app("tritrace (Python)");
-  cli::SceneFlags flags;
-  cli::add_scene_flags(app, flags);
-  std::vector<std::string> args(args_.rbegin(), args_.rend());  // CLI11 takes them reversed
-  try {
-    app.parse(args);
-  } catch (const CLI::ParseError& e) {
-    const std::string message = cli::one_line_usage_message(e);
-    for (const auto& [flag, name] : renamed_) {
-      if (message.starts_with(flag + ":")) {
-        throw py::value_error(name + message.substr(flag.size()));
+JobSettings FlagTexts::parse() const {
+  JobSettings settings;
+  for (const auto& [flag, text] : args_) {
+    for (const SettingRule& rule : setting_rules()) {
+      if (flag != rule.flag) continue;
+      settings.*rule.text = text;
+      const std::string why = rule.check(text);
+      if (why.empty()) break;
+      for (const auto& [renamed, name] : renamed_) {
+        if (renamed == flag) throw py::value_error(name + ": " + why);
       }
+      throw py::value_error(python_name(flag) + ": " + why);
     }
-    throw py::value_error(python_message(message));
   }
-  return flags;
+  return settings;
 }
 
 std::optional<glm::vec3> optional_vec3(const char* name, const py::object& value) {
   if (value.is_none()) return std::nullopt;
   const std::string text = vec3_text(name, value);
-  const std::string why = cli::check_vec3(text);
+  const std::string why = check_vec3(text);
   if (!why.empty()) throw py::value_error(std::string(name) + ": " + why);
-  return cli::parse_vec3(text);
+  return parse_vec3(text);
 }
 
 std::optional<double> optional_number(const char* name, const py::object& value) {
   if (value.is_none()) return std::nullopt;
   const std::optional<std::string> text = number_text(value);
   if (!text) raise_type_error(std::string(name) + ": must be a number, got " + type_name(value));
-  const std::string why = cli::check_finite(*text);
+  const std::string why = check_finite(*text);
   if (!why.empty()) throw py::value_error(std::string(name) + ": " + why);
-  return cli::parse_finite(*text);
+  return parse_finite(*text);
 }
 
 double number_arg(const char* name, const py::object& value) {

@@ -1,6 +1,7 @@
-// Python values in, checked: the keyword arguments the module shares with the CLI become the CLI's
-// flag texts and go through the CLI's own parser and validators (apps/flags), so that they accept
-// the same values and fail with the same reasons; arrays become C-contiguous float32 (without a
+// Python values in, checked: the keyword arguments the module shares with the CLI become the render
+// job's setting texts and go through the library's rule for each (tritrace/job/job_settings.h),
+// which the CLI's flags use too, so that they accept the same values and fail with the same
+// reasons; arrays become C-contiguous float32 (without a
 // copy when they already are) and are shape-checked. Wrong types raise TypeError, bad values and
 // shapes ValueError, each message starting with the argument's name.
 #pragma once
@@ -13,8 +14,8 @@
 #include <utility>
 #include <vector>
 
-#include "flags/scene_flags.h"
 #include "tritrace/error.h"
+#include "tritrace/job/job_settings.h"
 
 namespace tritrace::python {
 
@@ -35,14 +36,14 @@ class FlagTexts {
   void add_number(const char* flag, const py::object& value, const char* name = nullptr);
   void add_vec3(const char* flag, const py::object& value, const char* name = nullptr);
   void add_string(const char* flag, const py::object& value, const char* name = nullptr);
-  // Parses the texts with the CLI's scene flags (apps/flags/scene_flags.h); ValueError on failure.
-  cli::SceneFlags parse() const;
+  // The settings, each text checked by its rule; ValueError naming the keyword on failure.
+  JobSettings parse() const;
 
  private:
   // The keyword for `flag`, remembering a name that differs from python_name(flag).
   std::string keyword(const char* flag, const char* name);
 
-  std::vector<std::string> args_;
+  std::vector<std::pair<std::string, std::string>> args_;     // flag, text
   std::vector<std::pair<std::string, std::string>> renamed_;  // flag, keyword
 };
 

@@ -18,10 +18,11 @@
 
 #include "buffer_cache.h"
 #include "convert.h"
-#include "flags/flag_values.h"
 #include "ray_queries.h"
 #include "scene_data.h"
 #include "tritrace/accel/make_accel.h"
+#include "tritrace/job/render_job.h"
+#include "tritrace/job/setting_values.h"
 #include "tritrace/render/make_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/procedural.h"
@@ -116,7 +117,7 @@ std::shared_ptr<SceneData> load(const py::object& path_object) {
 
 std::shared_ptr<SceneData> builtin(const py::object& name_object) {
   const std::string name = string_arg("name", name_object);
-  const std::string why = cli::check_builtin_scene(name);
+  const std::string why = check_builtin_scene(name);
   if (!why.empty()) throw py::value_error("name: " + why);
   py::gil_scoped_release nogil;
   return load_builtin(name);
@@ -184,7 +185,7 @@ CameraPose camera_pose(const py::object& position, const py::object& look_at, co
   pose.vertical_fov_degrees = optional_number("vertical_fov", vertical_fov);
   if (const std::optional<double> f = optional_number("focal_length", focal_length)) {
     if (!(std::abs(*f) <= std::numeric_limits<float>::max())) {
-      throw py::value_error("focal_length: must be positive, got " + cli::format_double(*f));
+      throw py::value_error("focal_length: must be positive, got " + format_double(*f));
     }
     pose.focal_length_px = static_cast<float>(*f);
   }
@@ -208,9 +209,9 @@ py::tuple camera_rays(const std::shared_ptr<SceneData>& data, const py::object& 
   texts.add_int("--height", height);
   texts.add_number("--yaw", yaw);
   texts.add_number("--distance", distance);
-  const cli::SceneFlags flags = texts.parse();
+  const JobSettings flags = texts.parse();
   const View view = view_of(*data, camera_pose(position, look_at, up, vertical_fov, focal_length),
-                            cli::scene_overrides(flags));
+                            scene_overrides(flags));
   const Camera& camera = view.camera;
   const int w = camera.width(), h = camera.height();
   py::array_t<float> directions(
@@ -273,11 +274,11 @@ std::shared_ptr<PyAccel> make_py_accel(const std::shared_ptr<SceneData>& scene,
   FlagTexts texts;
   texts.add_string("--accel", kind, "kind");
   texts.add_string("--kernel", kernel);
-  const cli::SceneFlags flags = texts.parse();
+  const JobSettings flags = texts.parse();
   auto out = std::make_shared<PyAccel>();
   out->scene = scene;
-  out->kind = cli::accel_kind(flags);
-  out->kernel = cli::kernel_choice(flags);
+  out->kind = accel_kind(flags);
+  out->kernel = kernel_choice(flags);
   py::gil_scoped_release nogil;
   out->accel = make_accel(out->kind, scene->loaded.scene.mesh, out->kernel, &out->info);
   return out;
@@ -367,7 +368,7 @@ void ray_interval(const char* name, const py::object& value, const std::vector<p
   if (one) {
     if (is_tmin && !(*one >= 0.0)) {
       throw py::value_error(std::string(name) + ": must be a number >= 0, got " +
-                            cli::format_double(*one));
+                            format_double(*one));
     }
     if (std::isnan(*one)) throw py::value_error(std::string(name) + ": must not be NaN");
     scalar = static_cast<float>(*one);
@@ -497,6 +498,18 @@ AovSet aov_set(const py::object& aovs) {
   return set;
 }
 
+// The job setting's text for `set`: "albedo,normal,depth" or a subset; empty for none.
+std::string aov_names(const AovSet& set) {
+  std::string text;
+  for (const auto& [on, name] : {std::pair{set.albedo, "albedo"}, std::pair{set.normal, "normal"},
+                                 std::pair{set.depth, "depth"}}) {
+    if (!on) continue;
+    if (!text.empty()) text += ",";
+    text += name;
+  }
+  return text;
+}
+
 // An H x W x channels float32 array of an image's first `channels` channels, row 0 at the top.
 py::array_t<float> image_array(const Image& image, int channels) {
   const py::ssize_t h = image.height(), w = image.width();
@@ -547,48 +560,30 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
     texts.add_string("--accel", accel);
     texts.add_string("--kernel", kernel);
   }
-  const cli::SceneFlags flags = texts.parse();
+  JobSettings settings = texts.parse();
   const AovSet aov = aov_set(aovs);
+  settings.aovs = aov_names(aov);
   const View view = view_of(*data, camera_pose(position, look_at, up, vertical_fov, focal_length),
-                            cli::scene_overrides(flags));
-
-  const IntegratorSpec spec = cli::integrator_spec(flags, data->loaded);
-  RenderOptions options;
-  options.threads = cli::thread_count(flags);
-  options.spp = spec.spp;
-  options.seed = spec.seed;
-  options.sampler = spec.sampler;
-  options.filter = cli::filter_choice(flags);
+                            scene_overrides(settings));
 
   Frame frame;
-  Image image;
-  Image albedo_image, normal_image, depth_image;
+  RenderedImage rendered;
   RenderStats stats;
+  IntegratorSpec spec;
   {
     py::gil_scoped_release nogil;
-    std::unique_ptr<Accel> own;
-    if (!prebuilt) {
-      // The tree `tritrace render` would build for this render (the image is the same either way).
-      const TriangleMesh& mesh = data->loaded.scene.mesh;
-      own = make_accel(cli::accel_kind(flags), mesh, cli::kernel_choice(flags), nullptr,
-                       cli::bvh_build_choice(flags, mesh.size(), spec, view.camera));
-    }
-    const Accel& tracer = prebuilt ? *prebuilt->accel : *own;
+    // The view's camera and lights are the scene's while the lock lives: the job is made, builds
+    // the tree `tritrace render` would build (or takes the prebuilt accel) and renders under it.
     ViewLock lock(*data, view);
-    const std::unique_ptr<Integrator> shading = make_integrator(spec, lock.scene());
-    // As `tritrace render` does: a film only when AOVs are asked for, else render()'s image,
-    // which is the same bits as the film's resolve.
-    if (aov.any()) {
-      Film film(view.camera.width(), view.camera.height(), aov);
-      render_to_film(lock.scene(), tracer, *shading, film, options, &stats);
-      image = film.resolve();
-      albedo_image = film.resolve_albedo();
-      normal_image = film.resolve_normal();
-      depth_image = film.resolve_depth();
-    } else {
-      image = render(lock.scene(), tracer, *shading, options, &stats);
-    }
+    RenderJob job(settings, lock.scene(), data->loaded.integrator);
+    job.prepare(nullptr, prebuilt ? prebuilt->accel.get() : nullptr);
+    rendered = job.render(&stats);
+    spec = job.spec();
   }
+  const Image& image = rendered.image;
+  const Image& albedo_image = rendered.aovs.albedo;
+  const Image& normal_image = rendered.aovs.normal;
+  const Image& depth_image = rendered.aovs.depth;
   frame.image = image_array(image, 3);
   if (aov.albedo) frame.albedo = image_array(albedo_image, 3);
   if (aov.normal) frame.normal = image_array(normal_image, 3);

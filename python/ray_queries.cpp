@@ -15,7 +15,7 @@
 #include <immintrin.h>
 #endif
 
-#include "flags/flag_values.h"
+#include "tritrace/job/setting_values.h"
 #include "tritrace/math/simd_lanes.h"
 #include "tritrace/parallel.h"
 #include "tritrace/render/integrator.h"
@@ -150,9 +150,13 @@ bool load_batch(const RayArrays& in, size_t first, size_t n, Ray* batch) {
   return load_batch_general(in, first, n, batch);
 }
 
-std::string format_vec3(const float* p) {
-  return "(" + cli::format_float(p[0]) + ", " + cli::format_float(p[1]) + ", " +
-         cli::format_float(p[2]) + ")";
+std::string point_text(const float* p) {
+  std::string text = "(";
+  for (int i = 0; i < 3; ++i) {
+    if (i > 0) text += ", ";
+    text += format_float(p[i]);
+  }
+  return text + ")";
 }
 
 // Why ray i cannot be traced; called only for a ray that load_batch refused.
@@ -161,11 +165,11 @@ RayProblem describe_problem(const RayArrays& in, size_t i) {
   const float* d = in.directions + i * in.direction_stride;
   const float tmin = in.tmin[i * in.tmin_stride];
   const std::string ray = "ray " + std::to_string(i);
-  if (!finite3(o)) return {i, "origins: " + ray + " is not finite: " + format_vec3(o)};
-  if (!finite3(d)) return {i, "directions: " + ray + " is not finite: " + format_vec3(d)};
+  if (!finite3(o)) return {i, "origins: " + ray + " is not finite: " + point_text(o)};
+  if (!finite3(d)) return {i, "directions: " + ray + " is not finite: " + point_text(d)};
   if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) return {i, "directions: " + ray + " is zero"};
   if (!(tmin >= 0.0f)) {
-    return {i, "tmin: " + ray + " must be a number >= 0, got " + cli::format_float(tmin)};
+    return {i, "tmin: " + ray + " must be a number >= 0, got " + format_float(tmin)};
   }
   return {i, "tmax: " + ray + " is NaN"};
 }

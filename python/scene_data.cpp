@@ -7,8 +7,8 @@
 #include <map>
 #include <tuple>
 
-#include "flags/flag_values.h"
 #include "tritrace/error.h"
+#include "tritrace/job/setting_values.h"
 #include "tritrace/scene/io/mesh_import.h"
 #include "tritrace/scene/io/scene_loader.h"
 #include "tritrace/scene/io/triangle_filter.h"
@@ -39,8 +39,12 @@ glm::vec3 row(std::span<const float> values, size_t i) {
 }
 
 std::string text(glm::vec3 v) {
-  return "(" + cli::format_float(v.x) + ", " + cli::format_float(v.y) + ", " +
-         cli::format_float(v.z) + ")";
+  std::string out = "(";
+  for (int i = 0; i < 3; ++i) {
+    if (i > 0) out += ", ";
+    out += format_float(v[i]);
+  }
+  return out + ")";
 }
 
 // The materials of ImportedMesh: one per distinct albedo, in order of first use.
@@ -171,7 +175,7 @@ View make_view(const SceneData& data, const CameraPose& pose, const SceneOverrid
     const double fov = *pose.vertical_fov_degrees;
     if (!(fov > 0.0 && fov < 180.0)) {
       fail("vertical_fov",
-           "must be between 0 and 180 degrees (exclusive), got " + cli::format_double(fov));
+           "must be between 0 and 180 degrees (exclusive), got " + format_double(fov));
     }
     c.vertical_fov_degrees = fov;
     c.focal_length_px.reset();
@@ -179,7 +183,7 @@ View make_view(const SceneData& data, const CameraPose& pose, const SceneOverrid
   if (pose.focal_length_px) {
     const float f = *pose.focal_length_px;
     if (!(f > 0.0f && f <= std::numeric_limits<float>::max())) {
-      fail("focal_length", "must be positive, got " + cli::format_float(f));
+      fail("focal_length", "must be positive, got " + format_float(f));
     }
     c.focal_length_px = f;
     c.vertical_fov_degrees.reset();

@@ -17,12 +17,9 @@
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
+#include "tritrace/job/render_job.h"
 #include "tritrace/render/make_integrator.h"
-#include "tritrace/render/renderer.h"
 #include "tritrace/scene/io/input_file.h"
-#include "tritrace/scene/io/loaded_scene.h"
-#include "tritrace/scene/io/scene_loader.h"
-#include "tritrace/scene/procedural.h"
 
 namespace tritrace::cli {
 namespace {
@@ -121,42 +118,38 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
                   "Scene to measure, repeatable (default: cornell, terrain:1m, terrain:10m; with "
                   "--integrator path, cornell-area)")
       ->type_name("NAME")
-      ->check(checked(check_builtin_scene));
+      ->check(checked(setting_check("--scene")));
   sub->add_option("--integrator", args.integrator,
                   "lab (one primary and one shadow ray per pixel) or path (the path tracer: "
                   "paths/s and Mrays/s over camera, bounce and shadow rays)")
       ->type_name("NAME")
       ->capture_default_str()
-      ->check(checked([](std::string& s) {
-        return s == "lab" || s == "path" ? std::string()
-                                         : "unknown integrator '" + s + "' (use lab or path)";
-      }));
+      ->check(checked(setting_check("--integrator")));
   sub->add_option("--spp", args.spp,
                   "Samples per pixel of each path-traced frame (default 16; lab: always 1)")
       ->type_name("N")
-      ->check(checked([](std::string& s) { return check_integer_in(s, 1, kMaxSpp); }));
+      ->check(checked(setting_check("--spp")));
   sub->add_option("--accel", args.accels, "Acceleration structure, repeatable (default: all)")
       ->type_name("NAME")
-      ->check(checked(check_accel));
-  auto side = checked([](std::string& s) { return check_integer_in(s, 1, kMaxImageSide); });
+      ->check(checked(setting_check("--accel")));
   sub->add_option("--width", args.width, "Frame width (default 1920; path: 256)")
       ->type_name("W")
-      ->check(side);
+      ->check(checked(setting_check("--width")));
   sub->add_option("--height", args.height, "Frame height (default 1080; path: 256)")
       ->type_name("H")
-      ->check(side);
+      ->check(checked(setting_check("--height")));
   sub->add_option("--reps", args.reps, "Timed frames per scene and accel, after one warm-up")
       ->type_name("N")
       ->capture_default_str()
       ->check(checked([](std::string& s) { return check_integer_in(s, 1, 1000); }));
   sub->add_option("--threads", args.threads, "Worker threads (default: all cores)")
       ->type_name("N")
-      ->check(checked([](std::string& s) { return check_integer_in(s, 1, kMaxThreads); }));
+      ->check(checked(setting_check("--threads")));
   sub->add_option("--kernel", args.kernels,
                   "Ray/triangle kernel for bvh and brute, repeatable: one row per kernel "
                   "(default: each one's own, as in render)")
       ->type_name("NAME")
-      ->check(checked(check_kernel));
+      ->check(checked(setting_check("--kernel")));
   sub->add_option("--bvh-build", args.bvh_builds,
                   "How bvh and bvh-single build their tree, repeatable: one row per build: sah "
                   "(binned SAH) or morton (Morton codes: faster to build, slower to trace); "
@@ -225,12 +218,18 @@ int run_bench(const BenchArgs& args) {
     sources.emplace_back(std::filesystem::path(file).filename().string(), file);
   }
   for (const auto& [scene_name, file] : sources) {
-    SceneOverrides size;
-    size.width = width;
-    size.height = height;
-    const Scene scene = file.empty()
-                            ? make_builtin_scene(scene_name, {.width = width, .height = height})
-                            : load_scene(file, size).scene;
+    // Every row of a scene is a render job over the one loaded scene, with the bench's own
+    // integrator, spp, size and threads and the row's accel, kernel and build.
+    JobSettings settings;
+    settings.file = file;
+    settings.scene = file.empty() ? scene_name : std::string();
+    settings.width = std::to_string(width);
+    settings.height = std::to_string(height);
+    settings.threads = std::to_string(threads);
+    settings.integrator = std::string(integrator_name(spec.kind));
+    settings.spp = std::to_string(spec.spp);
+    const LoadedScene loaded = load_job_scene(settings);
+    const Scene& scene = loaded.scene;
     const size_t first = records.size();
     std::vector<std::string> skipped;
     for (AccelKind kind : accels) {
@@ -282,25 +281,23 @@ int run_bench(const BenchArgs& args) {
               continue;
             }
           }
+          JobSettings row = settings;
+          row.accel = std::string(accel_name(kind));
+          row.kernel = kernel ? std::string(kernel_name(*kernel)) : std::string();
+          row.bvh_build = std::string(bvh_build_name(build.value_or(bvh::BuildMethod::kBinnedSah)));
+          RenderJob job(row, scene, loaded.integrator);
           AccelInfo info;
-          // Embree ignores the kernel.
-          const std::unique_ptr<Accel> accel =
-              make_accel(kind, scene, kernel.value_or(kDefaultKernel), &info,
-                         build.value_or(bvh::BuildMethod::kBinnedSah));
+          job.prepare(&info);
           r.build_ms = info.build_ms;
           r.bytes_per_tri =
               static_cast<double>(info.structure_bytes) / std::max<size_t>(1, r.triangles);
           r.copy_bytes_per_tri =
               static_cast<double>(info.triangle_copy_bytes) / std::max<size_t>(1, r.triangles);
-          const std::unique_ptr<Integrator> integrator = make_integrator(spec, scene);
           std::vector<double> ms;
           uint64_t rays = 0, samples = 0;
           for (int i = 0; i <= reps; ++i) {  // frame 0 warms caches and threads up, untimed
             RenderStats stats;
-            render(
-                scene, *accel, *integrator,
-                {.threads = threads, .spp = spec.spp, .seed = spec.seed, .sampler = spec.sampler},
-                &stats);
+            job.render(&stats);
             if (i == 0) continue;
             ms.push_back(stats.milliseconds);
             rays += stats.rays;

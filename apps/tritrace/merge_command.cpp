@@ -10,6 +10,7 @@
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/image/image_io.h"
+#include "tritrace/job/render_job.h"
 
 namespace tritrace::cli {
 
@@ -28,38 +29,29 @@ CLI::App* add_merge_command(CLI::App& app, MergeArgs& args) {
   sub->add_option("--exposure", args.exposure,
                   "Scale path images by 2^STOPS before the sRGB curve of .png and .ppm outputs")
       ->type_name("STOPS")
-      ->check(checked([](std::string& s) {
-        return parse_float(s) ? std::string() : "must be a finite number, got '" + s + "'";
-      }));
+      ->check(checked(setting_check("--exposure")));
   sub->add_flag("-q,--quiet", args.quiet, "Print nothing on success");
   return sub;
 }
 
 int run_merge(const MergeArgs& args) {
-  const auto format = image_format_for(args.output);
-  if (!format) {
-    throw Error("--output",
-                "'" + args.output + "' has an unknown extension (use " +
-                    std::string(kImageExtensions) + ")",
-                ExitCode::kUsage);
-  }
-  if (!args.exposure.empty() && is_float_format(*format)) {
-    throw Error("--exposure", "applies to 8-bit outputs (.png, .ppm), got '" + args.output + "'",
-                ExitCode::kUsage);
-  }
+  // The output's checks and its writing are the render job's, so a merged image is written as
+  // the one-process render would be.
+  JobSettings settings;
+  settings.output = args.output;
+  settings.output_given = true;
+  settings.exposure = args.exposure;
+  RenderJob::check_output(settings, args.output);
   check_writable_path(args.output);
   const auto start = std::chrono::steady_clock::now();
-  const Film film = merge_parts(args.parts);
   const PartInfo info = read_part_info(args.parts.front());
   const bool path = info.render.integrator == "path";
-  const Image image = film.resolve();
-  if (*format == ImageFormat::kExr) {
-    write_exr(image, args.output,
-              {film.resolve_albedo(), film.resolve_normal(), film.resolve_depth()});
-  } else {
-    const float stops = args.exposure.empty() ? 0.0f : *parse_float(args.exposure);
-    write_image(image, args.output, path ? ImageEncoding::srgb(stops) : ImageEncoding::lab());
-  }
+  check_exposure(settings, path);
+  const Film film = merge_parts(args.parts);
+  const RenderedImage rendered{
+      film.resolve(), {film.resolve_albedo(), film.resolve_normal(), film.resolve_depth()}};
+  write_render(rendered, args.output, path, settings);
+  const Image& image = rendered.image;
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (!args.quiet) {

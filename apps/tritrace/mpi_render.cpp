@@ -18,14 +18,9 @@
 #include <cstring>
 #include <vector>
 
-#include "flags/flag_values.h"
-#include "tritrace/accel/make_accel.h"
 #include "tritrace/dist/partial_film.h"
 #include "tritrace/image/atomic_file.h"
-#include "tritrace/image/image_io.h"
-#include "tritrace/render/make_integrator.h"
-#include "tritrace/render/renderer.h"
-#include "tritrace/scene/io/scene_loader.h"
+#include "tritrace/job/render_job.h"
 #endif
 
 namespace tritrace::cli {
@@ -114,53 +109,32 @@ Film unpack(const std::vector<float>& data, const RenderIdentity& r, const PartR
   return film;
 }
 
-// Everything a rank needs to render units, loaded and built the way `tritrace render` does.
+// Every rank makes the same render job `tritrace render` makes, and times its start-up.
 struct RankSetup {
-  RankSetup() = default;
-  RankSetup(const RankSetup&) = delete;
-  RankSetup& operator=(const RankSetup&) = delete;
-
-  LoadedScene loaded;
-  IntegratorSpec spec;
-  RenderOptions options;
-  std::unique_ptr<Accel> accel;
-  std::unique_ptr<Integrator> integrator;
-  AovSet aovs;
+  std::unique_ptr<RenderJob> job;
   RenderIdentity identity;
   double startup_ms = 0.0;
 };
 
-AovSet aovs_of(const std::string& text) {
-  AovSet set;
-  set.albedo = text.find("albedo") != std::string::npos;
-  set.normal = text.find("normal") != std::string::npos;
-  set.depth = text.find("depth") != std::string::npos;
-  return set;
-}
-
-// Fills `s` in place: the accel and integrator keep references into s.loaded.scene, so the setup
-// must never be moved or copied afterwards.
 void setup(const RenderArgs& args, RankSetup& s) {
   const auto start = std::chrono::steady_clock::now();
-  s.loaded = load_scene_from(args.scene, scene_overrides(args.scene));
-  const Scene& scene = s.loaded.scene;
-  s.spec = integrator_spec(args.scene, s.loaded);
-  s.options.threads = thread_count(args.scene);
-  s.options.spp = s.spec.spp;
-  s.options.seed = s.spec.seed;
-  s.options.sampler = s.spec.sampler;
-  s.options.filter = filter_choice(args.scene);
-  const AccelKind accel = accel_kind(args.scene);
-  const Kernel kernel = kernel_choice(args.scene);
-  s.accel =
-      make_accel(accel, scene, kernel, nullptr,
-                 bvh_build_choice(args.scene, scene.stored_triangles(), s.spec, scene.camera));
-  s.integrator = make_integrator(s.spec, scene);
-  s.aovs = aovs_of(args.aovs);
-  s.identity =
-      render_identity(scene, s.spec, s.options, accel_name(accel), kernel_name(kernel), s.aovs);
+  s.job = std::make_unique<RenderJob>(args.job, load_job_scene(args.job));
+  s.job->prepare();
+  s.identity = s.job->identity();
   s.startup_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Unit `u` of the job's render: its tile part, its samples.
+Film render_unit(const RenderJob& job, const PartRange& u) {
+  RenderOptions options = job.options();
+  options.first_sample = u.first;
+  options.spp = u.end - u.first;
+  options.tile_part = u.tile;
+  options.tile_parts = u.tiles;
+  Film film = job.make_film();
+  job.render_to_film(film, options, nullptr);
+  return film;
 }
 
 [[noreturn]] void abort_job(int rank, const std::string& message) {
@@ -184,13 +158,7 @@ void work(int rank, const RankSetup& s, const std::vector<PartRange>& units) {
     if (status.MPI_TAG == kStop) return;
     if (must_die) std::raise(SIGKILL);
     const PartRange& u = units[static_cast<size_t>(unit)];
-    RenderOptions options = s.options;
-    options.first_sample = u.first;
-    options.spp = u.end - u.first;
-    options.tile_part = u.tile;
-    options.tile_parts = u.tiles;
-    Film film(s.identity.width, s.identity.height, s.aovs);
-    render_to_film(s.loaded.scene, *s.accel, *s.integrator, film, options);
+    const Film film = render_unit(*s.job, u);
     std::vector<float> data =
         pack(film, tile_group_pixels(s.identity.width, s.identity.height, u.tile, u.tiles));
     data.insert(data.begin(), static_cast<float>(unit));  // exact for any unit count below 2^24
@@ -212,23 +180,19 @@ int run_render_mpi(const RenderArgs& args) {
   std::string output;
   try {
     if (rank == 0) {
-      if (!args.output_given) {
+      if (!args.job.output_given) {
         throw Error("--mpi", "needs -o OUT (the one file rank 0 writes)", ExitCode::kUsage);
       }
-      const auto format = image_format_for(args.output);
-      if (!format) throw Error("--output", "'" + args.output + "' has an unknown extension");
-      if (!args.aovs.empty() && *format != ImageFormat::kExr) {
-        throw Error("--aovs", "needs an .exr output, got '" + args.output + "'", ExitCode::kUsage);
-      }
-      check_writable_path(args.output);
+      RenderJob::check_output(args.job, args.job.output);
+      check_writable_path(args.job.output);
     }
     setup(args, s);
   } catch (const Error& e) {
     abort_job(rank, e.what());
   }
-  const bool path = s.spec.kind == IntegratorSpec::Kind::kPath;
+  const bool path = s.job->path();
   const std::vector<PartRange> units =
-      make_units(ranks, path ? s.spec.spp : 1, s.identity.width, s.identity.height, path);
+      make_units(ranks, path ? s.job->spec().spp : 1, s.identity.width, s.identity.height, path);
 
   // Every rank's start-up time, for the summary (rank 0 prints the slowest).
   double slowest_startup = 0.0;
@@ -251,13 +215,7 @@ int run_render_mpi(const RenderArgs& args) {
   if (ranks == 1) {
     // No worker: rank 0 renders every unit itself.
     for (size_t u = 0; u < units.size(); ++u) {
-      RenderOptions options = s.options;
-      options.first_sample = units[u].first;
-      options.spp = units[u].end - units[u].first;
-      options.tile_part = units[u].tile;
-      options.tile_parts = units[u].tiles;
-      Film film(s.identity.width, s.identity.height, s.aovs);
-      render_to_film(s.loaded.scene, *s.accel, *s.integrator, film, options);
+      const Film film = render_unit(*s.job, units[u]);
       results[u] = pack(film, tile_group_pixels(s.identity.width, s.identity.height, units[u].tile,
                                                 units[u].tiles));
     }
@@ -304,15 +262,7 @@ int run_render_mpi(const RenderArgs& args) {
           results[u], s.identity, units[u],
           tile_group_pixels(s.identity.width, s.identity.height, units[u].tile, units[u].tiles));
     });
-    const Image image = film.resolve();
-    if (*image_format_for(args.output) == ImageFormat::kExr) {
-      write_exr(image, args.output,
-                {film.resolve_albedo(), film.resolve_normal(), film.resolve_depth()},
-                args.exr_half ? ExrPixelType::kHalf : ExrPixelType::kFloat);
-    } else {
-      const float stops = args.exposure.empty() ? 0.0f : *parse_float(args.exposure);
-      write_image(image, args.output, path ? ImageEncoding::srgb(stops) : ImageEncoding::lab());
-    }
+    s.job->write(film, args.job.output);
   } catch (const Error& e) {
     abort_job(0, e.what());
   }
@@ -323,7 +273,7 @@ int run_render_mpi(const RenderArgs& args) {
         "rendered %dx%d, %u spp on %d rank%s (%zu units, start-up up to %.1f ms) in %.1f ms to "
         "%s\n",
         s.identity.width, s.identity.height, s.identity.spp, ranks, ranks == 1 ? "" : "s",
-        units.size(), slowest_startup, ms, args.output.c_str());
+        units.size(), slowest_startup, ms, args.job.output.c_str());
   }
   MPI_Finalize();
   return 0;

@@ -10,15 +10,10 @@
 namespace tritrace::cli {
 
 struct RenderArgs {
-  SceneFlags scene;           // FILE, the scene and its view, shared with tritrace-view
-  std::string output;         // the scene file's output, else <file stem>.png or cornell.png
-  bool output_given = false;  // -o was on the command line (its value may still be empty)
+  // FILE, the scene and its view (the flags shared with tritrace-view), the output and its layers,
+  // the part: everything the render job reads.
+  JobSettings job;
   bool quiet = false;
-  std::string aovs;       // --aovs: "albedo,normal,depth" or a subset; empty: not given
-  bool exr_half = false;  // --exr-half: half floats in the EXR
-  std::string exposure;   // --exposure STOPS for path's 8-bit images; empty: not given
-  std::string spp_range;  // --spp-range A:B: a partial film of samples [A, B); empty: not given
-  std::string tile;  // --tile I/N: a partial film of the I-th of N tile parts; empty: not given
   bool mpi = false;  // --mpi: render across the ranks of an MPI job (TRITRACE_WITH_MPI)
 };
 

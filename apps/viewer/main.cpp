@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
                  "times per frame and exit")
       ->type_name("N")
       ->check(tritrace::cli::checked(
-          [](std::string& s) { return tritrace::cli::check_integer_in(s, 1, 100000); }));
+          [](std::string& s) { return tritrace::check_integer_in(s, 1, 100000); }));
 
   try {
     app.parse(argc, argv);
@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
     return static_cast<int>(tritrace::ExitCode::kUsage);
   }
   if (!frames.empty()) {
-    options.benchmark_frames = static_cast<int>(*tritrace::cli::parse_integer(frames));
+    options.benchmark_frames = static_cast<int>(*tritrace::parse_integer(frames));
   }
 
   try {

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <glm/geometric.hpp>
 
-#include "flags/flag_values.h"
+#include "tritrace/job/setting_values.h"
 
 namespace tritrace::view {
 
@@ -52,11 +52,11 @@ SceneOverrides view_overrides(const ViewState& state, int width, int height) {
   return o;
 }
 
-ViewState initial_view(const cli::SceneFlags& flags, const LoadedScene& loaded) {
+ViewState initial_view(const JobSettings& flags, const LoadedScene& loaded) {
   ViewState s;
-  if (!flags.yaw.empty()) s.yaw = *cli::parse_finite(flags.yaw);
+  if (!flags.yaw.empty()) s.yaw = *parse_finite(flags.yaw);
   s.distance = flags.distance.empty() ? glm::length(loaded.camera.position - loaded.camera.look_at)
-                                      : *cli::parse_float(flags.distance);
+                                      : *parse_float(flags.distance);
   if (!loaded.scene.lights.empty()) s.light = loaded.scene.lights.front().position;
   return s;
 }
@@ -72,16 +72,16 @@ std::string shell_quote(const std::string& text) {
   return quoted + "'";
 }
 
-std::string render_command_line(const cli::SceneFlags& flags, const ViewState& state, int width,
+std::string render_command_line(const JobSettings& flags, const ViewState& state, int width,
                                 int height, const IntegratorSpec& rendered) {
   std::string line = "tritrace render";
   if (!flags.file.empty()) line += " " + shell_quote(flags.file);
   if (!flags.scene.empty()) line += " --scene " + shell_quote(flags.scene);
   if (flags.accel != "bvh") line += " --accel " + shell_quote(flags.accel);
   if (!flags.kernel.empty()) line += " --kernel " + shell_quote(flags.kernel);
-  line += " --yaw " + cli::format_double(state.yaw);
-  line += " --distance " + cli::format_float(state.distance);
-  if (state.light) line += " --light " + cli::format_vec3(*state.light);
+  line += " --yaw " + format_double(state.yaw);
+  line += " --distance " + format_float(state.distance);
+  if (state.light) line += " --light " + format_vec3(*state.light);
   line += " --width " + std::to_string(width) + " --height " + std::to_string(height);
   if (rendered.kind == IntegratorSpec::Kind::kLab) {
     if (flags.integrator == "lab") line += " --integrator lab";
@@ -93,7 +93,7 @@ std::string render_command_line(const cli::SceneFlags& flags, const ViewState& s
   line += " --seed " + std::to_string(rendered.seed);
   if (!flags.sampler.empty()) line += " --sampler " + flags.sampler;
   if (!flags.max_depth.empty()) line += " --max-depth " + std::to_string(rendered.max_depth);
-  const FilterKind filter = cli::filter_choice(flags);
+  const FilterKind filter = filter_choice(flags);
   if (filter != FilterKind::kBox) line += " --filter " + std::string(filter_name(filter));
   return line;
 }

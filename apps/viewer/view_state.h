@@ -61,7 +61,7 @@ SceneOverrides view_overrides(const ViewState& state, int width, int height);
 
 // The starting view: the flags' values, else the loaded scene's (`loaded` was loaded with the
 // flags' overrides).
-ViewState initial_view(const cli::SceneFlags& flags, const LoadedScene& loaded);
+ViewState initial_view(const JobSettings& flags, const LoadedScene& loaded);
 
 // The lab integrator, as the scene or the flags chose it.
 inline constexpr IntegratorSpec kLabSpec{.kind = IntegratorSpec::Kind::kLab};
@@ -72,7 +72,7 @@ inline constexpr IntegratorSpec kLabSpec{.kind = IntegratorSpec::Kind::kLab};
 // for the path tracer, `--integrator path`, its spp (the samples the image holds) and seed, and
 // --max-depth and --filter when the flags gave them; for the lab integrator, `--integrator lab`
 // only when the flags asked for it.
-std::string render_command_line(const cli::SceneFlags& flags, const ViewState& state, int width,
+std::string render_command_line(const JobSettings& flags, const ViewState& state, int width,
                                 int height, const IntegratorSpec& rendered = kLabSpec);
 
 // `text` quoted for a POSIX shell when it holds anything but safe characters.

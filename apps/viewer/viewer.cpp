@@ -34,6 +34,7 @@
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/error.h"
 #include "tritrace/image/image_io.h"
+#include "tritrace/job/render_job.h"
 #include "tritrace/render/film.h"
 #include "tritrace/render/make_integrator.h"
 #include "tritrace/render/renderer.h"
@@ -188,7 +189,7 @@ class Viewer {
   int run() {
     // The display first: without one, fail at once rather than after loading a large scene.
     video_.emplace();
-    const SceneOverrides overrides = cli::scene_overrides(options_.scene);
+    const SceneOverrides overrides = scene_overrides(options_.scene);
     // The window opens at once, at the size the flags ask for (the scene's own size once it is
     // loaded), and shows what is being loaded and built: a ten-million-triangle model takes
     // seconds, which a blank window that does not answer would hide.
@@ -201,7 +202,7 @@ class Viewer {
     if (!renderer_) throw Error("SDL", std::string("cannot create a renderer: ") + SDL_GetError());
     overlay_.emplace(TRITRACE_OVERLAY_FONT);
 
-    if (!load_showing_progress(overrides)) return 0;  // closed while loading
+    if (!load_showing_progress()) return 0;  // closed while loading
     width_ = loaded_.scene.camera.width();
     height_ = loaded_.scene.camera.height();
     int shown_width = 0, shown_height = 0;
@@ -212,13 +213,11 @@ class Viewer {
     start_ = initial_view(options_.scene, loaded_);
     view_ = start_;
     rates_ = MotionRates::for_distance(start_.distance);
-    render_options_.threads = cli::thread_count(options_.scene);
-    // The integrator `tritrace render` would use with the same flags.
-    spec_ = cli::integrator_spec(options_.scene, loaded_);
-    path_ = spec_.kind == IntegratorSpec::Kind::kPath;
-    render_options_.seed = spec_.seed;
-    render_options_.sampler = spec_.sampler;
-    render_options_.filter = cli::filter_choice(options_.scene);
+    // The job's integrator, options and accel are those `tritrace render` makes from the same
+    // flags.
+    spec_ = job_->spec();
+    path_ = job_->path();
+    render_options_ = job_->options();
     schedule_.emplace(spec_.spp, kFrameBudgetMs);
     return loop();
   }
@@ -229,9 +228,9 @@ class Viewer {
   // time in the title and in the window. Returns false when the window was closed (or Esc
   // pressed) meanwhile: the load cannot be interrupted, so the caller leaves without waiting for
   // it (see leave_while_loading). Rethrows what the load threw.
-  bool load_showing_progress(const SceneOverrides& overrides) {
+  bool load_showing_progress() {
     std::mutex mutex;
-    std::string phase = cli::loading_phase(options_.scene);
+    std::string phase = loading_phase(options_.scene);
     Clock::time_point phase_start = Clock::now();
     std::exception_ptr error;
     std::atomic<bool> done{false};
@@ -242,20 +241,17 @@ class Viewer {
       try {
         {
           const LoadProgressScope report(&load_progress);
-          loaded_ = cli::load_scene_from(options_.scene, overrides);
+          loaded_ = load_job_scene(options_.scene);
         }
         building = true;
         {
           const std::lock_guard<std::mutex> lock(mutex);
-          phase =
-              cli::building_phase(cli::accel_kind(options_.scene), loaded_.scene.drawn_triangles());
+          phase = building_phase(accel_kind(options_.scene), loaded_.scene.drawn_triangles());
           phase_start = Clock::now();
         }
         // The viewer traces frame after frame: auto means the tree that traces fastest.
-        accel_ = make_accel(cli::accel_kind(options_.scene), loaded_.scene,
-                            cli::kernel_choice(options_.scene), nullptr,
-                            cli::bvh_build_choice(options_.scene, loaded_.scene.stored_triangles(),
-                                                  std::numeric_limits<double>::infinity()));
+        job_ = std::make_unique<RenderJob>(options_.scene, loaded_.scene, loaded_.integrator);
+        job_->prepare(nullptr, nullptr, std::numeric_limits<double>::infinity());
       } catch (...) {
         error = std::current_exception();
       }
@@ -422,8 +418,8 @@ class Viewer {
     // The path tracer builds its light sampler from the scene's lights when it is made, so it is
     // made again when the light moves: always the integrator `tritrace render` makes for the scene
     // with that light.
-    if (!integrator_ || integrator_light_ != view_.light) {
-      integrator_ = make_integrator(spec_, scene);
+    if (integrator_light_ != view_.light) {
+      job_->remake_integrator();
       integrator_light_ = view_.light;
     }
     times.events += ms_since(start);
@@ -444,11 +440,11 @@ class Viewer {
       RenderOptions options = render_options_;
       options.first_sample = schedule_->samples_taken();
       options.spp = spp;
-      render_to_film(scene, *accel_, *integrator_, film_, options, &stats);
+      job_->render_to_film(film_, options, &stats);
       schedule_->frame_rendered(spp, stats.milliseconds);
       image_spp_ = schedule_->samples_taken();
     } else {
-      image_ = render(scene, *accel_, *integrator_, render_options_, &stats);
+      image_ = job_->render(&stats).image;
     }
     image_view_ = view_;
     times.render = stats.milliseconds;
@@ -554,11 +550,11 @@ class Viewer {
     std::snprintf(
         scene, sizeof scene, "%dx%d, %zu triangles, %s, %s, %d threads, %.3g Mrays/s",
         image_.width(), image_.height(), static_cast<size_t>(loaded_.scene.drawn_triangles()),
-        std::string(accel_name(cli::accel_kind(options_.scene))).c_str(),
-        std::string(kernel_name(cli::kernel_choice(options_.scene))).c_str(), threads_, mrays_);
-    std::string view = "yaw " + cli::format_double(image_view_.yaw) + " rad, distance " +
-                       cli::format_float(image_view_.distance);
-    if (image_view_.light) view += ", light " + cli::format_vec3(*image_view_.light);
+        std::string(accel_name(accel_kind(options_.scene))).c_str(),
+        std::string(kernel_name(kernel_choice(options_.scene))).c_str(), threads_, mrays_);
+    std::string view = "yaw " + format_double(image_view_.yaw) + " rad, distance " +
+                       format_float(image_view_.distance);
+    if (image_view_.light) view += ", light " + format_vec3(*image_view_.light);
     std::string shading = "integrator " + std::string(integrator_name(spec_.kind));
     if (path_) {
       shading += ": " + std::to_string(image_spp_) + " of " + std::to_string(spec_.spp) + " spp, " +
@@ -604,12 +600,12 @@ class Viewer {
 
   const ViewerOptions& options_;
   LoadedScene loaded_;
-  std::unique_ptr<Accel> accel_;
+  // Over loaded_.scene, whose camera and light each frame's view sets.
+  std::unique_ptr<RenderJob> job_;
   RenderOptions render_options_;
   IntegratorSpec spec_;  // what `tritrace render` would use with the same flags
   bool path_ = false;    // spec_ is the path tracer: accumulate samples while the view rests
-  std::unique_ptr<Integrator> integrator_;
-  std::optional<glm::vec3> integrator_light_;  // the light integrator_ was made with
+  std::optional<glm::vec3> integrator_light_;  // the light the job's integrator was made with
   Film film_;                                  // the path tracer's samples of film_view_
   ViewState film_view_;
   std::optional<SampleSchedule> schedule_;

@@ -10,7 +10,7 @@
 namespace tritrace::view {
 
 struct ViewerOptions {
-  cli::SceneFlags scene;
+  JobSettings scene;
   bool quiet = false;        // no "Render time" lines
   bool print_state = false;  // print the view as a `tritrace render` command when it comes to rest
   int benchmark_frames = 0;  // > 0: render this many frames turning, print medians, exit

@@ -92,7 +92,7 @@ TEST(Motion, RatesScaleWithTheSceneSize) {
 }
 
 TEST(InitialView, TheLabsDefaults) {
-  const cli::SceneFlags flags;
+  const JobSettings flags;
   const LoadedScene loaded = load_builtin_scene("cornell");
   const ViewState s = initial_view(flags, loaded);
   EXPECT_EQ(s.yaw, 0.0);
@@ -102,7 +102,7 @@ TEST(InitialView, TheLabsDefaults) {
 }
 
 TEST(InitialView, FlagsWin) {
-  cli::SceneFlags flags;
+  JobSettings flags;
   flags.yaw = "0.25";
   flags.distance = "2.5";
   flags.light = "1,2,3";
@@ -115,7 +115,7 @@ TEST(InitialView, FlagsWin) {
 }
 
 TEST(CommandLine, NamesEveryViewValue) {
-  cli::SceneFlags flags;
+  JobSettings flags;
   ViewState s;
   s.yaw = 0.1234;
   s.light = glm::vec3(0.0f, -0.5f, -0.7f);
@@ -125,7 +125,7 @@ TEST(CommandLine, NamesEveryViewValue) {
 }
 
 TEST(CommandLine, AddsTheSceneSourceAccelAndKernelWhenGiven) {
-  cli::SceneFlags flags;
+  JobSettings flags;
   flags.file = "my scene.json";
   flags.accel = "brute";
   flags.kernel = "cramer";
@@ -135,14 +135,14 @@ TEST(CommandLine, AddsTheSceneSourceAccelAndKernelWhenGiven) {
   EXPECT_EQ(render_command_line(flags, s, 320, 240),
             "tritrace render 'my scene.json' --accel brute --kernel cramer --yaw -0.5 "
             "--distance 2.25 --width 320 --height 240");
-  cli::SceneFlags terrain;
+  JobSettings terrain;
   terrain.scene = "terrain:1m";
   EXPECT_EQ(render_command_line(terrain, s, 8, 8),
             "tritrace render --scene terrain:1m --yaw -0.5 --distance 2.25 --width 8 --height 8");
 }
 
 TEST(CommandLine, ThePathTracersSamplesSeedAndChoicesGiven) {
-  cli::SceneFlags flags;
+  JobSettings flags;
   flags.scene = "cornell-area";
   ViewState s;
   IntegratorSpec path;
@@ -163,7 +163,7 @@ TEST(CommandLine, ThePathTracersSamplesSeedAndChoicesGiven) {
 }
 
 TEST(CommandLine, TheLabIntegratorOnlyWhenAskedFor) {
-  cli::SceneFlags flags;
+  JobSettings flags;
   flags.scene = "cornell-area";  // a path tracer's scene, shown with the lab's shading
   flags.integrator = "lab";
   ViewState s;

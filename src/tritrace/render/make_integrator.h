@@ -7,7 +7,8 @@
 #include <string_view>
 
 #include "tritrace/render/integrator.h"
-#include "tritrace/scene/io/loaded_scene.h"
+#include "tritrace/scene/integrator_spec.h"
+#include "tritrace/scene/scene.h"
 
 namespace tritrace {
 

@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-#include "tritrace/math/random.h"
+#include "tritrace/scene/integrator_spec.h"
 #include "tritrace/scene/scene.h"
 
 namespace tritrace {
@@ -45,22 +45,6 @@ struct LoadStats {
   size_t meshes = 0;              // mesh sources (files, inline meshes, generators) and file meshes
   size_t dropped_degenerate = 0;  // zero-area triangles
   size_t dropped_non_finite = 0;  // triangles with a NaN or infinite vertex, or that overflow
-};
-
-// How the scene asks to be rendered: a scene file's "integrator" object, or a built-in scene's own
-// choice (the lab's scenes the lab integrator, the others the path tracer). Command-line flags
-// override each field.
-inline constexpr uint32_t kDefaultSpp = 64;
-inline constexpr uint32_t kMaxSpp = 1u << 24;
-inline constexpr int kDefaultMaxDepth = 1024;
-inline constexpr int kMaxMaxDepth = 1 << 16;
-struct IntegratorSpec {
-  enum class Kind { kLab, kPath };
-  Kind kind = Kind::kPath;
-  uint32_t spp = kDefaultSpp;
-  int max_depth = kDefaultMaxDepth;
-  uint64_t seed = 0;
-  SamplerKind sampler = SamplerKind::kSobol;
 };
 
 struct LoadedScene {

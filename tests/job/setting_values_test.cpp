@@ -1,6 +1,6 @@
 // The shared flag parsers and formatters: what the viewer prints must parse back to exactly the
 // value it rendered with.
-#include "flags/flag_values.h"
+#include "tritrace/job/setting_values.h"
 
 #include <gtest/gtest.h>
 

@@ -1,0 +1,200 @@
+// The settings' rules and conversions: the one place that says which texts a render accepts.
+#include "tritrace/job/job_settings.h"
+
+#include <limits>
+
+#include "tritrace/error.h"
+#include "tritrace/job/setting_values.h"
+#include "tritrace/render/make_integrator.h"
+#include "tritrace/scene/io/scene_loader.h"
+#include "tritrace/scene/procedural.h"
+
+namespace tritrace {
+namespace {
+
+std::string check_side(const std::string& s) {
+  return check_integer_in(s, 1, kMaxImageSide);
+}
+std::string check_threads(const std::string& s) {
+  return check_integer_in(s, 1, kMaxThreads);
+}
+std::string check_spp(const std::string& s) {
+  return check_integer_in(s, 1, kMaxSpp);
+}
+std::string check_seed(const std::string& s) {
+  return check_integer_in(s, 0, std::numeric_limits<long long>::max());
+}
+std::string check_max_depth(const std::string& s) {
+  return check_integer_in(s, 0, kMaxMaxDepth);
+}
+std::string check_bvh_build_or_auto(const std::string& s) {
+  return s == "auto" || parse_bvh_build(s)
+             ? std::string()
+             : "unknown BVH build '" + s + "' (use auto, sah or morton)";
+}
+std::string check_integrator(const std::string& s) {
+  return s == "lab" || s == "path" ? std::string()
+                                   : "unknown integrator '" + s + "' (use lab or path)";
+}
+std::string check_sampler(const std::string& s) {
+  return parse_sampler(s) ? std::string()
+                          : "unknown sampler '" + s + "' (use sobol or independent)";
+}
+std::string check_filter(const std::string& s) {
+  return parse_filter(s) ? std::string()
+                         : "unknown filter '" + s + "' (use box, gaussian or blackman-harris)";
+}
+std::string check_aovs(const std::string& s) {
+  std::string why;
+  return parse_aovs(s, &why) ? std::string() : why;
+}
+std::string check_exposure(const std::string& s) {
+  return parse_float(s) ? std::string() : "must be a finite number, got '" + s + "'";
+}
+
+constexpr SettingRule kRules[] = {
+    {"--scene", &JobSettings::scene, check_builtin_scene},
+    {"--width", &JobSettings::width, check_side},
+    {"--height", &JobSettings::height, check_side},
+    {"--yaw", &JobSettings::yaw, check_finite},
+    {"--distance", &JobSettings::distance, check_distance},
+    {"--light", &JobSettings::light, check_vec3},
+    {"--accel", &JobSettings::accel, check_accel},
+    {"--kernel", &JobSettings::kernel, check_kernel},
+    {"--bvh-build", &JobSettings::bvh_build, check_bvh_build_or_auto},
+    {"--threads", &JobSettings::threads, check_threads},
+    {"--integrator", &JobSettings::integrator, check_integrator},
+    {"--spp", &JobSettings::spp, check_spp},
+    {"--seed", &JobSettings::seed, check_seed},
+    {"--sampler", &JobSettings::sampler, check_sampler},
+    {"--max-depth", &JobSettings::max_depth, check_max_depth},
+    {"--filter", &JobSettings::filter, check_filter},
+    {"--aovs", &JobSettings::aovs, check_aovs},
+    {"--exposure", &JobSettings::exposure, check_exposure},
+};
+
+}  // namespace
+
+std::span<const SettingRule> setting_rules() {
+  return kRules;
+}
+
+auto setting_check(std::string_view flag) -> std::string (*)(const std::string&) {
+  for (const SettingRule& rule : kRules) {
+    if (flag == rule.flag) return rule.check;
+  }
+  return nullptr;
+}
+
+void check_settings(const JobSettings& settings) {
+  for (const SettingRule& rule : kRules) {
+    const std::string& text = settings.*rule.text;
+    if (text.empty()) continue;
+    const std::string why = rule.check(text);
+    if (!why.empty()) throw Error(rule.flag, why, ExitCode::kUsage);
+  }
+}
+
+std::optional<AovSet> parse_aovs(const std::string& text, std::string* why) {
+  AovSet set;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = text.find(',', start);
+    const std::string name =
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (name == "albedo") {
+      set.albedo = true;
+    } else if (name == "normal") {
+      set.normal = true;
+    } else if (name == "depth") {
+      set.depth = true;
+    } else {
+      *why = (name.empty() ? std::string("empty AOV name") : "unknown AOV '" + name + "'") +
+             " in '" + text + "' (use a comma-separated list of albedo, normal, depth)";
+      return std::nullopt;
+    }
+    if (comma == std::string::npos) return set;
+    start = comma + 1;
+  }
+}
+
+SceneOverrides scene_overrides(const JobSettings& settings) {
+  SceneOverrides o;
+  if (!settings.width.empty()) o.width = static_cast<int>(*parse_integer(settings.width));
+  if (!settings.height.empty()) o.height = static_cast<int>(*parse_integer(settings.height));
+  if (!settings.yaw.empty()) o.yaw = *parse_finite(settings.yaw);
+  if (!settings.distance.empty()) o.distance = *parse_float(settings.distance);
+  if (!settings.light.empty()) o.light = *parse_vec3(settings.light);
+  return o;
+}
+
+AccelKind accel_kind(const JobSettings& settings) {
+  return *parse_accel(settings.accel);
+}
+
+Kernel kernel_choice(const JobSettings& settings) {
+  return settings.kernel.empty() ? default_kernel_for(accel_kind(settings))
+                                 : *parse_kernel(settings.kernel);
+}
+
+bvh::BuildMethod bvh_build_choice(const JobSettings& settings, size_t triangles, double rays) {
+  if (settings.bvh_build == "auto") return bvh_build_for(triangles, rays);
+  return *parse_bvh_build(settings.bvh_build);
+}
+
+int thread_count(const JobSettings& settings) {
+  return settings.threads.empty() ? 0 : static_cast<int>(*parse_integer(settings.threads));
+}
+
+IntegratorSpec integrator_spec(const JobSettings& settings, const IntegratorSpec& scene_spec) {
+  IntegratorSpec spec = scene_spec;
+  if (!settings.integrator.empty()) {
+    spec.kind =
+        settings.integrator == "lab" ? IntegratorSpec::Kind::kLab : IntegratorSpec::Kind::kPath;
+  }
+  if (!settings.spp.empty()) spec.spp = static_cast<uint32_t>(*parse_integer(settings.spp));
+  if (!settings.seed.empty()) spec.seed = static_cast<uint64_t>(*parse_integer(settings.seed));
+  if (!settings.sampler.empty()) spec.sampler = *parse_sampler(settings.sampler);
+  if (!settings.max_depth.empty()) {
+    spec.max_depth = static_cast<int>(*parse_integer(settings.max_depth));
+  }
+  return spec;
+}
+
+FilterKind filter_choice(const JobSettings& settings) {
+  return parse_filter(settings.filter).value_or(FilterKind::kBox);
+}
+
+AovSet aov_set(const JobSettings& settings) {
+  if (settings.aovs.empty()) return {};
+  std::string why;
+  return parse_aovs(settings.aovs, &why).value_or(AovSet{});
+}
+
+std::optional<float> exposure_stops(const JobSettings& settings) {
+  if (settings.exposure.empty()) return std::nullopt;
+  return parse_float(settings.exposure);
+}
+
+std::string loading_phase(const JobSettings& settings) {
+  if (!settings.file.empty()) return "loading " + settings.file;
+  return "making " + (settings.scene.empty() ? std::string("cornell") : settings.scene);
+}
+
+std::string building_phase(AccelKind kind, size_t triangles) {
+  return "building " + std::string(accel_name(kind)) + " over " + std::to_string(triangles) +
+         " triangles";
+}
+
+LoadedScene load_job_scene(const JobSettings& settings) {
+  if (!settings.file.empty() && !settings.scene.empty()) {
+    throw Error("--scene", "give either a FILE or --scene, not both", ExitCode::kUsage);
+  }
+  const SceneOverrides overrides = scene_overrides(settings);
+  if (settings.file.empty()) {
+    return load_builtin_scene(settings.scene.empty() ? "cornell" : settings.scene, overrides);
+  }
+  return load_scene(settings.file, overrides);
+}
+
+}  // namespace tritrace

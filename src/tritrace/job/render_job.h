@@ -1,0 +1,120 @@
+// One render, set up in one place for every front end (render, render --mpi, bench, the viewer,
+// the Python module): the scene, the integrator spec with the user's settings over the scene's,
+// the accel and its build, the integrator, the film's size and AOVs, the part of the render
+// (sample range, tile part), the render identity, and every check of a combination of settings.
+// Front ends add only what is theirs: terminal output, ranks, a window, timing loops, arrays.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "tritrace/accel/accel.h"
+#include "tritrace/accel/make_accel.h"
+#include "tritrace/dist/partial_film.h"
+#include "tritrace/image/image.h"
+#include "tritrace/image/image_io.h"
+#include "tritrace/job/job_settings.h"
+#include "tritrace/render/film.h"
+#include "tritrace/render/integrator.h"
+#include "tritrace/render/renderer.h"
+#include "tritrace/scene/io/loaded_scene.h"
+
+namespace tritrace {
+
+// A whole render's image and the AOV images asked for (empty images for the others).
+struct RenderedImage {
+  Image image;
+  AovImages aovs;
+};
+
+// --exposure scales the path tracer's 8-bit images; with the lab integrator it is refused
+// (Error("--exposure", ..., kUsage)), whichever front end asks.
+void check_exposure(const JobSettings& settings, bool path);
+// Writes a whole render to `file` in its format: EXR with the AOV layers (half floats with
+// --exr-half), 8-bit through the sRGB curve with the exposure (path) or the lab's clamp without
+// gamma (lab), PFM as floats. Atomic. The job writes through it, and so does a merge of parts.
+void write_render(const RenderedImage& rendered, const std::string& file, bool path,
+                  const JobSettings& settings);
+
+class RenderJob {
+ public:
+  // The checks between the output's format and the settings, which need no scene: the caller runs
+  // them before loading, so that a bad output costs no time (the constructor runs them again once
+  // the output is known). Throws Error(flag, reason, kUsage).
+  static void check_output(const JobSettings& settings, const std::string& output);
+
+  // A job that owns its scene (load_job_scene's).
+  RenderJob(const JobSettings& settings, LoadedScene loaded);
+  // A job over a scene its caller keeps (the viewer's, the Python module's), which must outlive
+  // it; `scene_spec` is how that scene asks to be rendered.
+  RenderJob(const JobSettings& settings, const Scene& scene, const IntegratorSpec& scene_spec);
+  RenderJob(const RenderJob&) = delete;
+  RenderJob& operator=(const RenderJob&) = delete;
+
+  const JobSettings& settings() const { return settings_; }
+  const Scene& scene() const { return *scene_; }
+  // The loaded scene's facts (dropped triangles, the file's output); nullopt for a borrowed scene.
+  const LoadedScene* loaded() const { return loaded_ ? &*loaded_ : nullptr; }
+  const IntegratorSpec& spec() const { return spec_; }
+  bool path() const { return spec_.kind == IntegratorSpec::Kind::kPath; }
+  AccelKind accel_kind() const { return accel_kind_; }
+  Kernel kernel() const { return kernel_; }
+  const AovSet& aovs() const { return aovs_; }
+  int width() const { return scene_->camera.width(); }
+  int height() const { return scene_->camera.height(); }
+  // The options of this job's part: threads, its samples, seed, sampler, filter, tile part.
+  const RenderOptions& options() const { return options_; }
+  void set_progress(RenderProgress* progress) { options_.progress = progress; }
+  // The part --spp-range and --tile ask for (samples [0, spp) of tile part 0 / 1 when neither).
+  const PartRange& part() const { return part_; }
+  bool partial() const { return partial_; }
+  // The output path: the one given, else the scene file's, else <file stem>.png or cornell.png.
+  const std::string& output() const { return output_; }
+  // Everything that changes the pixels of the whole render this job is a part of.
+  RenderIdentity identity() const;
+
+  // The BVH build: --bvh-build, or for auto the faster to trace `rays` rays in all (default: this
+  // render's expected rays; the viewer, which traces frame after frame, passes infinity).
+  bvh::BuildMethod bvh_build(std::optional<double> rays = std::nullopt) const;
+  // Builds the accel (or takes `prebuilt`, which must outlive the job) and makes the integrator.
+  void prepare(AccelInfo* info = nullptr, const Accel* prebuilt = nullptr,
+               std::optional<double> rays = std::nullopt);
+  // Makes the integrator again for the scene as it is now (the viewer moves the light).
+  void remake_integrator();
+  const Accel& accel() const { return *accel_; }
+  const Integrator& integrator() const { return *integrator_; }
+
+  // A film of the image's size with the job's AOVs.
+  Film make_film() const;
+  // Renders `options` (default: the job's) into `film`; prepare() first.
+  void render_to_film(Film& film, RenderStats* stats = nullptr) const;
+  void render_to_film(Film& film, const RenderOptions& options, RenderStats* stats) const;
+  // The whole render (not a part): the image and the AOVs asked for.
+  RenderedImage render(RenderStats* stats = nullptr) const;
+  // Writes a whole render to `file` (write_render).
+  void write(const RenderedImage& rendered, const std::string& file) const;
+  void write(const Film& film, const std::string& file) const;
+  // A part's film as a partial film for `tritrace merge`. Atomic.
+  void write_part(const Film& film, const std::string& file) const;
+
+ private:
+  void set_up();
+
+  JobSettings settings_;
+  std::optional<LoadedScene> loaded_;
+  const Scene* scene_ = nullptr;
+  IntegratorSpec spec_;
+  AccelKind accel_kind_ = AccelKind::kBvh;
+  Kernel kernel_ = kDefaultKernel;
+  AovSet aovs_;
+  RenderOptions options_;
+  PartRange part_;
+  bool partial_ = false;
+  std::string output_;
+  std::unique_ptr<Accel> own_accel_;
+  const Accel* accel_ = nullptr;
+  std::unique_ptr<Integrator> integrator_;
+};
+
+}  // namespace tritrace

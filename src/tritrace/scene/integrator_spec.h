@@ -1,0 +1,26 @@
+// How a scene asks to be rendered: a scene file's "integrator" object, or a built-in scene's own
+// choice (the lab's scenes the lab integrator, the others the path tracer). Like the camera, it is
+// part of what a scene says; a render job applies the user's settings over it.
+#pragma once
+
+#include <cstdint>
+
+#include "tritrace/math/random.h"
+
+namespace tritrace {
+
+inline constexpr uint32_t kDefaultSpp = 64;
+inline constexpr uint32_t kMaxSpp = 1u << 24;
+inline constexpr int kDefaultMaxDepth = 1024;
+inline constexpr int kMaxMaxDepth = 1 << 16;
+
+struct IntegratorSpec {
+  enum class Kind { kLab, kPath };
+  Kind kind = Kind::kPath;
+  uint32_t spp = kDefaultSpp;
+  int max_depth = kDefaultMaxDepth;
+  uint64_t seed = 0;
+  SamplerKind sampler = SamplerKind::kSobol;
+};
+
+}  // namespace tritrace

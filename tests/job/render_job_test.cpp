@@ -1,0 +1,225 @@
+// The render job: every front end's set-up in one place, so its checks and its images are the
+// ones each front end gets. Expected images come from the renderer called directly (the oracle
+// the job must not change), messages from the rules the issue names.
+#include "tritrace/job/render_job.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+
+#include "tritrace/error.h"
+#include "tritrace/render/make_integrator.h"
+#include "tritrace/scene/io/scene_loader.h"
+
+namespace tritrace {
+namespace {
+
+// The Error a call throws, with its subject and exit code; fails the test when none is thrown.
+template <typename F>
+Error error_of(F&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no Error thrown";
+  return Error("", "");
+}
+
+// A 24 x 16 render of a built-in scene on two threads, with `spp` when given.
+JobSettings small(const std::string& scene, const std::string& spp = "") {
+  JobSettings s;
+  s.scene = scene;
+  s.spp = spp;
+  s.width = "24";
+  s.height = "16";
+  s.threads = "2";
+  return s;
+}
+
+LoadedScene small_area() {
+  SceneOverrides size;
+  size.width = 24;
+  size.height = 16;
+  return load_builtin_scene("cornell-area", size);
+}
+
+bool same_pixels(const Image& a, const Image& b) {
+  return a.width() == b.width() && a.height() == b.height() &&
+         std::memcmp(a.pixels().data(), b.pixels().data(), a.pixels().size() * sizeof(glm::vec3)) ==
+             0;
+}
+
+TEST(JobSettings, EveryRuleRefusesWhatItShould) {
+  // One bad value per rule: the rule names its flag and says why.
+  const std::pair<const char*, const char*> bad[] = {
+      {"--scene", "nope"},      {"--width", "0"},          {"--height", "16385"},
+      {"--yaw", "inf"},         {"--distance", "0"},       {"--light", "1,2"},
+      {"--accel", "octree"},    {"--kernel", "fast"},      {"--bvh-build", "lbvh"},
+      {"--threads", "0"},       {"--integrator", "bdpt2"}, {"--spp", "0"},
+      {"--seed", "-1"},         {"--sampler", "halton"},   {"--max-depth", "-1"},
+      {"--filter", "mitchell"}, {"--aovs", "albedo,,"},    {"--exposure", "nan"},
+  };
+  for (const auto& [flag, text] : bad) {
+    JobSettings s;
+    bool found = false;
+    for (const SettingRule& rule : setting_rules()) {
+      if (std::string(rule.flag) == flag) {
+        s.*rule.text = text;
+        found = true;
+      }
+    }
+    ASSERT_TRUE(found) << flag;
+    const Error e = error_of([&] { check_settings(s); });
+    EXPECT_EQ(e.subject(), flag) << text;
+    EXPECT_EQ(e.exit_code(), ExitCode::kUsage);
+  }
+  EXPECT_NO_THROW(check_settings(small("cornell")));
+}
+
+TEST(JobSettings, AovListIsParsedStrictly) {
+  std::string why;
+  EXPECT_TRUE(parse_aovs("depth,albedo,depth", &why).has_value());
+  // A list that only contains the names as substrings is not a list of them.
+  EXPECT_FALSE(parse_aovs("albedos", &why).has_value());
+  EXPECT_NE(why.find("unknown AOV 'albedos'"), std::string::npos) << why;
+  EXPECT_FALSE(parse_aovs("normal;depth", &why).has_value());
+}
+
+TEST(RenderJob, OutputChecksNameTheFlag) {
+  JobSettings s = small("cornell-area");
+  s.aovs = "albedo";
+  EXPECT_EQ(error_of([&] { RenderJob::check_output(s, "a.png"); }).subject(), "--aovs");
+  EXPECT_NO_THROW(RenderJob::check_output(s, "a.exr"));
+  s = small("cornell-area");
+  s.exposure = "1";
+  EXPECT_EQ(error_of([&] { RenderJob::check_output(s, "a.pfm"); }).subject(), "--exposure");
+  s = small("cornell-area");
+  s.exr_half = true;
+  EXPECT_EQ(error_of([&] { RenderJob::check_output(s, "a.ppm"); }).subject(), "--exr-half");
+  s = small("cornell-area");
+  s.tile = "0/2";
+  s.output_given = true;
+  EXPECT_EQ(error_of([&] { RenderJob::check_output(s, "a.png"); }).subject(), "--tile");
+  EXPECT_EQ(error_of([&] { RenderJob::check_output(s, "a.tiff"); }).subject(), "--tile");
+  EXPECT_EQ(error_of([&] { RenderJob::check_output(small("cornell"), "a.tiff"); }).subject(),
+            "--output");
+}
+
+TEST(RenderJob, ExposureWithTheLabIntegratorIsRefusedWhateverTheFrontEnd) {
+  // The lab's scenes render with the lab integrator: exposure has nothing to scale.
+  JobSettings s = small("cornell");
+  s.exposure = "1";
+  const Error e = error_of([&] { RenderJob job(s, load_job_scene(s)); });
+  EXPECT_EQ(e.subject(), "--exposure");
+  EXPECT_EQ(e.exit_code(), ExitCode::kUsage);
+  s.integrator = "path";
+  EXPECT_NO_THROW(RenderJob(s, load_job_scene(s)));
+}
+
+TEST(RenderJob, PartsAreCheckedAgainstTheRender) {
+  JobSettings s = small("cornell-area");
+  s.spp = "16";
+  s.spp_range = "8:24";
+  EXPECT_EQ(error_of([&] { RenderJob(s, load_job_scene(s)); }).subject(), "--spp-range");
+  s.spp_range = "4:16";  // not at a block of 8
+  EXPECT_EQ(error_of([&] { RenderJob(s, load_job_scene(s)); }).subject(), "--spp-range");
+  s.spp_range = "8:16";
+  const RenderJob job(s, load_job_scene(s));
+  EXPECT_TRUE(job.partial());
+  EXPECT_EQ(job.options().first_sample, 8u);
+  EXPECT_EQ(job.options().spp, 8u);
+  s.spp_range.clear();
+  s.tile = "2/7";  // a 24 x 16 image has only two 16 x 16 tiles
+  EXPECT_EQ(error_of([&] { RenderJob(s, load_job_scene(s)); }).subject(), "--tile");
+  s = small("cornell");
+  s.spp_range = "0:8";
+  EXPECT_EQ(error_of([&] { RenderJob(s, load_job_scene(s)); }).subject(), "--spp-range");
+}
+
+TEST(RenderJob, SettingsGoOverTheScenesOwnChoice) {
+  JobSettings s = small("cornell-area");
+  s.spp = "3";
+  s.seed = "9";
+  s.sampler = "independent";
+  s.max_depth = "2";
+  s.filter = "gaussian";
+  const RenderJob job(s, load_job_scene(s));
+  EXPECT_TRUE(job.path());
+  EXPECT_EQ(job.spec().spp, 3u);
+  EXPECT_EQ(job.spec().seed, 9u);
+  EXPECT_EQ(job.spec().sampler, SamplerKind::kIndependent);
+  EXPECT_EQ(job.spec().max_depth, 2);
+  EXPECT_EQ(job.options().filter, FilterKind::kGaussian);
+  EXPECT_EQ(job.options().threads, 2);
+  EXPECT_EQ(job.width(), 24);
+  EXPECT_EQ(job.output(), "cornell.png");
+}
+
+TEST(RenderJob, RendersWhatTheRendererRendersDirectly) {
+  // The oracle: the scene, accel and integrator put together by hand, as front ends once did.
+  for (const char* scene : {"cornell", "cornell-area"}) {
+    const JobSettings s = small(scene, "4");
+    RenderJob job(s, load_job_scene(s));
+    job.prepare();
+    const RenderedImage got = job.render();
+
+    const LoadedScene loaded = load_job_scene(s);
+    IntegratorSpec spec = loaded.integrator;
+    spec.spp = 4;
+    const auto accel = make_accel(AccelKind::kBvh, loaded.scene, Kernel::kWatertight);
+    const auto integrator = make_integrator(spec, loaded.scene);
+    RenderOptions options;
+    options.threads = 1;
+    options.spp = 4;
+    const Image want = render(loaded.scene, *accel, *integrator, options);
+    EXPECT_TRUE(same_pixels(got.image, want)) << scene;
+  }
+}
+
+TEST(RenderJob, AovsComeFromTheFilmAndMatchTheImageWithout) {
+  JobSettings s = small("cornell-area");
+  s.spp = "4";
+  RenderJob plain(s, load_job_scene(s));
+  plain.prepare();
+  s.aovs = "albedo,depth";
+  RenderJob with(s, load_job_scene(s));
+  with.prepare();
+  const RenderedImage a = plain.render();
+  const RenderedImage b = with.render();
+  EXPECT_TRUE(same_pixels(a.image, b.image));
+  EXPECT_EQ(b.aovs.albedo.width(), 24);
+  EXPECT_EQ(b.aovs.depth.width(), 24);
+  EXPECT_EQ(b.aovs.normal.width(), 0);
+}
+
+TEST(RenderJob, BorrowedSceneAndPrebuiltAccel) {
+  const LoadedScene loaded = small_area();
+  JobSettings s;
+  s.spp = "2";
+  const auto accel = make_accel(AccelKind::kBrute, loaded.scene, Kernel::kWatertight);
+  RenderJob borrowed(s, loaded.scene, loaded.integrator);
+  borrowed.prepare(nullptr, accel.get());
+  EXPECT_EQ(&borrowed.accel(), accel.get());
+  RenderJob own(s, small_area());
+  own.prepare();
+  // brute and bvh with the same kernel give the same hits, so the same image.
+  EXPECT_TRUE(same_pixels(borrowed.render().image, own.render().image));
+}
+
+TEST(RenderJob, PartIdentityIsTheWholeRendersIdentity) {
+  JobSettings s = small("cornell-area");
+  s.spp = "16";
+  const RenderJob whole(s, load_job_scene(s));
+  s.spp_range = "8:16";
+  s.tile = "1/2";
+  const RenderJob part(s, load_job_scene(s));
+  EXPECT_TRUE(whole.identity() == part.identity());
+  s.seed = "1";
+  const RenderJob other(s, load_job_scene(s));
+  EXPECT_FALSE(whole.identity() == other.identity());
+}
+
+}  // namespace
+}  // namespace tritrace
