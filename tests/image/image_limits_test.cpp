@@ -147,8 +147,8 @@ TEST(ExrHeader, FileTooShortForItsDataWindowIsAnError) {
 }
 
 TEST(ExrHeader, ReadImageFloatNamesTheFile) {
-  const fs::path path = fs::temp_directory_path() /
-                        ("tritrace-limits-" + std::to_string(::getpid()) + "-short.exr");
+  const fs::path path =
+      fs::temp_directory_path() / ("tritrace-limits-" + std::to_string(::getpid()) + "-short.exr");
   {
     const std::string bytes = exr_with_data_window(16383, 16383);
     std::ofstream(path, std::ios::binary) << bytes;

@@ -15,8 +15,8 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
-#include <cmath>
 #include <openexr.h>
+#include <cmath>
 
 #include "stb_image.h"
 #include "stb_image_write.h"
@@ -138,7 +138,8 @@ namespace {
 std::vector<uint8_t> read_file_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path, "cannot read image: cannot open the file");
-  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
   if (in.bad()) throw Error(path, "cannot read image: reading failed");
   return bytes;
 }
@@ -167,8 +168,8 @@ struct ExrCoreStream {
   std::string message;
 };
 
-int64_t exr_core_read(exr_const_context_t, void* user, void* buffer, uint64_t size,
-                      uint64_t offset, exr_stream_error_func_ptr_t) {
+int64_t exr_core_read(exr_const_context_t, void* user, void* buffer, uint64_t size, uint64_t offset,
+                      exr_stream_error_func_ptr_t) {
   const auto* stream = static_cast<const ExrCoreStream*>(user);
   if (offset >= stream->bytes.size()) return 0;
   const uint64_t n = std::min<uint64_t>(size, stream->bytes.size() - offset);
@@ -207,16 +208,16 @@ void check_exr_header(std::span<const uint8_t> bytes, const std::string& subject
   if (result == EXR_ERR_SUCCESS) result = exr_get_chunk_count(context, 0, &chunks);
   exr_finish(&context);
   if (result != EXR_ERR_SUCCESS) {
-    std::string reason = stream.message.empty() ? exr_get_default_error_message(result)
-                                                : stream.message;
+    std::string reason =
+        stream.message.empty() ? exr_get_default_error_message(result) : stream.message;
     std::replace(reason.begin(), reason.end(), '\n', ' ');
     throw Error(subject, "cannot read image: " + reason);
   }
   const int64_t width = int64_t{window.max.x} - window.min.x + 1;
   const int64_t height = int64_t{window.max.y} - window.min.y + 1;
   check_image_sides(width, height, subject);
-  const uint64_t needed = 8 * static_cast<uint64_t>(std::max(chunks, 0)) +
-                          least_bytes_for_pixels(width, height);
+  const uint64_t needed =
+      8 * static_cast<uint64_t>(std::max(chunks, 0)) + least_bytes_for_pixels(width, height);
   check_file_holds_pixels(width, height, needed, bytes.size(), subject);
 }
 

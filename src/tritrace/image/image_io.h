@@ -2,11 +2,11 @@
 // OpenEXR (float or half, with AOV layers), chosen by the file's extension; every write is atomic.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <span>
 #include <string>
 #include <string_view>
-#include <cstdint>
 #include <vector>
 
 #include "tritrace/image/exr.h"

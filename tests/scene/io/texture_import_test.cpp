@@ -222,7 +222,8 @@ TEST_F(TexturedFiles, GltfEmbeddedTextureWithALyingHeaderIsAnError) {
     "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
     "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
     "textures": [{"source": 0}],
-    "images": [{"uri": "data:image/png;base64,)" + base64(lying_png()) + R"("}],
+    "images": [{"uri": "data:image/png;base64,)" +
+                           base64(lying_png()) + R"("}],
     "buffers": [{"byteLength": 60, "uri": "data:application/octet-stream;base64,)" +
                            base64(buffer) + R"("}],
     "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
