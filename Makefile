@@ -1,7 +1,10 @@
 # Wraps CMake so that two commands do everything on a fresh Debian 12 machine:
-#   make run   installs missing packages, builds Release, renders out/cornell.png
-#   make test  the same set-up, then the whole test suite through ctest
-# CMake stays the real build; BUILD_DIR and CMAKE_FLAGS can be overridden.
+#   make run   installs missing packages, builds the tritrace command (Release), renders
+#              out/cornell.png
+#   make test  the same set-up and flags in the same build folder, so it reuses what `make run`
+#              compiled and builds the rest (tests, viewer, Python module, benchmarks), then runs
+#              the whole test suite through ctest
+# CMake stays the real build; BUILD_DIR, CMAKE_FLAGS and WERROR can be overridden.
 #   make test-asan  the test suite built with AddressSanitizer + UndefinedBehaviorSanitizer
 #   make test-tsan  the multi-threaded tests built with ThreadSanitizer
 #   make test-portable  the BVH, renderer and kernel tests built for any AVX2 CPU (x86-64-v3)
@@ -16,13 +19,16 @@ ASAN_DIR ?= build-asan
 TSAN_DIR ?= build-tsan
 PORTABLE_DIR ?= build-portable
 PREFIX ?= /usr/local
-# -Werror where the project asks for it: every test target (and so CI) configures with it, while
-# TRITRACE_WERROR defaults to OFF for a plain CMake build, so that a newer compiler's new warning
-# does not stop a user's build. `make run` and `make build` pass nothing, so build/'s cache decides:
-# off in a fresh folder, and still on after a `make test` there (that build passed with it, so
-# keeping it costs nothing, while switching it back and forth would recompile everything each
-# time). `make CMAKE_FLAGS=-DTRITRACE_WERROR=OFF run` turns it off again.
-WERROR = -DTRITRACE_WERROR=ON
+# -Werror (TRITRACE_WERROR) in BUILD_DIR: `make run`, `make build` and `make test` configure it
+# with the same flags, so none of them recompiles what another compiled. WERROR empty (the
+# default) passes nothing and build/'s cache decides: off in a fresh folder, so that a newer
+# compiler's new warning does not stop a user's build. `make WERROR=ON test` turns it on, as CI
+# does in its own folder (.ci/run); the sanitizer and portable builds, in their own folders, always
+# have it.
+WERROR ?=
+WERROR_FLAG = $(if $(WERROR),-DTRITRACE_WERROR=$(WERROR))
+CONFIGURE = cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release $(WERROR_FLAG) $(CMAKE_FLAGS) \
+  >/dev/null
 # Sanitized builds: optimised (the tests trace millions of rays) with debug info for reports; no
 # benchmarks.
 # MPI is left out: Open MPI dlcloses its components in MPI_Finalize, so LeakSanitizer reports their
@@ -34,7 +40,7 @@ WERROR = -DTRITRACE_WERROR=ON
 # object is half the size, which shortens the links too.
 SANITIZE_FLAGS = -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRITRACE_BUILD_BENCH=OFF -DTRITRACE_WITH_MPI=OFF \
   "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" \
-  $(WERROR)
+  -DTRITRACE_WERROR=ON
 # UBSan's `undefined` group leaves out float-cast-overflow (a float-to-int cast of a value out of
 # the int's range, inf or NaN: undefined behaviour), so it is named as well.
 # Left out under ASan: this test feeds libassimp a file that crashes it, on purpose, in the isolated
@@ -48,16 +54,17 @@ ASAN_EXCLUDE = CliTest.ModelThatCrashesTheImporterIsAnError
 # force, the BVH's packet path and Embree's three modes; the threads it runs; whole images), the
 # parallel SAH and Morton builds (serial against parallel) and the Embree
 # backend, whose build runs on TBB threads; the wide BVH's build (BvhInvariants.*) and the path
-# tracer's multi-threaded renders (PathRender.*).
-TSAN_TESTS = Renderer.*:Placements/*:BinnedSahBuilder.ParallelBuildMakesTheSerialTree:MortonBuilder.ParallelBuildMakesTheSerialTree:Modes/EmbreeVsBrute.*:EmbreeAccel.*:BvhInvariants.*:PathRender.*
-# They live in seven test files, which tests/CMakeLists.txt builds alone as tritrace_tsan_tests.
+# tracer's multi-threaded renders (PathRender.*); and a race between two sibling tasks, which TSan
+# must report (ParallelTsan.*, tests/parallel/parallel_tsan_test.cpp).
+TSAN_TESTS = ParallelTsan.*:Renderer.*:Placements/*:BinnedSahBuilder.ParallelBuildMakesTheSerialTree:MortonBuilder.ParallelBuildMakesTheSerialTree:Modes/EmbreeVsBrute.*:EmbreeAccel.*:BvhInvariants.*:PathRender.*
+# They live in eight test files, which tests/CMakeLists.txt builds alone as tritrace_tsan_tests.
 
 # The portable build (TRITRACE_NATIVE=OFF: -march=x86-64-v3, AVX2) compiles the AVX2 code paths,
 # which a -march=native build on an AVX-512 machine does not; only the test binary is built, and
 # only the tests of the code that differs between the two run: BVH build and traversal, kernels,
 # leak counts, the lab integrator and the renderer.
 PORTABLE_FLAGS = -DCMAKE_BUILD_TYPE=Release -DTRITRACE_NATIVE=OFF -DTRITRACE_BUILD_BENCH=OFF \
-  -DTRITRACE_VIEWER=OFF $(WERROR)
+  -DTRITRACE_VIEWER=OFF -DTRITRACE_WERROR=ON
 PORTABLE_TESTS = *Bvh*:*BinnedSah*:*BruteForce*:*Kernel*:*Leak*:ClosedMeshes.*:*Lab*:*Renderer*:Placements/*:BlockKernels.*:*FarCamera*:TranslatedScene.*:RaysFromTriangles.*:Default*:*DefaultLab*:Path*:*WhiteFurnace*:*Sampler*:Sobol*:OffsetRayOrigin.*
 
 .PHONY: all deps configure build run test test-asan test-tsan test-portable leaks bench format \
@@ -69,18 +76,18 @@ deps:
 	@./scripts/install-deps.sh
 
 configure: deps
-	@cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
+	@$(CONFIGURE)
 
 build: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS)
 
-run: build
+# Only the command it runs (tritrace_cli is the target of the tritrace binary).
+run: configure
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target tritrace_cli
 	@mkdir -p out
 	@$(BUILD_DIR)/tritrace render -o out/cornell.png
 
-test: deps
-	@cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release $(WERROR) $(CMAKE_FLAGS) >/dev/null
-	@cmake --build $(BUILD_DIR) -j $(JOBS)
+test: build
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
 test-asan: deps
@@ -127,4 +134,4 @@ lint: configure
 	@git ls-files 'src/*.cpp' 'apps/*.cpp' | xargs clang-tidy -p $(BUILD_DIR) --quiet
 
 clean:
-	@rm -rf $(BUILD_DIR) $(ASAN_DIR) $(TSAN_DIR) $(PORTABLE_DIR) out
+	@rm -rf $(BUILD_DIR) build-ci $(ASAN_DIR) $(TSAN_DIR) $(PORTABLE_DIR) out

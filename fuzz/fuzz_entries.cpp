@@ -1,5 +1,5 @@
 // Load, then render tiny, so that whatever the loaders let through also meets the camera, the
-// accelerator and the integrator.
+// accelerator and the integrator; images (HDR, EXR) are only decoded.
 #include "fuzz_entries.h"
 
 #include <array>
@@ -9,6 +9,7 @@
 
 #include "tritrace/accel/brute_force.h"
 #include "tritrace/error.h"
+#include "tritrace/image/image_io.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/io/scene_file.h"
@@ -75,6 +76,20 @@ void mesh_memory_one_input(const uint8_t* data, size_t size, bool isolate_assimp
     small.width = kSide;
     small.height = kSide;
     render_tiny(scene_from_mesh(mesh, small).scene);
+  } catch (const Error&) {
+  }
+}
+
+void hdr_image_one_input(const uint8_t* data, size_t size) {
+  try {
+    (void)decode_radiance_hdr(std::span(data, size), "fuzz.hdr");
+  } catch (const Error&) {
+  }
+}
+
+void exr_image_one_input(const uint8_t* data, size_t size) {
+  try {
+    (void)decode_exr_image(std::span(data, size), "fuzz.exr");
   } catch (const Error&) {
   }
 }

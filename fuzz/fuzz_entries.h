@@ -18,4 +18,10 @@ void scene_json_one_input(const uint8_t* data, size_t size);
 // this process, where libFuzzer sees assimp's coverage (the fuzzer).
 void mesh_memory_one_input(const uint8_t* data, size_t size, bool isolate_assimp);
 
+// The bytes are a Radiance HDR file, decoded as an environment map's file is.
+void hdr_image_one_input(const uint8_t* data, size_t size);
+
+// The bytes are an OpenEXR file, decoded as an environment map's file is.
+void exr_image_one_input(const uint8_t* data, size_t size);
+
 }  // namespace tritrace::fuzz

@@ -1,5 +1,6 @@
 // Replays saved fuzzer inputs through the same entry points, in the normal build and under ctest:
-// `tritrace_fuzz_replay scene_json|mesh_memory FILE_OR_FOLDER...`. Passing means no crash.
+// `tritrace_fuzz_replay TARGET FILE_OR_FOLDER...`, TARGET one of scene_json, mesh_memory,
+// hdr_image, exr_image. Passing means no crash.
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -12,13 +13,37 @@
 
 namespace fs = std::filesystem;
 
+namespace {
+
+void mesh_memory_isolated(const uint8_t* data, size_t size) {
+  tritrace::fuzz::mesh_memory_one_input(data, size, /*isolate_assimp=*/true);
+}
+
+struct Target {
+  const char* name;
+  void (*one_input)(const uint8_t*, size_t);
+};
+
+constexpr Target kTargets[] = {
+    {"scene_json", tritrace::fuzz::scene_json_one_input},
+    {"mesh_memory", mesh_memory_isolated},
+    {"hdr_image", tritrace::fuzz::hdr_image_one_input},
+    {"exr_image", tritrace::fuzz::exr_image_one_input},
+};
+
+}  // namespace
+
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: %s scene_json|mesh_memory FILE_OR_FOLDER...\n", argv[0]);
+    std::fprintf(stderr, "usage: %s scene_json|mesh_memory|hdr_image|exr_image FILE_OR_FOLDER...\n",
+                 argv[0]);
     return 2;
   }
-  const bool scene = std::strcmp(argv[1], "scene_json") == 0;
-  if (!scene && std::strcmp(argv[1], "mesh_memory") != 0) {
+  const Target* target = nullptr;
+  for (const Target& t : kTargets) {
+    if (std::strcmp(argv[1], t.name) == 0) target = &t;
+  }
+  if (target == nullptr) {
     std::fprintf(stderr, "unknown target '%s'\n", argv[1]);
     return 2;
   }
@@ -35,12 +60,7 @@ int main(int argc, char** argv) {
   for (const fs::path& f : files) {
     std::ifstream in(f, std::ios::binary);
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const auto* data = reinterpret_cast<const uint8_t*>(bytes.data());
-    if (scene) {
-      tritrace::fuzz::scene_json_one_input(data, bytes.size());
-    } else {
-      tritrace::fuzz::mesh_memory_one_input(data, bytes.size(), /*isolate_assimp=*/true);
-    }
+    target->one_input(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size());
   }
   std::printf("replayed %zu inputs\n", files.size());
   return files.empty() ? 1 : 0;

@@ -1,9 +1,12 @@
 // Parallel loops, reductions and task groups over TBB whose hand-overs of work ThreadSanitizer can
 // follow. Debian's libtbb.so is not built with TSan, so TSan cannot see TBB hand a task to another
 // thread, nor a waiting thread learn that the tasks finished, and reports races between a task and
-// the code before the hand-over or after the wait. Here, in a TSan build, every hand-over releases
-// and every task acquires first (and the reverse at the end), as TBB guarantees; otherwise these
-// are plain TBB task groups. Races between tasks that run at the same time are still reported.
+// the code before the hand-over or after the wait. Here, in a TSan build, each task gets its own
+// synchronisation address: the thread that hands it over releases it and the task acquires it
+// first; each task releases its group's address when it ends, and wait() acquires that. These are
+// exactly the edges TBB guarantees, and no more: sibling tasks are not ordered with each other,
+// so TSan reports a race between two of them even when one ran after the other had finished
+// (tests/parallel/parallel_tsan_test.cpp). Otherwise these are plain TBB task groups.
 //
 // Everything is built on tbb::task_group rather than parallel_for / parallel_reduce: TBB's loops
 // keep their completion count on the caller's stack and a worker still reads it after its last
@@ -17,6 +20,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <memory>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -36,19 +40,15 @@ extern "C" void __tsan_release(void* addr);
 namespace tritrace::parallel {
 namespace detail {
 
-// One address for every hand-over: a task acquires what every earlier release published, which
-// is at least what TBB guarantees to it.
-inline char handover = 0;
-
-inline void release() {
+inline void release([[maybe_unused]] const void* address) {
 #ifdef TRITRACE_TSAN
-  __tsan_release(&handover);
+  __tsan_release(const_cast<void*>(address));
 #endif
 }
 
-inline void acquire() {
+inline void acquire([[maybe_unused]] const void* address) {
 #ifdef TRITRACE_TSAN
-  __tsan_acquire(&handover);
+  __tsan_acquire(const_cast<void*>(address));
 #endif
 }
 
@@ -84,36 +84,54 @@ class TaskGroup {
 
   template <typename F>
   void run(F&& f) {
-    group_.run(Task<std::decay_t<F>>(std::forward<F>(f)));
+    group_.run(Task<std::decay_t<F>>(std::forward<F>(f), &done_));
   }
   void wait() {
     group_.wait();
-    detail::acquire();
+    detail::acquire(&done_);
   }
 
  private:
-  // TBB moves the task into its own memory on the spawning thread, so the move releases after it;
-  // the thread that runs it acquires before reading it.
+  // TBB moves the task into its own memory on the spawning thread, so each move or copy releases
+  // the task's own address after it; the thread that runs it acquires that address before reading
+  // it, and releases the group's when it has finished.
   template <typename F>
   class Task {
    public:
-    explicit Task(F f) : fn_(std::move(f)) {}
-    Task(Task&& other) noexcept : fn_(std::move(other.fn_)) { detail::release(); }
-    Task(const Task& other) : fn_(other.fn_) { detail::release(); }
+    Task(F f, const char* done) : fn_(std::move(f)), done_(done) {}
+    Task(Task&& other) noexcept
+        : fn_(std::move(other.fn_)), done_(other.done_), token_(std::move(other.token_)) {
+      detail::release(token_.get());
+    }
+    Task(const Task& other) : fn_(other.fn_), done_(other.done_), token_(other.token_) {
+      detail::release(token_.get());
+    }
     Task& operator=(const Task&) = delete;
     Task& operator=(Task&&) = delete;
     ~Task() = default;
 
     void operator()() const {
-      detail::acquire();
+      detail::acquire(token_.get());
       fn_();
-      detail::release();
+      detail::release(done_);
     }
 
    private:
     F fn_;
+    const char* done_;
+#ifdef TRITRACE_TSAN
+    // The task's synchronisation address, shared by its copies (TSan builds only).
+    std::shared_ptr<const char> token_ = std::make_shared<const char>(0);
+#else
+    // No address without TSan: release and acquire do nothing.
+    struct NoToken {
+      const void* get() const { return nullptr; }
+    } token_;
+#endif
   };
   tbb::task_group group_;
+  // The address every task of this group releases when it ends, and wait() acquires.
+  char done_ = 0;
 };
 
 // body(const blocked_range&) over chunks of `range` (at least its grain size each) in parallel.

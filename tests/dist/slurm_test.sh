@@ -3,8 +3,11 @@
 # with a generated slurm.conf in a temporary folder (private ports, state and logs), then the job
 # array of scripts/slurm (tile parts, then sample ranges) with its dependent merge job; the merged
 # images must equal the one-process render byte for byte. Every daemon is stopped on exit. Exits 77
-# (ctest's skip) with one line where it cannot run: not root, or Slurm/munge not installed.
+# (ctest's skip) with one line where it cannot run: not root, Slurm/munge not installed, or a
+# hostname that does not resolve (a minimal container or chroot: slurmctld and slurmd find the node
+# by that name, and without it sinfo would only time out).
 # Usage: slurm_test.sh TRITRACE SCRIPTS_SLURM_DIR
+# SLURM_TEST_HOST replaces `hostname -s` as the node's name (to check the skip with a bogus name).
 set -euo pipefail
 cli=$1
 scripts=$(cd "$2" && pwd)
@@ -12,6 +15,10 @@ case "$cli" in */*) cli=$(readlink -f "$cli") ;; esac
 skip() { echo "slurm_test: skipped: $*"; exit 77; }
 fail() { echo "slurm_test: $*" >&2; exit 1; }
 trap 'echo "slurm_test: failed at line $LINENO" >&2' ERR
+host=${SLURM_TEST_HOST:-$(hostname -s)}
+# The same lookup (NSS, getaddrinfo) that the daemons make; timeout bounds a slow resolver.
+timeout 5 getent hosts "$host" >/dev/null ||
+  skip "this machine's hostname '$host' does not resolve (getent hosts), and slurmctld and slurmd need it"
 [ "$(id -u)" -eq 0 ] || skip "needs root to start slurmd and munged"
 for tool in munged slurmctld slurmd sbatch squeue sacct scontrol; do
   command -v "$tool" >/dev/null || skip "$tool is not installed (scripts/install-deps.sh)"
@@ -54,7 +61,6 @@ free_port() {
 ctld_port=$(free_port)
 d_port=$(free_port)
 [ "$ctld_port" != "$d_port" ] || d_port=$((d_port + 1))
-host=$(hostname -s)
 cpus=$(nproc)
 
 mkdir -p "$dir/munge" "$dir/state" "$dir/spool" "$dir/parts" "$dir/out"
@@ -105,9 +111,10 @@ pids+=($!)
 slurmd -D -f "$SLURM_CONF" -N "$host" >"$dir/slurmd.out" 2>&1 &
 pids+=($!)
 
-# Wait (at most 30 s) for the node to be idle.
-for _ in $(seq 150); do
-  state=$(sinfo -h -n "$host" -o %t 2>/dev/null || true)
+# Wait (at most 30 s, however long each sinfo takes) for the node to be idle.
+deadline=$((SECONDS + 30))
+while [ "$SECONDS" -lt "$deadline" ]; do
+  state=$(timeout 5 sinfo -h -n "$host" -o %t 2>/dev/null || true)
   [ "$state" = "idle" ] && break
   sleep 0.2
 done

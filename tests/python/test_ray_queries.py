@@ -1,9 +1,7 @@
 # Accel.intersect and Accel.occluded: hits on the lab box computed by hand, an independent
 # double-precision ray/triangle test on many rays, every accel giving the same hits bit for bit,
 # the CLI's depth, normal and albedo images of the same camera rays, broadcasting and shapes, and
-# inputs read in place when they are float32 already.
-import tracemalloc
-
+# result memory reused once released.
 import numpy as np
 import pytest
 
@@ -222,23 +220,27 @@ def test_any_real_dtype_or_layout_gives_the_hits_of_its_float32_values(accel):
     np.testing.assert_array_equal(ints.prim, floats.prim)
 
 
-def test_float32_inputs_are_read_in_place_and_others_converted_once(accel):
-    n = 1 << 20
+def test_result_memory_is_reused_once_released_and_never_while_alive(accel):
+    # The accel keeps released result buffers for its next queries (BufferCache): after the
+    # results of one query are freed, the next query of the same size, float32 or converted from
+    # float64, gets the same memory back; while results are alive, a query gets other memory.
+    n = 1 << 16
     rng = np.random.default_rng(4)
     o32 = rng.uniform(-0.9, 0.9, (n, 3)).astype(np.float32)
     d32 = rng.normal(size=(n, 3)).astype(np.float32)
-    outputs = 4 * 4 * n  # t, prim, u, v
-    accel.intersect(o32[:10], d32[:10])  # any first-call set-up outside the measurement
 
-    def peak(o, d):
-        tracemalloc.start()
-        tracemalloc.reset_peak()
-        hits = accel.intersect(o, d)
-        peak = tracemalloc.get_traced_memory()[1]
-        tracemalloc.stop()
-        del hits
-        return peak
+    def addresses(hits):
+        return {a.__array_interface__["data"][0] for a in (hits.t, hits.prim, hits.u, hits.v)}
 
-    assert peak(o32, d32) < outputs + (1 << 20)
-    # float64: one float32 copy of each input (12 bytes per ray each), nothing more.
-    assert peak(o32.astype(np.float64), d32.astype(np.float64)) < outputs + 2 * 12 * n + (1 << 20)
+    first = accel.intersect(o32, d32)
+    used = addresses(first)
+    expected_t = first.t.copy()
+    alive = accel.intersect(o32, d32)
+    assert addresses(alive).isdisjoint(used)
+    del first
+    for o, d in ((o32, d32), (o32.astype(np.float64), d32.astype(np.float64))):
+        again = accel.intersect(o, d)
+        assert addresses(again) == used
+        np.testing.assert_array_equal(again.t, expected_t)
+        del again
+    np.testing.assert_array_equal(alive.t, expected_t)

@@ -4,20 +4,26 @@
 #include <algorithm>
 #include <bit>
 #include <cctype>
+#include <climits>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
+#include <openexr.h>
 #include <cmath>
 
 #include "stb_image.h"
 #include "stb_image_write.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
+#include "tritrace/image/exr_memory_stream.h"
+#include "tritrace/image/image_limits.h"
 
 namespace tritrace {
 namespace {
@@ -129,6 +135,15 @@ Rgb8Image read_image_rgb8(const std::string& path) {
 
 namespace {
 
+std::vector<uint8_t> read_file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path, "cannot read image: cannot open the file");
+  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
+  if (in.bad()) throw Error(path, "cannot read image: reading failed");
+  return bytes;
+}
+
 std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
@@ -136,27 +151,114 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
-Image read_hdr(const std::string& path) {
+// The least bytes stb_image's Radiance reader consumes for width x height pixels: a flat scanline
+// is 4 bytes a pixel; a run-length encoded one (widths 8 to 32767) a 4-byte header, then for each
+// of its 4 components at least one 2-byte run per 127 pixels.
+uint64_t least_radiance_bytes(int64_t width, int64_t height) {
+  const auto w = static_cast<uint64_t>(width);
+  uint64_t line = 4 * w;
+  if (width >= 8 && width < 32768) line = std::min(line, 4 + 4 * 2 * ((w + 126) / 127));
+  return line * static_cast<uint64_t>(height);
+}
+
+// Errors from OpenEXR's core library: the message, kept for the exception, instead of its default
+// print to stderr.
+struct ExrCoreStream {
+  std::span<const uint8_t> bytes;
+  std::string message;
+};
+
+int64_t exr_core_read(exr_const_context_t, void* user, void* buffer, uint64_t size, uint64_t offset,
+                      exr_stream_error_func_ptr_t) {
+  const auto* stream = static_cast<const ExrCoreStream*>(user);
+  if (offset >= stream->bytes.size()) return 0;
+  const uint64_t n = std::min<uint64_t>(size, stream->bytes.size() - offset);
+  std::memcpy(buffer, stream->bytes.data() + offset, n);
+  return static_cast<int64_t>(n);
+}
+
+int64_t exr_core_size(exr_const_context_t, void* user) {
+  return static_cast<int64_t>(static_cast<const ExrCoreStream*>(user)->bytes.size());
+}
+
+void exr_core_error(exr_const_context_t context, exr_result_t, const char* message) {
+  void* user = nullptr;
+  if (exr_get_user_data(context, &user) == EXR_ERR_SUCCESS && user != nullptr) {
+    auto* stream = static_cast<ExrCoreStream*>(user);
+    if (stream->message.empty()) stream->message = message;
+  }
+}
+
+// Reads the header with OpenEXR's core library, which checks every attribute against the file's
+// size, then the data window against kMaxImageSide and the file's size: the chunk offset table (8
+// bytes a chunk) and kMaxPixelsPerFileByte. Imf::InputFile sizes its line buffers from the header,
+// so this runs before it is made.
+void check_exr_header(std::span<const uint8_t> bytes, const std::string& subject) {
+  ExrCoreStream stream{bytes, {}};
+  exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+  init.error_handler_fn = exr_core_error;
+  init.user_data = &stream;
+  init.read_fn = exr_core_read;
+  init.size_fn = exr_core_size;
+  exr_context_t context = nullptr;
+  exr_result_t result = exr_start_read(&context, subject.c_str(), &init);
+  exr_attr_box2i_t window{};
+  int32_t chunks = 0;
+  if (result == EXR_ERR_SUCCESS) result = exr_get_data_window(context, 0, &window);
+  if (result == EXR_ERR_SUCCESS) result = exr_get_chunk_count(context, 0, &chunks);
+  exr_finish(&context);
+  if (result != EXR_ERR_SUCCESS) {
+    std::string reason =
+        stream.message.empty() ? exr_get_default_error_message(result) : stream.message;
+    std::replace(reason.begin(), reason.end(), '\n', ' ');
+    throw Error(subject, "cannot read image: " + reason);
+  }
+  const int64_t width = int64_t{window.max.x} - window.min.x + 1;
+  const int64_t height = int64_t{window.max.y} - window.min.y + 1;
+  check_image_sides(width, height, subject);
+  const uint64_t needed =
+      8 * static_cast<uint64_t>(std::max(chunks, 0)) + least_bytes_for_pixels(width, height);
+  check_file_holds_pixels(width, height, needed, bytes.size(), subject);
+}
+
+}  // namespace
+
+Image decode_radiance_hdr(std::span<const uint8_t> bytes, const std::string& subject) {
+  if (bytes.size() > static_cast<size_t>(INT_MAX)) {
+    throw Error(subject, "cannot read image: the file is too large");
+  }
+  const auto* data = bytes.data();
+  const int size = static_cast<int>(bytes.size());
+  if (!stbi_is_hdr_from_memory(data, size)) {
+    throw Error(subject, "cannot read image: not a Radiance HDR file");
+  }
   int w = 0, h = 0, channels = 0;
-  float* data = stbi_loadf(path.c_str(), &w, &h, &channels, 3);
-  if (!data) throw Error(path, std::string("cannot read image: ") + stbi_failure_reason());
+  if (!stbi_info_from_memory(data, size, &w, &h, &channels)) {
+    throw Error(subject, std::string("cannot read image: ") + stbi_failure_reason());
+  }
+  check_image_sides(w, h, subject);
+  check_file_holds_pixels(w, h, least_radiance_bytes(w, h), bytes.size(), subject);
+  float* pixels = stbi_loadf_from_memory(data, size, &w, &h, &channels, 3);
+  if (!pixels) throw Error(subject, std::string("cannot read image: ") + stbi_failure_reason());
   Image image(w, h);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
-      const float* p = data + (static_cast<size_t>(y) * static_cast<size_t>(w) + x) * 3;
+      const float* p = pixels + (static_cast<size_t>(y) * static_cast<size_t>(w) + x) * 3;
       image.at(x, y) = glm::vec3(p[0], p[1], p[2]);
     }
   }
-  stbi_image_free(data);
+  stbi_image_free(pixels);
   return image;
 }
 
-Image read_exr(const std::string& path) {
+Image decode_exr_image(std::span<const uint8_t> bytes, const std::string& subject) {
+  check_exr_header(bytes, subject);
   try {
-    Imf::InputFile file(path.c_str());
+    ExrMemoryInputStream in(bytes, subject.c_str());
+    Imf::InputFile file(in);
     const Imath::Box2i window = file.header().dataWindow();
     const int w = window.max.x - window.min.x + 1, h = window.max.y - window.min.y + 1;
-    if (w <= 0 || h <= 0) throw Error(path, "EXR image without pixels");
+    check_image_sides(w, h, subject);
     const Imf::ChannelList& channels = file.header().channels();
     const bool luminance_only = !channels.findChannel("R") && !channels.findChannel("G") &&
                                 !channels.findChannel("B") && channels.findChannel("Y");
@@ -185,11 +287,9 @@ Image read_exr(const std::string& path) {
   } catch (const std::exception& e) {
     std::string reason = e.what();
     std::replace(reason.begin(), reason.end(), '\n', ' ');
-    throw Error(path, "cannot read image: " + reason);
+    throw Error(subject, "cannot read image: " + reason);
   }
 }
-
-}  // namespace
 
 Image read_image_float(const std::string& path) {
   const std::string ext = lower_extension(path);
@@ -198,7 +298,8 @@ Image read_image_float(const std::string& path) {
                           std::string(kFloatImageExtensions) + ")");
   }
   if (!std::filesystem::is_regular_file(path)) throw Error(path, "cannot read image: no such file");
-  Image image = ext == ".hdr" ? read_hdr(path) : read_exr(path);
+  const std::vector<uint8_t> bytes = read_file_bytes(path);
+  Image image = ext == ".hdr" ? decode_radiance_hdr(bytes, path) : decode_exr_image(bytes, path);
   for (const glm::vec3& c : image.pixels()) {
     for (int k = 0; k < 3; ++k) {
       if (!std::isfinite(c[k]) || c[k] < 0.0f) {

@@ -2,6 +2,7 @@
 // OpenEXR (float or half, with AOV layers), chosen by the file's extension; every write is atomic.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <span>
 #include <string>
@@ -64,6 +65,12 @@ Rgb8Image read_image_rgb8(const std::string& path);
 // for all three when it has only luminance). Throws Error(path, reason) for another extension, an
 // unreadable file, or a non-finite or negative value.
 Image read_image_float(const std::string& path);
+
+// read_image_float's two readers, on a file's bytes (the fuzz targets call them). Each checks the
+// header first (image/image_limits.h): sides within kMaxImageSide and a file long enough for its
+// pixels, before allocating them. Throw Error(subject, reason). Values are not checked here.
+Image decode_radiance_hdr(std::span<const uint8_t> bytes, const std::string& subject);
+Image decode_exr_image(std::span<const uint8_t> bytes, const std::string& subject);
 
 // The extensions read_image_float knows, as error messages list them.
 inline constexpr std::string_view kFloatImageExtensions = ".hdr or .exr";

@@ -8,6 +8,7 @@
 
 #include "stb_image.h"
 #include "tritrace/error.h"
+#include "tritrace/image/image_limits.h"
 
 namespace tritrace {
 namespace {
@@ -79,9 +80,11 @@ TextureImage decode_texture_image(std::span<const uint8_t> bytes, const std::str
   if (!stbi_info_from_memory(bytes.data(), static_cast<int>(bytes.size()), &w, &h, &channels)) {
     throw Error(subject, std::string("cannot read texture: ") + stbi_failure_reason());
   }
-  if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > kMaxTextureTexels) {
-    throw Error(subject, "cannot read texture: " + std::to_string(w) + " x " + std::to_string(h) +
-                             " texels is too large");
+  try {
+    check_image_sides(w, h, subject);
+    check_file_holds_pixels(w, h, least_bytes_for_pixels(w, h), bytes.size(), subject);
+  } catch (const Error& e) {
+    throw Error(subject, "cannot read texture: " + e.reason());
   }
   uint8_t* data =
       stbi_load_from_memory(bytes.data(), static_cast<int>(bytes.size()), &w, &h, &channels, 3);

@@ -52,9 +52,9 @@ class Texture {
 };
 
 // Decodes an image file's bytes (PNG, JPEG, BMP, TGA ... through stb_image) to 8-bit RGB. Throws
-// Error(subject, "cannot read texture: <reason>") for bytes it cannot decode or an image larger
-// than kMaxTextureTexels.
-inline constexpr int64_t kMaxTextureTexels = int64_t{1} << 28;
+// Error(subject, "cannot read texture: <reason>") for bytes it cannot decode, a side longer than
+// kMaxImageSide, a header whose pixels the bytes are too few to hold (image/image_limits.h; both
+// checked before decoding).
 TextureImage decode_texture_image(std::span<const uint8_t> bytes, const std::string& subject);
 
 }  // namespace tritrace

@@ -186,6 +186,76 @@ TEST_F(TexturedFiles, MissingTextureIsAnErrorNamingTheFile) {
   }
 }
 
+std::string base64(const std::string& bytes) {
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    uint32_t n = static_cast<uint8_t>(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) n |= static_cast<uint8_t>(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) n |= static_cast<uint8_t>(bytes[i + 2]);
+    out += kAlphabet[(n >> 18) & 63];
+    out += kAlphabet[(n >> 12) & 63];
+    out += i + 1 < bytes.size() ? kAlphabet[(n >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? kAlphabet[n & 63] : '=';
+  }
+  return out;
+}
+
+// A PNG signature and IHDR chunk claiming 16384 x 16384 RGB texels, in 100 bytes: the header
+// check refuses it (16384 bytes at least) before stb_image allocates anything.
+std::string lying_png() {
+  auto be32 = [](uint32_t v) {
+    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16),
+                       static_cast<char>(v >> 8), static_cast<char>(v)};
+  };
+  const std::string png = std::string("\x89PNG\r\n\x1a\n", 8) + be32(13) + "IHDR" + be32(16384) +
+                          be32(16384) + std::string("\x08\x02\x00\x00\x00", 5) + be32(0);
+  return png + std::string(100 - png.size(), '\0');
+}
+
+TEST_F(TexturedFiles, GltfEmbeddedTextureWithALyingHeaderIsAnError) {
+  // One triangle with texture coordinates; its base colour texture is a data URI.
+  const float geometry[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1};
+  const std::string buffer(reinterpret_cast<const char*>(geometry), sizeof(geometry));
+  const std::string gltf = R"({"asset": {"version": "2.0"}, "scene": 0,
+    "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+    "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
+    "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+    "textures": [{"source": 0}],
+    "images": [{"uri": "data:image/png;base64,)" +
+                           base64(lying_png()) + R"("}],
+    "buffers": [{"byteLength": 60, "uri": "data:application/octet-stream;base64,)" +
+                           base64(buffer) + R"("}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                    {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+    "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                   "min": [0, 0, 0], "max": [1, 1, 0]},
+                  {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}]})";
+  const std::string path = file("lying.gltf", gltf);
+  try {
+    (void)import_mesh_file(path);
+    FAIL() << "imported a model whose embedded texture claims 16384 x 16384 texels in 100 bytes";
+  } catch (const Error& e) {
+    EXPECT_NE(e.subject().find("lying.gltf"), std::string::npos) << e.subject();
+    EXPECT_NE(e.subject().find("embedded texture"), std::string::npos) << e.subject();
+    EXPECT_NE(e.reason().find("16384 bytes"), std::string::npos) << e.reason();
+    EXPECT_EQ(e.reason().find('\n'), std::string::npos) << e.reason();
+  }
+}
+
+TEST_F(TexturedFiles, ObjTextureWithALyingHeaderIsAnError) {
+  file("big.png", lying_png());
+  file("quad.mtl", "newmtl m\nKd 1 1 1\nmap_Kd big.png\n");
+  const std::string obj = file("quad.obj", quad_obj("quad.mtl"));
+  try {
+    (void)import_mesh_file(obj);
+    FAIL() << "imported a model whose texture claims 16384 x 16384 texels in 100 bytes";
+  } catch (const Error& e) {
+    EXPECT_NE(e.subject().find("big.png"), std::string::npos) << e.subject();
+    EXPECT_NE(e.reason().find("16384 bytes"), std::string::npos) << e.reason();
+  }
+}
+
 TEST_F(TexturedFiles, JsonAlbedoTextureIsReadOnceAndShared) {
   file("t.ppm", ppm(2, 1, {255, 0, 0, 0, 0, 255}));
   const std::string json = R"({"materials": [

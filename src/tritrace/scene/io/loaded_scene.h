@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "tritrace/image/image_limits.h"  // kMaxImageSide
 #include "tritrace/scene/integrator_spec.h"
 #include "tritrace/scene/scene.h"
 
@@ -15,7 +16,6 @@ namespace tritrace {
 
 // The lab's image size, used when neither the scene nor the command line gives one.
 inline constexpr int kDefaultImageSide = 500;
-inline constexpr int kMaxImageSide = 16384;
 
 struct CameraSpec {
   int width = kDefaultImageSide;

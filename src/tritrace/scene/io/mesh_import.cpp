@@ -29,6 +29,7 @@
 #include <utility>
 
 #include "tritrace/error.h"
+#include "tritrace/image/image_limits.h"
 #include "tritrace/parallel.h"
 #include "tritrace/scene/io/input_file.h"
 #include "tritrace/scene/io/isolated_call.h"
@@ -129,8 +130,10 @@ class TextureTable {
           std::span(reinterpret_cast<const uint8_t*>(t.pcData), static_cast<size_t>(t.mWidth)),
           what);
     }
-    if (static_cast<int64_t>(t.mWidth) * t.mHeight > kMaxTextureTexels) {
-      throw Error(what, "cannot read texture: too large");
+    try {
+      check_image_sides(t.mWidth, t.mHeight, what);
+    } catch (const Error& e) {
+      throw Error(what, "cannot read texture: " + e.reason());
     }
     TextureImage image{static_cast<int>(t.mWidth), static_cast<int>(t.mHeight), {}};
     image.rgb.reserve(static_cast<size_t>(t.mWidth) * t.mHeight * 3);
