@@ -104,9 +104,9 @@ class SdlVideo {
     // GL driver for nothing (and, with Mesa, leaves allocations LeakSanitizer reports).
     SDL_SetHint(SDL_HINT_FRAMEBUFFER_ACCELERATION, "0");
     // The frame is made on the CPU; all the window needs is a copy of it. SDL's software renderer
-    // does that with one shared-memory copy, and measured faster than its OpenGL renderer in every
-    // part of a frame under Xvfb (docs/PERFORMANCE.md: 0.65 vs 1.67 ms to convert and upload a
-    // 1280 x 720 frame, 0.84 vs 2.97 ms to present it), where OpenGL is Mesa's CPU rasteriser.
+    // does that with one shared-memory copy, which is faster in every part of a frame than its
+    // OpenGL renderer where OpenGL is Mesa's CPU rasteriser, as under Xvfb (docs/PERFORMANCE.md,
+    // "Viewer: frame time and display overhead").
     // SDL_RENDER_DRIVER=opengl (the environment wins over this default) picks OpenGL.
     SDL_SetHint(SDL_HINT_RENDER_DRIVER, "software");
     // SDL hands the window title (UTF-8) to Xlib, which converts text by LC_CTYPE; in the "C"
@@ -120,9 +120,9 @@ class SdlVideo {
       g_previous_x_error_handler = XSetErrorHandler(ignore_wakeup_after_close);
     }
     // A display that is there can still refuse one connection: with Xvfb on a loaded machine,
-    // SDL's first XOpenDisplay failed in about 1 of 10 test-suite runs while the server went on
-    // serving other clients, and a second try 100 ms later always connected. So a few tries,
-    // about a second in all, before calling the display missing.
+    // SDL's first XOpenDisplay can fail while the server goes on serving other clients, and a
+    // second try 100 ms later connects. So a few tries, about a second in all, before calling the
+    // display missing.
     for (int attempt = 1; SDL_Init(SDL_INIT_VIDEO) != 0; ++attempt) {
       if (attempt == kDisplayAttempts) throw no_display();
       SDL_Delay(100);

@@ -3,8 +3,8 @@
 // offered to the kernel's transparent huge pages (madvise), which Debian enables on request by
 // default. Two reasons: incoherent rays through a big mesh reach nodes and leaves all over tens of
 // MiB, so with 4 KiB pages nearly every visit also misses the TLB; and the first touch of fresh
-// memory costs about 0.7 s per GiB in 4 KiB pages on the machines measured, 0.14 s in 2 MiB pages
-// (docs/PERFORMANCE.md), which is most of loading and building a big mesh.
+// memory, most of loading and building a big mesh, costs several times less in 2 MiB pages than in
+// 4 KiB pages (docs/PERFORMANCE.md, "A faster binned SAH build").
 #pragma once
 
 #include <cstddef>

@@ -20,10 +20,10 @@ constexpr AccelKind kAll[] = {AccelKind::kBvh,          AccelKind::kBrute,     A
                               AccelKind::kEmbreeSingle, AccelKind::kBvhSingle, AccelKind::kEmbree8,
                               AccelKind::kEmbreeRobust};
 
-// bvh_build_for's threshold. Measured on 2 cores (docs/PERFORMANCE.md, "A Morton-code build"):
-// the Morton build saves 57-127 ns per triangle, and its tree costs 1.5-12 ns more per lab ray and
-// about 63 ns more per path-traced ray (terrain:1m), so it wins below about 5-80 lab rays or 1.25
-// path rays per triangle: one ray per triangle is on the safe side of both.
+// bvh_build_for's threshold. The Morton build saves time per triangle and its tree costs time per
+// ray, a lab ray less than a path-traced one, so it wins where the rays per triangle are few; one
+// ray per triangle lies on the safe side of the break-even point for both integrators (the figures
+// are in docs/PERFORMANCE.md, "A Morton-code build").
 constexpr double kMortonRaysPerTriangle = 1.0;
 
 bool is_embree(AccelKind kind) {

@@ -32,15 +32,15 @@ std::vector<AccelKind> available_accels();
 std::string_view embree_version();
 
 // The kernel used when none is asked for: the watertight kernel for every accel tritrace
-// implements (brute, bvh, bvh-single), so that they write byte-identical images by default. Issue
-// 6's rule was "watertight wherever it costs within 15% of Möller–Trumbore"; with SIMD watertight
-// leaves and packets the BVH meets it too (docs/PERFORMANCE.md). Embree uses its own kernel
-// whatever is asked.
+// implements (brute, bvh, bvh-single), so that they write byte-identical images by default. The
+// rule (issue 6) is "watertight wherever it costs within 15% of Möller–Trumbore", which the BVH
+// meets with its SIMD watertight leaves and packets (docs/PERFORMANCE.md). Embree uses its own
+// kernel whatever is asked.
 Kernel default_kernel_for(AccelKind kind);
 
 // How bvh and bvh-single make their tree (Embree and brute force ignore it): "sah" (binned SAH,
-// the tree to trace many rays through) or "morton" (1.6-3.3x faster to build on big meshes, slower
-// to trace).
+// the tree to trace many rays through) or "morton" (faster to build on big meshes, slower to
+// trace; docs/PERFORMANCE.md, "A Morton-code build").
 std::string_view bvh_build_name(bvh::BuildMethod method);
 std::optional<bvh::BuildMethod> parse_bvh_build(std::string_view name);
 

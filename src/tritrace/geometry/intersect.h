@@ -23,8 +23,9 @@ inline constexpr std::array<Kernel, 4> kAllKernels = {Kernel::kInverse, Kernel::
                                                       Kernel::kMollerTrumbore, Kernel::kWatertight};
 
 // The default everywhere: no ray slips between two triangles that share an edge or a vertex. The
-// BVH runs it in SIMD leaves and packets at within a few percent of Möller–Trumbore, the fastest
-// kernel, and brute force at 1.06x (docs/PERFORMANCE.md).
+// BVH runs it in SIMD leaves and packets at close to the speed of Möller–Trumbore, the fastest
+// kernel, and brute force little slower (docs/PERFORMANCE.md, "Robust intersection" and
+// "Watertight by default").
 inline constexpr Kernel kDefaultKernel = Kernel::kWatertight;
 
 // "inverse", "cramer", "moller-trumbore", "watertight"

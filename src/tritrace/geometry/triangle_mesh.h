@@ -1,7 +1,8 @@
 // TriangleMesh: triangles stored as structure-of-arrays (the vertices v0, v1, v2 exactly as given,
 // which the watertight kernel reads; the edges e1 = v1 - v0, e2 = v2 - v0 the other kernels read
-// are recomputed from them, bit for bit what storing them gave), plus the geometric normal and a
-// material id per triangle, and optionally per-corner shading normals and texture coordinates.
+// are computed from them when read, the same bits for every reader), plus the geometric normal
+// and a material id per triangle, and optionally per-corner shading normals and texture
+// coordinates.
 // The arrays live on huge pages (huge_page_allocator.h): a 10-million-triangle mesh is 485 MiB.
 #pragma once
 
@@ -53,7 +54,8 @@ class TriangleMesh {
   // neighbouring triangles to see bit-identical shared vertices.
   const HugePageVector<glm::vec3>& v1() const { return v1_; }
   const HugePageVector<glm::vec3>& v2() const { return v2_; }
-  // The edges v1 - v0 and v2 - v0 of triangle `tri` (the operations add() always used for them).
+  // The edges v1 - v0 and v2 - v0 of triangle `tri`, computed on each call; the BVH's SIMD blocks
+  // make them with the same subtraction, so every reader gets the same bits.
   glm::vec3 e1(size_t tri) const { return v1_[tri] - v0_[tri]; }
   glm::vec3 e2(size_t tri) const { return v2_[tri] - v0_[tri]; }
   const HugePageVector<glm::vec3>& normal() const { return normal_; }

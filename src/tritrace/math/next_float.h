@@ -1,6 +1,7 @@
 // The neighbouring floats of x, as std::nextafter(x, +inf) and std::nextafter(x, -inf) give them
 // for any x but NaN, inline: the BVH builds widen six box coordinates per triangle by a float step,
-// and the library call was about 5% of a Morton build of ten million triangles.
+// and a library call for each is a noticeable share of a big build (docs/PERFORMANCE.md, "A
+// Morton-code build").
 #pragma once
 
 #include <bit>

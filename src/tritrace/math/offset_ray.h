@@ -62,7 +62,7 @@ inline glm::vec3 offset_ray_origin(glm::vec3 p, glm::vec3 n, float extent,
                                    const RayOffsetParams& k = {}) {
 #if defined(__AVX2__)
   // offset_ray_origin_scalar, three lanes at once (the path tracer offsets three points per
-  // vertex; measured 3% of its instructions): the same IEEE operations, and max/min with
+  // vertex, a visible share of its work): the same IEEE operations, and max/min with
   // std::max/std::min's operand order and NaN rule (_mm_max_ps(b, a) is b > a ? b : a, which is
   // std::max(a, b)).
   const __m128 pv = _mm_setr_ps(p.x, p.y, p.z, 0.0f), nv = _mm_setr_ps(n.x, n.y, n.z, 0.0f);

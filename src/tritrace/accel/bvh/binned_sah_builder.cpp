@@ -82,8 +82,8 @@ struct AxisBins {
 
 // A primitive's box with its index, in the layout the build works on: two SSE registers, so that
 // centroids, bin indices and bin bounds take a few vector instructions, and the references move
-// with the partition (the build reads them in order instead of gathering boxes by index, which
-// at ten million primitives waited on memory for most of the build).
+// with the partition (the build reads them in order instead of gathering boxes by index, which on
+// a big mesh would spend most of the build waiting on memory).
 struct alignas(32) PrimRef {
   float lo[3];
   uint32_t id;
@@ -231,7 +231,7 @@ class Builder {
   template <typename Real = double>
   Real leaf_cost(uint32_t count) const {
     // Rounded up; a shift for the usual power-of-two block sizes (the sweeps ask for this 90 times
-    // a node, and a division was a tenth of the build).
+    // a node, which makes a division here a noticeable share of the build).
     const uint32_t blocks = block_shift_ >= 0
                                 ? (count + config_.block_size - 1) >> block_shift_
                                 : (count + config_.block_size - 1) / config_.block_size;
@@ -332,7 +332,7 @@ class Builder {
   // best_split<float> on the bins as they are, without turning them into Bounds3, and over the
   // occupied bins only: a split just after an empty bin costs exactly what the split before that
   // bin costs, and the first of equal costs wins, so skipping them chooses the same split. (Most
-  // nodes are small, with few of their 48 bins occupied; their sweeps were a tenth of the build.)
+  // nodes are small, with few of their 48 bins occupied, so most of a full sweep is wasted work.)
   Split best_split_float(const BinSet& bins, const std::array<AxisBins, 3>& axes) const {
     Split best;
     float best_cost = std::numeric_limits<float>::infinity();
@@ -463,9 +463,9 @@ class Builder {
     Split best;
     const BinSet bins = count > 1 ? bin_range(begin, end, axes4) : BinSet(config_.bins);
     if (count > 1) {
-      // Float is enough, and measured about 3% faster over a terrain:1m build, wherever no cost
-      // can overflow: every box swept lies inside the node's, so a cost is below twice its area
-      // times the cost of a leaf of all its primitives.
+      // Float is enough here, and faster, wherever no cost can overflow: every box swept lies
+      // inside the node's, so a cost is below twice its area times the cost of a leaf of all its
+      // primitives.
       const double largest_cost = 2.0 * parent_area * leaf_cost(count);
       if (largest_cost < 0.25 * std::numeric_limits<float>::max()) {
         best = best_split_float(bins, axes);

@@ -19,7 +19,7 @@ namespace tritrace::bvh {
 inline constexpr uint32_t kMaxLeafSize = 8;
 
 // How the binary tree is made: the binned SAH (the tree to trace many rays through), or Morton
-// codes (morton_builder.h: 1.6-3.3x faster to build on big meshes, slower to trace).
+// codes (morton_builder.h: faster to build on big meshes, slower to trace).
 enum class BuildMethod { kBinnedSah, kMorton };
 
 struct BuildConfig {
@@ -39,11 +39,11 @@ struct BuildConfig {
 
 // The configuration make_accel builds with for a mesh of `triangles` triangles. Small meshes price
 // a leaf per triangle (block_size 1), not per block of eight: the SAH then splits them into small
-// leaves with tight boxes, so rays test fewer triangles, at the cost of partly filled blocks. On
-// the 30-triangle lab box that made the lab frame 1.2-1.4x and the path tracer 1.15-1.3x faster
-// (docs/PERFORMANCE.md), while on terrain:1m it gained nothing and took 3.9x the leaf memory
-// (167 against 42.5 bytes per triangle); so only meshes below kFineLeavesBelow triangles, where
-// that memory is at most a few MiB, get fine leaves.
+// leaves with tight boxes, so rays test fewer triangles, at the cost of partly filled blocks. That
+// speeds up both integrators on a small mesh such as the 30-triangle lab box, but gains nothing on
+// a big one and multiplies its leaf memory (docs/PERFORMANCE.md, "Fine leaves for small meshes");
+// so only meshes below kFineLeavesBelow triangles, where that memory is at most a few MiB, get
+// fine leaves.
 inline constexpr size_t kFineLeavesBelow = size_t{1} << 14;
 inline BuildConfig default_build_config(size_t triangles) {
   BuildConfig config;
@@ -82,8 +82,9 @@ using BoxSource = std::function<void(size_t begin, size_t end, Bounds3* out)>;
 inline constexpr size_t kBoxBatch = 1024;
 
 // The same build over `count` primitives whose boxes come from `boxes`, without an array of them
-// (at ten million triangles that array was 240 MB of fresh pages, whose first touch costs on a
-// virtual machine about as much as the whole partition).
+// (at ten million triangles that array would be 240 MB of fresh pages, and the first touch of
+// fresh pages is slow, on a virtual machine especially; docs/PERFORMANCE.md, "A faster binned SAH
+// build").
 [[nodiscard]] BinaryBvh build_binned_sah(size_t count, const BoxSource& boxes,
                                          const BuildConfig& config = {});
 

@@ -1,9 +1,10 @@
 // A binary BVH from Morton codes (a linear BVH): primitives sorted along a Z-order curve through
 // their box centres and split top-down where the codes of a range first differ, after Lauterbach
 // et al., "Fast BVH Construction on GPUs" (Eurographics 2009) and Karras, "Maximizing Parallelism
-// in the Construction of BVHs, Octrees, and k-d Trees" (HPG 2012). It builds 1.6-3.3x faster
-// than the binned SAH (binned_sah_builder.h) and traces more slowly: the tree for a render that
-// traces few rays per triangle, where the build is most of the time to the first pixel.
+// in the Construction of BVHs, Octrees, and k-d Trees" (HPG 2012). It builds faster than the
+// binned SAH (binned_sah_builder.h) and traces more slowly (docs/PERFORMANCE.md, "A Morton-code
+// build"): the tree for a render that traces few rays per triangle, where the build is most of the
+// time to the first pixel.
 #pragma once
 
 #include <cstddef>

@@ -378,9 +378,9 @@ inline uint32_t candidates(const WideNode& node, const Packet& p, float tfar_hi)
   return present;
 }
 
-// Building the frustum costs a dozen horizontal reductions per packet; it pays where the tree is
-// deep enough that rejecting children saves more (measured: 3-7% slower on the 30-triangle box,
-// 6% and 12% faster on terrain:1m and terrain:10m; docs/PERFORMANCE.md).
+// Building the frustum costs a dozen horizontal reductions per packet; it pays only where the tree
+// is deep enough that rejecting children saves more, as on big meshes and not on a box of a few
+// dozen triangles (docs/PERFORMANCE.md, "Predictions and outcomes").
 constexpr size_t kFrustumMinNodes = 16;
 inline bool wants_frustum(const WideBvh& tree) {
   return tree.nodes.size() >= kFrustumMinNodes;
@@ -395,8 +395,8 @@ struct Entry {
 // A leaf reached by at most this many rays of a packet is tested one ray at a time, eight triangles
 // per SIMD step, rather than one triangle per step for every lane: on fine meshes a packet spreads
 // over many small leaves, each reached by a ray or two (Embree's hybrid traversal does the like).
-// Measured (docs/PERFORMANCE.md): with 16 lanes, 2 to 4 rays are about equally good, -5% on
-// terrain:1m and -16% on terrain:10m; a quarter of the lanes is the rule.
+// A quarter of the lanes: with 16 lanes any threshold from 2 to 4 rays does about equally well
+// (docs/PERFORMANCE.md, "Predictions and outcomes").
 constexpr int kSingleRayLeafLanes = W / 4;
 
 // Starts loading a child that the packet will visit: a node is 224 bytes and a triangle block 320,

@@ -2,8 +2,8 @@
 // with it (a memfd the child writes and this process maps), so that a crash or a runaway
 // allocation inside a third-party library (assimp has segfaulted on malformed PLY files found by
 // fuzzing) becomes an Error in tritrace instead of taking the process down. The result is not
-// copied through a pipe: measured on a 2M-triangle STL, the pipe made the isolated import take
-// twice as long as assimp in this process (docs/PERFORMANCE.md).
+// copied through a pipe: for a big mesh the pipe's copies into fresh memory cost about as much as
+// the import itself (docs/PERFORMANCE.md, "The importer hands its mesh over in shared memory").
 #pragma once
 
 #include <cstddef>

@@ -23,8 +23,9 @@ inline constexpr glm::vec3 kNeutralGrey{0.6f, 0.6f, 0.6f};
 
 // The per-triangle arrays live on huge pages, as the mesh they are added to: for a big mesh they
 // are hundreds of MiB written once, and in 4 KiB pages their first touch (zeroing and a fault per
-// page) took longer than reading the file (docs/PERFORMANCE.md). Their resize() leaves new
-// elements uninitialised (huge_page_allocator.h): give a value or write them all.
+// page) costs more than reading the file (docs/PERFORMANCE.md, "Loading straight from a mapped
+// file"). Their resize() leaves new elements uninitialised (huge_page_allocator.h): give a value
+// or write them all.
 struct ImportedMesh {
   // The corners, node transforms applied, in one of two forms: three per triangle in `corners`, or
   // (the native PLY and OBJ readers', `corners` empty) three indices per triangle into the file's
