@@ -6,7 +6,7 @@
 #include <cstdio>
 
 #include "flags/flag_values.h"
-#include "tritrace/dist/partial_film.h"
+#include "tritrace/distributed/partial_film.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/image/image_io.h"

@@ -13,7 +13,7 @@
 #include "flags/flag_values.h"
 #include "progress.h"
 #include "tritrace/accel/make_accel.h"
-#include "tritrace/dist/partial_film.h"
+#include "tritrace/distributed/partial_film.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/image/image_io.h"

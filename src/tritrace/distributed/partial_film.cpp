@@ -1,7 +1,7 @@
 // Partial films in OpenEXR (float channels per block-tree layer, tritrace.* string attributes) and
 // their merge: parts are checked to be of one render and to cover it exactly once, then their
 // layers are pushed, in sample order per tile, through the block counter a single render uses.
-#include "tritrace/dist/partial_film.h"
+#include "tritrace/distributed/partial_film.h"
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
