@@ -13,7 +13,7 @@
 #include "flags/flag_values.h"
 #include "progress.h"
 #include "tritrace/accel/make_accel.h"
-#include "tritrace/distributed/partial_film.h"
+#include "tritrace/distributed/partial_film_codec.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/image/image_io.h"
@@ -311,7 +311,7 @@ int run_render(const RenderArgs& args) {
     Film film(scene.camera.width(), scene.camera.height(), aovs);
     render_to_film(scene, *accel, *integrator, film, render_options, &stats);
     bar.finish();
-    write_file_atomic(output, encode_partial_film(film, info));
+    write_file_atomic(output, encode_partial_film(pack_part(film, range.tile, range.tiles), info));
     if (!args.quiet) {
       std::printf("rendered %s of %dx%d, %u spp in %.1f ms (%.3g Mrays/s, %d thread%s) to %s\n",
                   range.describe().c_str(), scene.camera.width(), scene.camera.height(), spec.spp,

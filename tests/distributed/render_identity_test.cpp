@@ -5,7 +5,7 @@
 #include <functional>
 #include <memory>
 
-#include "tritrace/distributed/partial_film.h"
+#include "tritrace/distributed/render_identity.h"
 #include "tritrace/scene/cornell_box.h"
 
 namespace tritrace {
