@@ -8,6 +8,8 @@
 #include <string_view>
 
 #include "tritrace/accel/brute_force.h"
+#include "tritrace/distributed/film_merger.h"
+#include "tritrace/distributed/partial_film_codec.h"
 #include "tritrace/error.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/renderer.h"
@@ -75,6 +77,18 @@ void mesh_memory_one_input(const uint8_t* data, size_t size, bool isolate_assimp
     small.width = kSide;
     small.height = kSide;
     render_tiny(scene_from_mesh(mesh, small).scene);
+  } catch (const Error&) {
+  }
+}
+
+void partial_film_one_input(const uint8_t* data, size_t size) {
+  try {
+    PartialFilm part = decode_partial_film(std::span(data, size), "fuzz.exr");
+    const RenderIdentity& r = part.info.render;
+    if (static_cast<size_t>(r.width) * static_cast<size_t>(r.height) > size_t{256} * 256) return;
+    FilmMerger merger(r, part.info.range.tiles);
+    merger.add(part.info.range, std::move(part.film));
+    if (merger.complete()) (void)std::move(merger).finish().resolve();
   } catch (const Error&) {
   }
 }

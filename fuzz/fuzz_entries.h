@@ -18,4 +18,8 @@ void scene_json_one_input(const uint8_t* data, size_t size);
 // this process, where libFuzzer sees assimp's coverage (the fuzzer).
 void mesh_memory_one_input(const uint8_t* data, size_t size, bool isolate_assimp);
 
+// The bytes are a partial film (render --spp-range / --tile); one that decodes is added to a
+// merger of its render when the image is small.
+void partial_film_one_input(const uint8_t* data, size_t size);
+
 }  // namespace tritrace::fuzz

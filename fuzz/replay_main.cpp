@@ -1,5 +1,6 @@
 // Replays saved fuzzer inputs through the same entry points, in the normal build and under ctest:
-// `tritrace_fuzz_replay scene_json|mesh_memory FILE_OR_FOLDER...`. Passing means no crash.
+// `tritrace_fuzz_replay scene_json|mesh_memory|partial_film FILE_OR_FOLDER...`. Passing means no
+// crash.
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -14,11 +15,13 @@ namespace fs = std::filesystem;
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: %s scene_json|mesh_memory FILE_OR_FOLDER...\n", argv[0]);
+    std::fprintf(stderr, "usage: %s scene_json|mesh_memory|partial_film FILE_OR_FOLDER...\n",
+                 argv[0]);
     return 2;
   }
   const bool scene = std::strcmp(argv[1], "scene_json") == 0;
-  if (!scene && std::strcmp(argv[1], "mesh_memory") != 0) {
+  const bool part = std::strcmp(argv[1], "partial_film") == 0;
+  if (!scene && !part && std::strcmp(argv[1], "mesh_memory") != 0) {
     std::fprintf(stderr, "unknown target '%s'\n", argv[1]);
     return 2;
   }
@@ -38,6 +41,8 @@ int main(int argc, char** argv) {
     const auto* data = reinterpret_cast<const uint8_t*>(bytes.data());
     if (scene) {
       tritrace::fuzz::scene_json_one_input(data, bytes.size());
+    } else if (part) {
+      tritrace::fuzz::partial_film_one_input(data, bytes.size());
     } else {
       tritrace::fuzz::mesh_memory_one_input(data, bytes.size(), /*isolate_assimp=*/true);
     }

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # `tritrace render --mpi` under a real mpirun (Open MPI): 1, 2 and 3 ranks (oversubscribed on this
-# machine) give the one-process image byte for byte, with AOVs too; a rank that dies ends the job
-# with a message naming it and no output file. Usage: mpi_test.sh TRITRACE
+# machine) give the one-process image byte for byte, with AOVs too, also when results travel in
+# pieces of 1001 bytes; a rank that dies, or one that loaded another scene file, ends the job with
+# a message naming it and no output file. Usage: mpi_test.sh TRITRACE
 set -euo pipefail
 cli=$1
 dir=$(mktemp -d)
@@ -26,6 +27,40 @@ cmp "$dir/one.exr" "$dir/mpi.exr" || fail "3 ranks with AOVs: the EXR differs fr
 "${run_mpi[@]}" -np 3 "$cli" render --width 48 --height 40 -q --mpi -o "$dir/lab_mpi.png"
 cmp "$dir/lab.png" "$dir/lab_mpi.png" || fail "the lab image differs"
 
+# Results cut into pieces (TRITRACE_MPI_TEST_PIECE_BYTES; 2^30 bytes by default) arrive whole.
+TRITRACE_MPI_TEST_PIECE_BYTES=1001 "${run_mpi[@]}" -x TRITRACE_MPI_TEST_PIECE_BYTES -np 3 "$cli" \
+  render "${scene[@]}" --aovs albedo,depth --mpi -o "$dir/pieces.exr"
+cmp "$dir/one.exr" "$dir/pieces.exr" || fail "results sent in pieces: the EXR differs"
+
+# Rank 2 loads another scene file (one material changed): the job stops before rendering, with
+# one line naming rank 2, its host and what differs, and writes nothing.
+scenes=$(cd "$(dirname "$0")/../../scenes" && pwd)
+cp "$scenes/cornell.json" "$dir/a.json"
+sed 's/"albedo": \[0.75, 0.15, 0.15\]/"albedo": [0.7, 0.15, 0.15]/' "$scenes/cornell.json" \
+  >"$dir/b.json"
+if cmp -s "$dir/a.json" "$dir/b.json"; then fail "the second scene file is not different"; fi
+# Each rank gets its own arguments from this wrapper, by its rank in the job.
+cat >"$dir/rank.sh" <<EOF
+#!/usr/bin/env bash
+scene="$dir/a.json"
+if [ "\$OMPI_COMM_WORLD_RANK" = 2 ]; then scene="\$SECOND_SCENE"; fi
+exec "$cli" render "\$scene" --width 48 --height 40 -q --mpi -o "$dir/mixed.png"
+EOF
+chmod +x "$dir/rank.sh"
+if SECOND_SCENE="$dir/b.json" "${run_mpi[@]}" -x SECOND_SCENE -np 3 "$dir/rank.sh" \
+    >"$dir/mixed.log" 2>&1; then
+  fail "a job whose ranks loaded different scenes succeeded"
+fi
+[ "$(grep -c '^tritrace: ' "$dir/mixed.log")" = 1 ] || { cat "$dir/mixed.log" >&2; fail "not one line"; }
+grep -q "^tritrace: rank 2 (host $(hostname)[^)]*) differs from rank 0: another scene (render " \
+  "$dir/mixed.log" || { cat "$dir/mixed.log" >&2; fail "no line names rank 2, its host and scene"; }
+[ ! -e "$dir/mixed.png" ] || fail "a job whose ranks loaded different scenes wrote its output"
+# The same wrapper with one scene file for every rank renders the one-process image, so the
+# refusal above is the scene's.
+SECOND_SCENE="$dir/a.json" "${run_mpi[@]}" -x SECOND_SCENE -np 3 "$dir/rank.sh"
+"$cli" render "$dir/a.json" --width 48 --height 40 -q -o "$dir/a.png"
+cmp "$dir/a.png" "$dir/mixed.png" || fail "the wrapper's image differs from one process's"
+
 # Rank 1 dies on its first unit: the job must end (not hang), fail, and name rank 1.
 if TRITRACE_MPI_TEST_DIE=1 "${run_mpi[@]}" -x TRITRACE_MPI_TEST_DIE -np 3 "$cli" render \
     "${scene[@]}" --mpi -o "$dir/dead.pfm" >"$dir/dead.log" 2>&1; then
@@ -33,4 +68,5 @@ if TRITRACE_MPI_TEST_DIE=1 "${run_mpi[@]}" -x TRITRACE_MPI_TEST_DIE -np 3 "$cli"
 fi
 grep -q "rank 1" "$dir/dead.log" || { cat "$dir/dead.log" >&2; fail "no message names rank 1"; }
 [ ! -e "$dir/dead.pfm" ] || fail "a job whose rank died wrote its output"
-echo "mpi_test: 1, 2 and 3 ranks match one process byte for byte; a dying rank is named"
+echo "mpi_test: 1, 2 and 3 ranks match one process byte for byte, in pieces too; a dying rank" \
+  "and a rank with another scene file are named"

@@ -371,6 +371,39 @@ std::vector<uint8_t> read_bytes(const std::string& path, size_t limit) {
   return bytes;
 }
 
+// The table of chunk offsets after the header: each chunk (y, size, data) must lie in the file
+// and hold its own lines. OpenEXR would rebuild a broken table by scanning, and read a chunk of
+// size 0 as zeros.
+void check_chunks(std::span<const uint8_t> bytes, size_t header_end, int height,
+                  const std::string& name) {
+  const size_t chunks = (static_cast<size_t>(height) + kZipLines - 1) / kZipLines;
+  auto word = [&](size_t at, int n) {
+    uint64_t v = 0;
+    for (int k = n; k-- > 0;) v = v << 8 | bytes[at + static_cast<size_t>(k)];
+    return v;
+  };
+  const size_t table_end = header_end + 8 * chunks;
+  for (size_t c = 0; c < chunks; ++c) {
+    const uint64_t at = word(header_end + 8 * c, 8);
+    const std::string which = "chunk " + std::to_string(c) + " of " + std::to_string(chunks);
+    if (at < table_end) {
+      throw Error(name, "corrupt partial film: " + which + " is not where its offset table says");
+    }
+    if (at > bytes.size() - 8) {
+      throw Error(name, "truncated partial film: " + std::to_string(bytes.size()) + " bytes, but " +
+                            which + " starts at byte " + std::to_string(at));
+    }
+    const uint64_t end = at + 8 + word(at + 4, 4);
+    if (end > bytes.size()) {
+      throw Error(name, "truncated partial film: " + std::to_string(bytes.size()) + " bytes, but " +
+                            which + " ends at byte " + std::to_string(end));
+    }
+    if (word(at, 4) != c * kZipLines || end == at + 8) {
+      throw Error(name, "corrupt partial film: " + which + " is not where its offset table says");
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<uint8_t> encode_partial_film(const Film& packed, const PartInfo& info) {
@@ -427,6 +460,7 @@ PartialFilm decode_partial_film(std::span<const uint8_t> bytes, const std::strin
   const PartInfo& info = part.info;
   const PackedShape shape =
       packed_shape(info.render.width, info.render.height, info.range.tile, info.range.tiles);
+  check_chunks(bytes, facts.end, shape.height, name);
   try {
     ExrMemoryInput stream(bytes);
     Imf::InputFile file(stream, exr_threads());
