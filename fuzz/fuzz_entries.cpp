@@ -8,6 +8,8 @@
 #include <string_view>
 
 #include "tritrace/accel/brute_force.h"
+#include "tritrace/distributed/film_merger.h"
+#include "tritrace/distributed/partial_film_codec.h"
 #include "tritrace/error.h"
 #include "tritrace/image/image_io.h"
 #include "tritrace/render/lab_integrator.h"
@@ -90,6 +92,18 @@ void hdr_image_one_input(const uint8_t* data, size_t size) {
 void exr_image_one_input(const uint8_t* data, size_t size) {
   try {
     (void)decode_exr_image(std::span(data, size), "fuzz.exr");
+  } catch (const Error&) {
+  }
+}
+
+void partial_film_one_input(const uint8_t* data, size_t size) {
+  try {
+    PartialFilm part = decode_partial_film(std::span(data, size), "fuzz.exr");
+    const RenderIdentity& r = part.info.render;
+    if (static_cast<size_t>(r.width) * static_cast<size_t>(r.height) > size_t{256} * 256) return;
+    FilmMerger merger(r, part.info.range.tiles);
+    merger.add(part.info.range, std::move(part.film));
+    if (merger.complete()) (void)std::move(merger).finish().resolve();
   } catch (const Error&) {
   }
 }

@@ -24,4 +24,8 @@ void hdr_image_one_input(const uint8_t* data, size_t size);
 // The bytes are an OpenEXR file, decoded as an environment map's file is.
 void exr_image_one_input(const uint8_t* data, size_t size);
 
+// The bytes are a partial film (render --spp-range / --tile); one that decodes is added to a
+// merger of its render when the image is small.
+void partial_film_one_input(const uint8_t* data, size_t size);
+
 }  // namespace tritrace::fuzz

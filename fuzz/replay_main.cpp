@@ -1,6 +1,6 @@
 // Replays saved fuzzer inputs through the same entry points, in the normal build and under ctest:
 // `tritrace_fuzz_replay TARGET FILE_OR_FOLDER...`, TARGET one of scene_json, mesh_memory,
-// hdr_image, exr_image. Passing means no crash.
+// hdr_image, exr_image, partial_film. Passing means no crash.
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -29,13 +29,14 @@ constexpr Target kTargets[] = {
     {"mesh_memory", mesh_memory_isolated},
     {"hdr_image", tritrace::fuzz::hdr_image_one_input},
     {"exr_image", tritrace::fuzz::exr_image_one_input},
+    {"partial_film", tritrace::fuzz::partial_film_one_input},
 };
 
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: %s scene_json|mesh_memory|hdr_image|exr_image FILE_OR_FOLDER...\n",
+    std::fprintf(stderr, "usage: %s scene_json|mesh_memory|hdr_image|exr_image|partial_film FILE_OR_FOLDER...\n",
                  argv[0]);
     return 2;
   }

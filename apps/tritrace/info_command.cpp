@@ -3,7 +3,7 @@
 
 #include <cstdio>
 
-#include "tritrace/dist/partial_film.h"
+#include "tritrace/distributed/partial_film_codec.h"
 #include "tritrace/scene/io/scene_loader.h"
 
 namespace tritrace::cli {

@@ -6,7 +6,8 @@
 #include <cstdio>
 
 #include "flags/flag_values.h"
-#include "tritrace/dist/partial_film.h"
+#include "tritrace/distributed/film_merger.h"
+#include "tritrace/distributed/partial_film_codec.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/image/image_io.h"

@@ -1,6 +1,7 @@
-// `tritrace render --mpi`: every rank loads the scene and builds the accel, rank 0 hands out units
-// (a tile part x a sample range) to whichever rank asks, gathers their block sums and merges them
-// in the block tree's fixed order, so the image is the one-process image bit for bit.
+// `tritrace render --mpi`: every rank loads the scene and builds the accel, rank 0 checks that
+// every rank has the render identity it has, hands out units (a tile part x a sample range) to
+// whichever rank asks and adds their block sums as they arrive in the block tree's fixed order,
+// so the image is the one-process image bit for bit.
 #include <cstdio>
 #include <cstdlib>
 
@@ -18,7 +19,8 @@
 #include <cstring>
 #include <vector>
 
-#include "tritrace/dist/partial_film.h"
+#include "tritrace/distributed/film_merger.h"
+#include "tritrace/distributed/merge_plan.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/job/render_job.h"
 #endif
@@ -38,7 +40,7 @@ int run_render_mpi(const RenderArgs&) {
 
 namespace {
 
-enum Tag : int { kReady = 1, kWork = 2, kStop = 3, kResult = 4 };
+enum Tag : int { kReady = 1, kWork = 2, kStop = 3, kResult = 4, kPiece = 5 };
 
 // Units: tile part t of `tiles` x sample range [first, end). Ranges are whole blocks of 8 (the
 // last may end at the spp), so the merge is exact.
@@ -60,17 +62,24 @@ std::vector<PartRange> make_units(int ranks, uint32_t spp, int width, int height
   return units;
 }
 
-// A unit's sums as floats: per layer the group's pixels' (R, G, B, W), then their AOV sums.
-std::vector<float> pack(const Film& film, const std::vector<size_t>& pixels) {
+size_t floats_per_pixel(const AovSet& aovs) {
+  return aovs.any() ? 11 : 4;
+}
+
+// A unit's packed film (pack_part) as floats: per layer the unit's pixels' (R, G, B, W), then
+// their AOV sums; the packed film's padding is not sent.
+std::vector<float> pack(const Film& packed, size_t pixels) {
   std::vector<float> out;
-  const bool aovs = film.aovs().any();
-  out.reserve(film.layer_count() * pixels.size() * (aovs ? 11 : 4));
-  for (size_t k = 0; k < film.layer_count(); ++k) {
-    const glm::vec4* sums = film.sums(k);
-    for (size_t p : pixels) out.insert(out.end(), {sums[p].x, sums[p].y, sums[p].z, sums[p].w});
+  const bool aovs = packed.aovs().any();
+  out.reserve(packed.layer_count() * pixels * floats_per_pixel(packed.aovs()));
+  for (size_t k = 0; k < packed.layer_count(); ++k) {
+    const glm::vec4* sums = packed.sums(k);
+    for (size_t p = 0; p < pixels; ++p) {
+      out.insert(out.end(), {sums[p].x, sums[p].y, sums[p].z, sums[p].w});
+    }
     if (aovs) {
-      const AovSums* a = film.aov_sums(k);
-      for (size_t p : pixels) {
+      const AovSums* a = packed.aov_sums(k);
+      for (size_t p = 0; p < pixels; ++p) {
         out.insert(out.end(), {a[p].albedo.x, a[p].albedo.y, a[p].albedo.z, a[p].normal.x,
                                a[p].normal.y, a[p].normal.z, a[p].depth});
       }
@@ -79,37 +88,80 @@ std::vector<float> pack(const Film& film, const std::vector<size_t>& pixels) {
   return out;
 }
 
-Film unpack(const std::vector<float>& data, const RenderIdentity& r, const PartRange& unit,
-            const std::vector<size_t>& pixels) {
-  Film film(r.width, r.height, r.aovs);
+// The layers a unit of samples [first, end) sends.
+size_t unit_layers(const PartRange& unit) {
+  BlockCounter counter;
+  counter.push_blocks(unit.first / kSampleBlock, unit.end / kSampleBlock);
+  return counter.size() + (unit.end % kSampleBlock != 0 ? 1 : 0);
+}
+
+Film unpack(const std::vector<float>& data, const RenderIdentity& r, const PartRange& unit) {
+  const PackedShape shape = packed_shape(r.width, r.height, unit.tile, unit.tiles);
+  Film film(shape.width, shape.height, r.aovs);
   BlockCounter counter;
   counter.push_blocks(unit.first / kSampleBlock, unit.end / kSampleBlock);
   film.set_layout(unit.first, unit.end,
                   std::vector<BlockNode>(counter.nodes().begin(), counter.nodes().end()));
   const bool aovs = r.aovs.any();
-  if (data.size() != film.layer_count() * pixels.size() * (aovs ? 11 : 4)) {
-    throw Error("--mpi", "a rank sent a unit of the wrong size");
-  }
   size_t i = 0;
   for (size_t k = 0; k < film.layer_count(); ++k) {
     glm::vec4* sums = film.sums(k);
-    for (size_t p : pixels) {
+    for (size_t p = 0; p < shape.pixels; ++p, i += 4) {
       sums[p] = glm::vec4(data[i], data[i + 1], data[i + 2], data[i + 3]);
-      i += 4;
     }
     if (aovs) {
       AovSums* a = film.aov_sums(k);
-      for (size_t p : pixels) {
+      for (size_t p = 0; p < shape.pixels; ++p, i += 7) {
         a[p] = {glm::vec3(data[i], data[i + 1], data[i + 2]),
                 glm::vec3(data[i + 3], data[i + 4], data[i + 5]), data[i + 6]};
-        i += 7;
       }
     }
   }
   return film;
 }
 
-// Every rank makes the same render job `tritrace render` makes, and times its start-up.
+// MPI counts are ints, so a message of 2^31 bytes or more cannot be sent at once: a unit's sums
+// go in pieces of at most this many bytes. TRITRACE_MPI_TEST_PIECE_BYTES lowers it, for the test
+// that small images still arrive whole when cut into many pieces.
+size_t piece_bytes() {
+  size_t bytes = size_t{1} << 30;
+  if (const char* text = std::getenv("TRITRACE_MPI_TEST_PIECE_BYTES")) {
+    const long long v = std::atoll(text);
+    if (v > 0) bytes = static_cast<size_t>(v);
+  }
+  return bytes;
+}
+
+// A result is a head (unit index, float count) followed by the floats' bytes in pieces.
+void send_result(uint64_t unit, const std::vector<float>& data, size_t piece) {
+  const uint64_t head[2] = {unit, data.size()};
+  MPI_Send(head, 2, MPI_UINT64_T, 0, kResult, MPI_COMM_WORLD);
+  const char* bytes = reinterpret_cast<const char*>(data.data());
+  const size_t total = data.size() * sizeof(float);
+  for (size_t at = 0; at < total; at += piece) {
+    MPI_Send(bytes + at, static_cast<int>(std::min(piece, total - at)), MPI_BYTE, 0, kPiece,
+             MPI_COMM_WORLD);
+  }
+}
+
+// The pieces of a result whose head said `count` floats; false when a piece overruns it. MPI
+// keeps one sender's messages in order, so the pieces are this result's.
+bool receive_pieces(int from, std::vector<float>& data) {
+  char* bytes = reinterpret_cast<char*>(data.data());
+  const size_t total = data.size() * sizeof(float);
+  for (size_t at = 0; at < total;) {
+    MPI_Status status;
+    MPI_Probe(from, kPiece, MPI_COMM_WORLD, &status);
+    int n = 0;
+    MPI_Get_count(&status, MPI_BYTE, &n);
+    if (n <= 0 || static_cast<size_t>(n) > total - at) return false;
+    MPI_Recv(bytes + at, n, MPI_BYTE, from, kPiece, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    at += static_cast<size_t>(n);
+  }
+  return true;
+}
+
+// Every rank makes the render job `tritrace render` makes, and times its start-up.
 struct RankSetup {
   std::unique_ptr<RenderJob> job;
   RenderIdentity identity;
@@ -125,23 +177,23 @@ void setup(const RenderArgs& args, RankSetup& s) {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-// Unit `u` of the job's render: its tile part, its samples.
-Film render_unit(const RenderJob& job, const PartRange& u) {
-  RenderOptions options = job.options();
-  options.first_sample = u.first;
-  options.spp = u.end - u.first;
-  options.tile_part = u.tile;
-  options.tile_parts = u.tiles;
-  Film film = job.make_film();
-  job.render_to_film(film, options, nullptr);
-  return film;
-}
-
 [[noreturn]] void abort_job(int rank, const std::string& message) {
   std::fprintf(stderr, "tritrace: rank %d: %s\n", rank, message.c_str());
   std::fflush(stderr);
   MPI_Abort(MPI_COMM_WORLD, 1);
   std::exit(1);
+}
+
+// Renders a unit of the job into an image-sized film and keeps only the unit's pixels.
+Film render_unit(const RankSetup& s, const PartRange& u) {
+  RenderOptions options = s.job->options();
+  options.first_sample = u.first;
+  options.spp = u.end - u.first;
+  options.tile_part = u.tile;
+  options.tile_parts = u.tiles;
+  Film film = s.job->make_film();
+  s.job->render_to_film(film, options, nullptr);
+  return pack_part(film, u.tile, u.tiles);
 }
 
 void work(int rank, const RankSetup& s, const std::vector<PartRange>& units) {
@@ -150,6 +202,7 @@ void work(int rank, const RankSetup& s, const std::vector<PartRange>& units) {
   // and names the rank ("process rank R with PID ... exited on signal 9").
   const char* die = std::getenv("TRITRACE_MPI_TEST_DIE");
   const bool must_die = die && std::atoi(die) == rank;
+  const size_t piece = piece_bytes();
   MPI_Send(nullptr, 0, MPI_BYTE, 0, kReady, MPI_COMM_WORLD);
   while (true) {
     int unit = 0;
@@ -158,11 +211,61 @@ void work(int rank, const RankSetup& s, const std::vector<PartRange>& units) {
     if (status.MPI_TAG == kStop) return;
     if (must_die) std::raise(SIGKILL);
     const PartRange& u = units[static_cast<size_t>(unit)];
-    const Film film = render_unit(*s.job, u);
-    std::vector<float> data =
-        pack(film, tile_group_pixels(s.identity.width, s.identity.height, u.tile, u.tiles));
-    data.insert(data.begin(), static_cast<float>(unit));  // exact for any unit count below 2^24
-    MPI_Send(data.data(), static_cast<int>(data.size()), MPI_FLOAT, 0, kResult, MPI_COMM_WORLD);
+    const Film packed = render_unit(s, u);
+    const PackedShape shape = packed_shape(s.identity.width, s.identity.height, u.tile, u.tiles);
+    send_result(static_cast<uint64_t>(unit), pack(packed, shape.pixels), piece);
+  }
+}
+
+// The identity as one text (hash, settings, build, AOVs, host) for the check against rank 0's.
+std::string identity_text(const RenderIdentity& id) {
+  char host[MPI_MAX_PROCESSOR_NAME] = {};
+  int length = 0;
+  MPI_Get_processor_name(host, &length);
+  return id.hash + "\n" + id.settings + "\n" + id.build + "\n" + aov_list(id.aovs) + "\n" +
+         std::string(host, static_cast<size_t>(length));
+}
+
+// Every rank's identity must be rank 0's before anything is rendered: a rank that loaded another
+// scene file (a different copy on its node) or runs another build would otherwise merge sums of
+// another render into the image. Rank 0 names the first rank that differs, its host and how.
+void check_identities(int rank, int ranks, const RenderIdentity& own) {
+  const std::string text = identity_text(own);
+  const int length = static_cast<int>(text.size());
+  std::vector<int> lengths(rank == 0 ? static_cast<size_t>(ranks) : 0);
+  MPI_Gather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+  std::vector<int> offsets(lengths.size());
+  std::string all;
+  if (rank == 0) {
+    for (size_t r = 1; r < lengths.size(); ++r) offsets[r] = offsets[r - 1] + lengths[r - 1];
+    all.resize(static_cast<size_t>(offsets.back() + lengths.back()));
+  }
+  MPI_Gatherv(text.data(), length, MPI_CHAR, all.data(), lengths.data(), offsets.data(), MPI_CHAR,
+              0, MPI_COMM_WORLD);
+  if (rank != 0) return;
+  for (int r = 1; r < ranks; ++r) {
+    const std::string other =
+        all.substr(static_cast<size_t>(offsets[r]), static_cast<size_t>(lengths[r]));
+    if (other == text) continue;
+    auto field = [&](int k) {  // line k of `other`
+      size_t at = 0;
+      for (int i = 0; i < k; ++i) at = other.find('\n', at) + 1;
+      return other.substr(at, other.find('\n', at) - at);
+    };
+    RenderIdentity theirs = own;
+    theirs.hash = field(0);
+    theirs.settings = field(1);
+    theirs.build = field(2);
+    const std::string aovs = field(3);
+    std::string why;
+    theirs.aovs = aovs.empty() ? AovSet{} : parse_aovs(aovs, &why).value_or(AovSet{});
+    const std::string difference = identity_difference(theirs, own);
+    if (difference.empty()) continue;  // only the host differs
+    std::fprintf(stderr, "tritrace: rank %d (host %s) differs from rank 0: %s\n", r,
+                 field(4).c_str(), difference.c_str());
+    std::fflush(stderr);
+    MPI_Abort(MPI_COMM_WORLD, 1);
+    std::exit(1);
   }
 }
 
@@ -190,6 +293,7 @@ int run_render_mpi(const RenderArgs& args) {
   } catch (const Error& e) {
     abort_job(rank, e.what());
   }
+  check_identities(rank, ranks, s.identity);
   const bool path = s.job->path();
   const std::vector<PartRange> units =
       make_units(ranks, path ? s.job->spec().spp : 1, s.identity.width, s.identity.height, path);
@@ -208,36 +312,56 @@ int run_render_mpi(const RenderArgs& args) {
     return 0;
   }
 
-  std::vector<std::vector<float> > results(units.size());
-  std::vector<int> rendered_by(units.size(), 0);
-  size_t next = 0, received = 0;
-  int stopped = 0;
-  if (ranks == 1) {
-    // No worker: rank 0 renders every unit itself.
+  // Rank 0 adds each unit into the output film as it arrives. A tile part's sample ranges must be
+  // added in sample order (float addition is not associative), so a range that arrives before
+  // the one ending where it starts is held until then; units are handed out in that order, so
+  // few are ever held.
+  FilmMerger merger(s.identity, units.front().tiles);
+  std::vector<bool> received(units.size(), false);
+  try {
+    std::vector<PartInfo> infos;
+    std::vector<std::string> names;
     for (size_t u = 0; u < units.size(); ++u) {
-      const Film film = render_unit(*s.job, units[u]);
-      results[u] = pack(film, tile_group_pixels(s.identity.width, s.identity.height, units[u].tile,
-                                                units[u].tiles));
+      infos.push_back({s.identity, units[u]});
+      names.push_back("unit " + std::to_string(u));
     }
-    received = units.size();
+    (void)plan_merge(names, infos);
+    if (ranks == 1) {
+      // No worker: rank 0 renders every unit itself.
+      for (const PartRange& u : units) merger.add(u, render_unit(s, u));
+    }
+  } catch (const Error& e) {
+    abort_job(0, e.what());
   }
+  size_t next = 0;
+  int stopped = 0;
   while (stopped < ranks - 1) {
     MPI_Status status;
     MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &status);
     const int from = status.MPI_SOURCE;
     if (status.MPI_TAG == kResult) {
-      int count = 0;
-      MPI_Get_count(&status, MPI_FLOAT, &count);
-      std::vector<float> data(static_cast<size_t>(count));
-      MPI_Recv(data.data(), count, MPI_FLOAT, from, kResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-      const size_t u = data.empty() ? units.size() : static_cast<size_t>(data[0]);
-      if (u >= units.size() || !results[u].empty())
-        abort_job(0, "rank " + std::to_string(from) + " sent an unknown unit");
-      results[u].assign(data.begin() + 1, data.end());
-      rendered_by[u] = from;
-      ++received;
-    } else {
+      uint64_t head[2] = {0, 0};
+      MPI_Recv(head, 2, MPI_UINT64_T, from, kResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+      const uint64_t u = head[0];
+      const std::string sender = "rank " + std::to_string(from);
+      if (u >= units.size() || received[u]) abort_job(0, sender + " sent an unknown unit");
+      const PackedShape shape =
+          packed_shape(s.identity.width, s.identity.height, units[u].tile, units[u].tiles);
+      if (head[1] != unit_layers(units[u]) * shape.pixels * floats_per_pixel(s.identity.aovs)) {
+        abort_job(0, sender + " sent a unit of the wrong size");
+      }
+      std::vector<float> data(head[1]);
+      if (!receive_pieces(from, data)) abort_job(0, sender + " sent a unit of the wrong size");
+      received[u] = true;
+      try {
+        merger.add(units[u], unpack(data, s.identity, units[u]));
+      } catch (const Error& e) {
+        abort_job(0, sender + ": " + e.what());
+      }
+    } else if (status.MPI_TAG == kReady) {
       MPI_Recv(nullptr, 0, MPI_BYTE, from, kReady, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    } else {
+      abort_job(0, "rank " + std::to_string(from) + " sent an unexpected message");
     }
     if (next < units.size()) {
       const int u = static_cast<int>(next++);
@@ -248,20 +372,9 @@ int run_render_mpi(const RenderArgs& args) {
     }
   }
 
+  const size_t most_held = merger.most_held();
   try {
-    std::vector<PartInfo> infos;
-    std::vector<std::string> names;
-    for (size_t u = 0; u < units.size(); ++u) {
-      infos.push_back({s.identity, units[u]});
-      names.push_back("unit " + std::to_string(u) + " (rank " + std::to_string(rendered_by[u]) +
-                      ")");
-    }
-    const std::vector<size_t> order = plan_merge(names, infos);
-    const Film film = merge_planned(infos, order, [&](size_t u) {
-      return unpack(
-          results[u], s.identity, units[u],
-          tile_group_pixels(s.identity.width, s.identity.height, units[u].tile, units[u].tiles));
-    });
+    const Film film = std::move(merger).finish();
     s.job->write(film, args.job.output);
   } catch (const Error& e) {
     abort_job(0, e.what());
@@ -270,10 +383,10 @@ int run_render_mpi(const RenderArgs& args) {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (!args.quiet) {
     std::printf(
-        "rendered %dx%d, %u spp on %d rank%s (%zu units, start-up up to %.1f ms) in %.1f ms to "
-        "%s\n",
+        "rendered %dx%d, %u spp on %d rank%s (%zu units, at most %zu held for merging, start-up "
+        "up to %.1f ms) in %.1f ms to %s\n",
         s.identity.width, s.identity.height, s.identity.spp, ranks, ranks == 1 ? "" : "s",
-        units.size(), slowest_startup, ms, args.job.output.c_str());
+        units.size(), most_held, slowest_startup, ms, args.job.output.c_str());
   }
   MPI_Finalize();
   return 0;

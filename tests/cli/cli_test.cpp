@@ -1724,6 +1724,61 @@ TEST_F(DistributedCliTest, MergeNamesMissingOverlappingAndForeignParts) {
   expect_error({"nope.exr"}, {"nope.exr"});
 }
 
+// brute, bvh and bvh-single give the same bytes with one kernel, so their parts merge; a part
+// rendered with another kernel is foreign, and the message says which setting differs.
+TEST_F(DistributedCliTest, AccelsWithOneKernelMergeAndAnotherKernelIsForeign) {
+  const std::string whole = Whole("whole.pfm");
+  RenderPart("a.exr", {"--spp-range", "0:8", "--accel", "brute"});
+  RenderPart("b.exr", {"--spp-range", "8:16", "--accel", "bvh-single"});
+  RenderPart("c.exr", {"--spp-range", "16:20", "--accel", "bvh"});
+  RenderPart("mt.exr", {"--spp-range", "16:20", "--kernel", "moller-trumbore"});
+  const RunResult r = Merge({"a.exr", "b.exr", "c.exr"}, "merged.pfm");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(ReadFile(work_ / "merged.pfm") == whole);
+  const RunResult foreign = Merge({"a.exr", "b.exr", "mt.exr"}, "out.pfm");
+  EXPECT_EQ(foreign.exit_code, 1);
+  EXPECT_EQ(CountLines(foreign.err), 1u) << foreign.err;
+  EXPECT_NE(foreign.err.find("mt.exr: foreign part"), std::string::npos) << foreign.err;
+  EXPECT_NE(foreign.err.find("kernel=moller-trumbore"), std::string::npos) << foreign.err;
+  EXPECT_FALSE(fs::exists(work_ / "out.pfm"));
+}
+
+// A part from another build (here: its header's commit altered, the file otherwise intact) is
+// refused, naming both builds.
+TEST_F(DistributedCliTest, PartsOfAnotherBuildAreForeign) {
+  RenderPart("a.exr", {"--spp-range", "0:8"});
+  RenderPart("b.exr", {"--spp-range", "8:20"});
+  std::string bytes = ReadFile(work_ / "b.exr");
+  const size_t at = bytes.find("commit=");
+  ASSERT_NE(at, std::string::npos);
+  bytes[at + 7] = 'z';  // never a hex digit
+  std::ofstream(work_ / "b.exr", std::ios::binary) << bytes;
+  const RunResult r = Merge({"a.exr", "b.exr"}, "out.pfm");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(CountLines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("b.exr: foreign part: built by another tritrace: version="),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("commit=z"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(", not version="), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(work_ / "out.pfm"));
+}
+
+// A part cut short (a copy that did not finish) is one line naming it, before anything is merged.
+TEST_F(DistributedCliTest, TruncatedPartIsNamed) {
+  RenderPart("a.exr", {"--spp-range", "0:8"});
+  RenderPart("b.exr", {"--spp-range", "8:20"});
+  const std::string bytes = ReadFile(work_ / "b.exr");
+  ASSERT_GT(bytes.size(), 3000u);
+  std::ofstream(work_ / "b.exr", std::ios::binary) << bytes.substr(0, 2000);
+  const RunResult r = Merge({"a.exr", "b.exr"}, "out.pfm");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(CountLines(r.err), 1u) << r.err;
+  EXPECT_EQ(r.err.rfind("tritrace: b.exr: truncated partial film: 2000 bytes, but chunk ", 0), 0u)
+      << r.err;
+  EXPECT_FALSE(fs::exists(work_ / "out.pfm"));
+}
+
 TEST_F(DistributedCliTest, BadSplitsAreRefusedBeforeRendering) {
   auto expect_usage = [&](std::vector<std::string> flags, const std::string& flag,
                           const std::string& words) {

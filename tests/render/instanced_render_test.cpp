@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "tritrace/accel/make_accel.h"
-#include "tritrace/dist/partial_film.h"
+#include "tritrace/distributed/render_identity.h"
 #include "tritrace/render/film.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/path_integrator.h"

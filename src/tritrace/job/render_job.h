@@ -11,7 +11,8 @@
 
 #include "tritrace/accel/accel.h"
 #include "tritrace/accel/make_accel.h"
-#include "tritrace/dist/partial_film.h"
+#include "tritrace/distributed/part.h"
+#include "tritrace/distributed/render_identity.h"
 #include "tritrace/image/image.h"
 #include "tritrace/image/image_io.h"
 #include "tritrace/job/job_settings.h"

@@ -1,0 +1,200 @@
+// render_identity: a 64-bit hash over the settings text, the build and every array of the scene
+// that a pixel reads (own mesh, instanced prototypes with their normals and UVs, placements,
+// materials, textures, lights, environment, camera).
+#include "tritrace/distributed/render_identity.h"
+
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include "tritrace/accel/make_accel.h"
+#include "tritrace/build_info.h"
+#include "tritrace/math/random.h"
+
+namespace tritrace {
+namespace {
+
+// A 64-bit hash of bytes, eight at a time through hash_combine (math/random.h), with the length
+// absorbed last so that trailing zeros count.
+class Hasher {
+ public:
+  void add(const void* data, size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+      uint64_t w;
+      std::memcpy(&w, p + i, 8);
+      h_ = hash_combine(h_, w);
+    }
+    uint64_t tail = 0;
+    // Not for n - i == 0: an empty vector's data() may be null, which memcpy must not be given.
+    if (n > i) std::memcpy(&tail, p + i, n - i);
+    h_ = hash_combine(hash_combine(h_, tail), n);
+  }
+  template <typename T>
+  void add_vector(const T& v) {  // any contiguous container
+    add(v.data(), v.size() * sizeof(v[0]));
+  }
+  void add_value(const auto& v) { add(&v, sizeof v); }
+  void add_text(std::string_view s) { add(s.data(), s.size()); }
+  uint64_t value() const { return h_; }
+
+ private:
+  uint64_t h_ = 0x74726974726163ull;
+};
+
+std::string hex(uint64_t v) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(v));
+  return text;
+}
+
+// Every array of a mesh that a hit or its shading reads.
+void add_mesh(Hasher& h, const TriangleMesh& m) {
+  h.add_vector(m.v0());
+  h.add_vector(m.v1());
+  h.add_vector(m.v2());
+  h.add_vector(m.material());
+  h.add_vector(m.corner_normals());
+  h.add_vector(m.corner_uvs());
+}
+
+void add_affine(Hasher& h, const Affine& a) {
+  for (int c = 0; c < 3; ++c) h.add_value(a.linear[c]);
+  h.add_value(a.translation);
+}
+
+std::vector<std::string_view> words(std::string_view text) {
+  std::vector<std::string_view> out;
+  while (!text.empty()) {
+    const size_t space = text.find(' ');
+    if (space != 0) out.push_back(text.substr(0, space));
+    if (space == std::string_view::npos) break;
+    text.remove_prefix(space + 1);
+  }
+  return out;
+}
+
+// The words of `a` that `b` lacks ("spp=20 seed=3"), or all of `a` when none differ alone.
+std::string words_not_in(std::string_view a, std::string_view b) {
+  const std::vector<std::string_view> wb = words(b);
+  std::string out;
+  for (std::string_view w : words(a)) {
+    if (std::find(wb.begin(), wb.end(), w) != wb.end()) continue;
+    if (!out.empty()) out += ' ';
+    out += w;
+  }
+  return out.empty() ? std::string(a) : out;
+}
+
+}  // namespace
+
+std::string hit_rule(std::string_view accel, std::string_view kernel) {
+  const std::optional<AccelKind> kind = parse_accel(accel);
+  const bool ours = kind && (*kind == AccelKind::kBrute || *kind == AccelKind::kBvh ||
+                             *kind == AccelKind::kBvhSingle);
+  return ours ? std::string(kernel) : std::string(accel);
+}
+
+std::string aov_list(const AovSet& a) {
+  std::string s;
+  for (auto [on, name] : {std::pair{a.albedo, "albedo"}, std::pair{a.normal, "normal"},
+                          std::pair{a.depth, "depth"}}) {
+    if (!on) continue;
+    if (!s.empty()) s += ",";
+    s += name;
+  }
+  return s;
+}
+
+RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
+                               const RenderOptions& options, std::string_view accel,
+                               std::string_view kernel, const AovSet& aovs) {
+  RenderIdentity id;
+  const bool path = spec.kind == IntegratorSpec::Kind::kPath;
+  id.integrator = path ? "path" : "lab";
+  id.seed = path ? options.seed : 0;
+  id.spp = path ? options.spp : 1;
+  id.width = scene.camera.width();
+  id.height = scene.camera.height();
+  id.aovs = aovs;
+  id.build = build_text();
+  id.settings = "integrator=" + id.integrator;
+  if (path) {
+    id.settings += " spp=" + std::to_string(id.spp) +
+                   " max_depth=" + std::to_string(spec.max_depth) +
+                   " seed=" + std::to_string(id.seed) +
+                   " sampler=" + std::string(sampler_name(options.sampler)) +
+                   " filter=" + std::string(filter_name(options.filter));
+  }
+  id.settings += " kernel=" + hit_rule(accel, kernel) + " size=" + std::to_string(id.width) + "x" +
+                 std::to_string(id.height);
+
+  Hasher h;
+  h.add_text(id.settings);
+  h.add_text(id.build);
+  add_mesh(h, scene.mesh);
+  for (const TriangleMesh& p : scene.prototypes) add_mesh(h, p);
+  for (const Instance& inst : scene.instances) {
+    h.add_value(inst.prototype);
+    add_affine(h, inst.to_world);
+    add_affine(h, inst.to_object);
+    h.add_value(inst.first_prim);
+  }
+  for (const Texture& t : scene.textures) {
+    h.add_value(t.width());
+    h.add_value(t.height());
+    h.add_vector(t.texels());
+  }
+  for (const Material& mat : scene.materials) {
+    h.add_value(mat.albedo);
+    h.add_value(mat.emission);
+    h.add_value(static_cast<uint8_t>(mat.two_sided));
+    h.add_value(static_cast<uint8_t>(mat.type));
+    h.add_value(mat.roughness);
+    h.add_value(mat.ior);
+    h.add_value(mat.metallic);
+    h.add_value(mat.transmission);
+    h.add_value(mat.conductor_eta);
+    h.add_value(mat.conductor_k);
+    for (const TextureRef& r : {mat.albedo_texture, mat.emission_texture}) {
+      h.add_value(r.index);
+      h.add_value(static_cast<uint8_t>(r.wrap_s));
+      h.add_value(static_cast<uint8_t>(r.wrap_t));
+    }
+  }
+  for (const PointLight& l : scene.lights) {
+    h.add_value(l.position);
+    h.add_value(l.power);
+  }
+  h.add_value(scene.ambient);
+  h.add_value(scene.environment);
+  if (const EnvironmentMap* env = scene.environment_map.get()) {
+    h.add_value(env->width);
+    h.add_value(env->height);
+    h.add_vector(env->texels);
+    h.add_value(env->scale);
+    h.add_value(env->rotate_degrees);
+  }
+  const Camera& c = scene.camera;
+  for (glm::vec3 v : {c.position(), c.right(), c.down(), c.forward()}) h.add_value(v);
+  h.add_value(c.focal_px());
+  id.hash = hex(h.value());
+  return id;
+}
+
+std::string identity_difference(const RenderIdentity& a, const RenderIdentity& b) {
+  if (a.build != b.build) {
+    return "another build (" + words_not_in(a.build, b.build) + ", not " +
+           words_not_in(b.build, a.build) + ")";
+  }
+  if (a.settings != b.settings) {
+    return "other settings (" + words_not_in(a.settings, b.settings) + ", not " +
+           words_not_in(b.settings, a.settings) + ")";
+  }
+  if (a.hash != b.hash) return "another scene (render " + a.hash + ", not " + b.hash + ")";
+  if (!(a == b)) return "other AOVs (" + aov_list(a.aovs) + ", not " + aov_list(b.aovs) + ")";
+  return {};
+}
+
+}  // namespace tritrace
