@@ -114,6 +114,20 @@ TEST(EnvironmentLookup, ReadsTheTexelTimesScale) {
   expect_near(env.radiance(glm::normalize(glm::vec3(0.0f, 0.1f, -1.0f))), {0.0f, 2.0f, 2.0f});
 }
 
+// The mean luminance over the sphere, against the exact solid-angle averages: a constant map is
+// its own luminance, and a map bright on the upper hemisphere only (rows 0 to H/2 - 1) half of it.
+// The texels' solid angle is taken at their centres (the midpoint rule in theta), exact to
+// (pi / H)^2 / 24 relative: 1e-4 at 64 rows.
+TEST(EnvironmentLookup, MeanLuminanceIsTheAverageOverTheSphere) {
+  const glm::vec3 c(0.5f, 1.0f, 2.0f);
+  const double l = 0.2126 * 0.5 + 0.7152 * 1.0 + 0.0722 * 2.0;
+  const EnvironmentLight constant(map_of(8, 64, [&](int, int) { return c; }));
+  EXPECT_NEAR(constant.mean_luminance(), l, 2e-4 * l);
+  const EnvironmentLight upper(
+      map_of(8, 64, [&](int, int y) { return y < 32 ? c : glm::vec3(0.0f); }));
+  EXPECT_NEAR(upper.mean_luminance(), 0.5 * l, 2e-4 * l);
+}
+
 // A map whose luminance varies over rows and columns, with a black texel, a bright spot and a
 // rotation: the pdf's sin(theta) Jacobian, its rotation and the distribution all show.
 EnvironmentMap test_map() {

@@ -36,7 +36,9 @@ class EnvironmentLight {
   glm::vec2 uv_of(glm::vec3 dir) const;
   glm::vec3 direction_of(glm::vec2 uv) const;
 
-  // The mean radiance over the sphere's solid angle (luminance), for choosing among lights.
+  // The map's luminance averaged over the sphere's solid angle (its irradiance on an unoccluded
+  // plane is pi times it). The light sampler does not choose by it: a map is chosen half the time
+  // beside other lights (light_sampler.cpp), since its power has no finite scale to compare.
   float mean_luminance() const { return mean_luminance_; }
 
  private:

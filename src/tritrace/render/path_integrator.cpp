@@ -20,10 +20,15 @@ namespace {
 
 // Per thread, reused by every batch: Ray and Hit initialise their members, which costs when done
 // for hundreds of them per batch.
+// Up to two shadow rays per path and bounce: one to a light chosen by the light sampler, one to
+// a uniform environment.
+inline constexpr size_t kMaxShadowRays = 2 * kMaxBatch;
+
 struct Scratch {
-  std::array<Ray, kMaxBatch> rays, shadow_rays;
+  std::array<Ray, kMaxBatch> rays;
+  std::array<Ray, kMaxShadowRays> shadow_rays;
   std::array<Hit, kMaxBatch> hits;
-  std::array<uint8_t, kMaxBatch> blocked;
+  std::array<uint8_t, kMaxShadowRays> blocked;
 };
 
 Scratch& thread_scratch() {
@@ -64,11 +69,11 @@ glm::vec3 light_contribution(const LightSample& ls, glm::vec3 throughput_f, floa
 
 // The shadow rays of a bounce: the ray, the path that owns it and what it brings if unblocked.
 struct ShadowRays {
-  explicit ShadowRays(std::array<Ray, kMaxBatch>& storage) : rays(storage) {}
+  explicit ShadowRays(std::array<Ray, kMaxShadowRays>& storage) : rays(storage) {}
 
-  std::array<Ray, kMaxBatch>& rays;
-  std::array<uint16_t, kMaxBatch> owner;
-  std::array<glm::vec3, kMaxBatch> contribution;
+  std::array<Ray, kMaxShadowRays>& rays;
+  std::array<uint16_t, kMaxShadowRays> owner;
+  std::array<glm::vec3, kMaxShadowRays> contribution;
   size_t count = 0;
 
   // Queues the ray from `from` (already off the surface at x, whose triangle's extent is
@@ -103,6 +108,23 @@ struct ShadowRays {
   }
 };
 
+// A direction towards a uniform environment as a light sample (infinite: only its direction
+// matters), drawn in proportion to the cosine about the shading normal on wo's side (`local` is
+// sample_cosine_hemisphere's point, `frame` the shading frame, `flip` whether wo lies below it).
+// The cosine is what an unoccluded diffuse surface integrates, so the sample carries no more noise
+// than the bounce: uniform directions over the sphere, tried first, made the framed mesh files'
+// images 4 to 6 times noisier (RMSE at 16 spp; docs/PERFORMANCE.md). The other hemisphere, which
+// only transmission reaches, is left to BSDF sampling (MIS weight 1 there).
+LightSample uniform_environment_sample(glm::vec3 radiance, const Frame& frame, glm::vec3 local,
+                                       bool flip) {
+  LightSample ls;
+  ls.infinite = true;
+  ls.wi = frame.to_world(flip ? glm::vec3(local.x, local.y, -local.z) : local);
+  ls.radiance = radiance;
+  ls.pdf = cosine_hemisphere_pdf(local.z);
+  return ls;
+}
+
 }  // namespace
 
 PathIntegrator::PathIntegrator(const Scene& scene, const PathSettings& settings,
@@ -113,6 +135,7 @@ PathIntegrator::PathIntegrator(const Scene& scene, const PathSettings& settings,
       std::all_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) {
         return m.is_diffuse() && !m.albedo_texture.present() && !m.emission_texture.present();
       });
+  uniform_environment_ = !scene.environment_map && max_component(scene.environment) > 0.0f;
 }
 
 uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& out,
@@ -128,14 +151,20 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
   assert(n <= kMaxBatch && batch.samplers.size() == n && out.radiance.size() == n);
   const TriangleMesh& mesh = scene.mesh;
   const bool mis = settings_.strategy == PathSettings::Strategy::kMis;
-  // Point lights are found by light sampling only, whatever the strategy for emissive triangles.
+  // Point lights are found by light sampling only, whatever the strategy for emissive triangles
+  // and the environment.
   const bool light_finds_triangles = settings_.strategy != PathSettings::Strategy::kBsdfOnly;
+  const bool uniform_environment = uniform_environment_;
+  const bool light_finds_environment = uniform_environment && light_finds_triangles;
   const bool bsdf_finds_lights = settings_.strategy != PathSettings::Strategy::kLightOnly;
   // Meshes without vertex normals take exactly the flat-shading code below (the same images).
 
   Scratch& scratch = thread_scratch();
   std::array<glm::vec3, kMaxBatch> throughput, origin_point;
   std::array<float, kMaxBatch> bsdf_pdf;
+  // The density with which the vertex the bounce left would have light-sampled the uniform
+  // environment in the bounce's direction (0 on the hemisphere it does not sample).
+  std::array<float, kMaxBatch> environment_pdf;
   std::array<uint16_t, kMaxBatch> path;  // active slot -> path index
   ShadowRays shadows(scratch.shadow_rays);
 
@@ -168,10 +197,15 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
                            : 1.0f;
           }
           if (weight > 0.0f) out.radiance[i] += throughput[i] * env->radiance(dir) * weight;
-        } else {
-          // A constant environment, found by BSDF sampling only (light sampling does not choose
-          // it), so with weight 1.
-          out.radiance[i] += throughput[i] * scene.environment;
+        } else if (uniform_environment) {
+          // Light sampling finds it too, with the uniform density over the sphere.
+          float weight = 1.0f;
+          if (depth > 0 && !std::isinf(bsdf_pdf[i]) && environment_pdf[i] > 0.0f) {
+            weight = !bsdf_finds_lights ? 0.0f
+                     : mis ? power_heuristic(1.0f, bsdf_pdf[i], 1.0f, environment_pdf[i])
+                           : 1.0f;
+          }
+          if (weight > 0.0f) out.radiance[i] += throughput[i] * scene.environment * weight;
         }
         continue;
       }
@@ -181,6 +215,8 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       // roulette's coin, the point on the light, the bounce direction.
       const auto [u_choice, u_light_point, u_bsdf] = sampler.get_2d_groups<3>();
       const float u_light = u_choice.x, u_roulette = u_choice.y;
+      // A fourth group, for the direction towards a uniform environment, in scenes that have one.
+      const glm::vec2 u_environment = uniform_environment ? sampler.get_2d() : glm::vec2(0.0f);
 
       const uint32_t prim = hit.prim;
       // In world space: an instanced triangle is moved there here (Scene::triangle).
@@ -208,7 +244,9 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
         if (!kPlainDiffuse && material.emission_texture.present()) {
           le = textured(scene, material.emission_texture, le, uv());
         }
-        if (depth == 0) {
+        // Emission reached by the camera or through a delta lobe is found by no other strategy:
+        // weight 1 under every strategy (light sampling alone included).
+        if (depth == 0 || std::isinf(bsdf_pdf[i])) {
           out.radiance[i] += throughput[i] * le;
         } else if (bsdf_finds_lights) {
           const float weight =
@@ -231,10 +269,29 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
         glm::vec3 n_shade = n_lab;
         if (smooth) {
           const glm::vec3 ns = oriented_shading_normal(corners, hit.u, hit.v, n_lab);
-          if ((glm::dot(wo, ns) >= 0.0f) == (glm::dot(wo, n_lab) >= 0.0f)) n_shade = ns;
+          if (shading_agrees(wo, ns, n_lab)) n_shade = ns;
         }
         const Frame frame = Frame::from_normal(n_shade);
         const glm::vec3 wo_local = frame.to_local(wo);
+        // A light sample `ls` towards wi (world) at distance^2 dist2, through the shading rule and
+        // the BSDF into a shadow ray.
+        const auto shade_light_sample = [&](const LightSample& ls, glm::vec3 wi, float dist2) {
+          const glm::vec3 wi_local = frame.to_local(wi);
+          glm::vec3 f = dist2 > 0.0f ? bsdf.eval(wo_local, wi_local) : glm::vec3(0.0f);
+          if (smooth && (wi_local.z >= 0.0f) != (glm::dot(wi, n_lab) >= 0.0f)) f = glm::vec3(0.0f);
+          if (!(ls.pdf > 0.0f && max_component(f) > 0.0f && max_component(ls.radiance) > 0.0f)) {
+            return;
+          }
+          const glm::vec3 side = wi_local.z >= 0.0f ? n_lab : -n_lab;
+          const glm::vec3 from =
+              leave_surface(tri, smooth ? terminator_safe_point(corners, hit.u, hit.v, x, side) : x,
+                            side, offset_);
+          const glm::vec3 contribution =
+              light_contribution(ls, throughput[i] * f, std::abs(wi_local.z), dist2, mis,
+                                 [&] { return bsdf.pdf(wo_local, wi_local); });
+          shadows.add(ls, wi, from, triangle_extent(tri.e1, tri.e2), contribution, i,
+                      out.radiance[i], offset_);
+        };
         if (!lights_.empty() && !bsdf.all_delta()) {
           LightSample ls = lights_.sample(scene, x, u_light, u_light_point);
           if (!ls.delta && !light_finds_triangles) ls.pdf = 0.0f;
@@ -242,22 +299,12 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
           const float dist2 = glm::dot(to_light, to_light);
           const float dist = std::sqrt(dist2);
           const glm::vec3 wi = ls.infinite ? ls.wi : to_light * (1.0f / dist);
-          const glm::vec3 wi_local = frame.to_local(wi);
-          glm::vec3 f = dist > 0.0f ? bsdf.eval(wo_local, wi_local) : glm::vec3(0.0f);
-          // A direction on one side of the shading surface and the other of the geometric one
-          // is neither a reflection nor a transmission: no light that way (pbrt-v3's rule).
-          if (smooth && (wi_local.z >= 0.0f) != (glm::dot(wi, n_lab) >= 0.0f)) f = glm::vec3(0.0f);
-          if (ls.pdf > 0.0f && max_component(f) > 0.0f && max_component(ls.radiance) > 0.0f) {
-            const glm::vec3 side = wi_local.z >= 0.0f ? n_lab : -n_lab;
-            const glm::vec3 from = leave_surface(
-                tri, smooth ? terminator_safe_point(corners, hit.u, hit.v, x, side) : x, side,
-                offset_);
-            const glm::vec3 contribution =
-                light_contribution(ls, throughput[i] * f, std::abs(wi_local.z), dist2, mis,
-                                   [&] { return bsdf.pdf(wo_local, wi_local); });
-            shadows.add(ls, wi, from, triangle_extent(tri.e1, tri.e2), contribution, i,
-                        out.radiance[i], offset_);
-          }
+          shade_light_sample(ls, wi, dist > 0.0f ? dist2 : 0.0f);
+        }
+        if (light_finds_environment && !bsdf.all_delta()) {
+          const LightSample ls = uniform_environment_sample(
+              scene.environment, frame, sample_cosine_hemisphere(u_environment), wo_local.z < 0.0f);
+          shade_light_sample(ls, ls.wi, 1.0f);
         }
         const BsdfSample bs = bsdf.sample(wo_local, u_light, u_bsdf);
         if (!bs.valid()) continue;
@@ -272,6 +319,8 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
         if (!(max_component(t) > 0.0f)) continue;
         throughput[i] = t;
         bsdf_pdf[i] = bs.pdf;  // infinite for a delta lobe: emission found by it gets weight 1
+        environment_pdf[i] =
+            bs.wi.z * wo_local.z > 0.0f ? cosine_hemisphere_pdf(std::abs(bs.wi.z)) : 0.0f;
         origin_point[i] = x;
         Ray& r = scratch.rays[next];
         const glm::vec3 side = bs.wi.z >= 0.0f ? n_lab : -n_lab;
@@ -288,13 +337,14 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       // The side the path arrived from: the two-sided surface reflects there, and both the shadow
       // ray and the bounce leave from that side.
       const glm::vec3 n = glm::dot(n_lab, wo) >= 0.0f ? n_lab : -n_lab;
-      // With vertex normals: Lambert about the shading normal on that side, over the shading
-      // normal's whole hemisphere (no light lost where it and the geometric one disagree), rays
-      // leaving from the curved surface the normals describe (shading_normal.h), above the facets.
+      // With vertex normals: Lambert about the shading normal on that side, under the rule of
+      // shading_agrees (shading_normal.h), rays leaving from the curved surface the normals
+      // describe, above the facets.
       glm::vec3 ns = n;
       if (smooth) {
         ns = oriented_shading_normal(corners, hit.u, hit.v, n_lab);
         if (!(n == n_lab)) ns = -ns;
+        if (!shading_agrees(wo, ns, n)) ns = n;
       }
       const glm::vec3 start = leave_surface(
           tri, smooth ? terminator_safe_point(corners, hit.u, hit.v, x, n) : x, n, offset_);
@@ -307,7 +357,8 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
         const float dist = std::sqrt(dist2);
         const glm::vec3 wi = ls.infinite ? ls.wi : to_light * (1.0f / dist);
         const float cos_theta = glm::dot(ns, wi);
-        if (ls.pdf > 0.0f && dist > 0.0f && cos_theta > 0.0f && max_component(ls.radiance) > 0.0f) {
+        if (ls.pdf > 0.0f && dist > 0.0f && cos_theta > 0.0f && max_component(ls.radiance) > 0.0f &&
+            (!smooth || glm::dot(n, wi) > 0.0f)) {
           const glm::vec3 contribution =
               light_contribution(ls, throughput[i] * f, cos_theta, dist2, mis,
                                  [&] { return cosine_hemisphere_pdf(cos_theta); });
@@ -315,10 +366,25 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
                       out.radiance[i], offset_);
         }
       }
+      const Frame frame = Frame::from_normal(ns);
+      if (light_finds_environment) {
+        const LightSample ls = uniform_environment_sample(
+            scene.environment, frame, sample_cosine_hemisphere(u_environment), false);
+        const float cos_theta = glm::dot(ns, ls.wi);
+        if (cos_theta > 0.0f && (!smooth || glm::dot(n, ls.wi) > 0.0f)) {
+          const glm::vec3 contribution =
+              light_contribution(ls, throughput[i] * f, cos_theta, 1.0f, mis,
+                                 [&] { return cosine_hemisphere_pdf(cos_theta); });
+          shadows.add(ls, ls.wi, start, triangle_extent(tri.e1, tri.e2), contribution, i,
+                      out.radiance[i], offset_);
+        }
+      }
 
       const glm::vec3 local = sample_cosine_hemisphere(u_bsdf);
       const float pdf = cosine_hemisphere_pdf(local.z);
       if (!(pdf > 0.0f)) continue;
+      const glm::vec3 wi = frame.to_world(local);
+      if (smooth && !(glm::dot(n, wi) > 0.0f)) continue;
       glm::vec3 t = throughput[i] * albedo;  // f cos / pdf = albedo for Lambert
       if (depth + 1 >= settings_.roulette_depth) {
         // Survival by the square root of the throughput, not the throughput itself: paths live
@@ -331,10 +397,11 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       if (!(max_component(t) > 0.0f)) continue;
       throughput[i] = t;
       bsdf_pdf[i] = pdf;
+      environment_pdf[i] = pdf;
       origin_point[i] = x;
       Ray& r = scratch.rays[next];  // next <= k: overwrites only rays already consumed
       r.origin = start;
-      r.dir = Frame::from_normal(ns).to_world(local);
+      r.dir = wi;
       r.tmin = 0.0f;
       r.tmax = kRayTMax;
       path[next] = i;

@@ -49,6 +49,9 @@ class PathIntegrator final : public Integrator {
   RayOffsetParams offset_;
   LightSampler lights_;
   bool plain_diffuse_ = false;  // every material diffuse and untextured, flat shading, no instances
+  // A constant environment that emits (no map): light-sampled uniformly over the sphere at every
+  // vertex, beside the light the light sampler chooses.
+  bool uniform_environment_ = false;
 };
 
 }  // namespace tritrace

@@ -30,6 +30,18 @@ inline glm::vec3 oriented_shading_normal(const TriangleMesh& mesh, size_t tri, f
   return glm::dot(ns, ng) < 0.0f ? -ns : ns;
 }
 
+// The path tracer's one rule for shading normals, the same in every BSDF branch (Veach, "Robust
+// Monte Carlo Methods for Light Transport Simulation", 1997, section 5.3; pbrt-v3's BSDF::f): the
+// shading normal shades a direction only where it agrees with the geometric normal on which side
+// of the surface that direction lies. wo on different sides of the two surfaces: the geometric
+// normal shades instead. wi (a light sample or a bounce) on different sides: no light is carried
+// that way. Light from below the triangle's plane therefore never reaches its top (an open mesh
+// with bent normals does not leak), at the price of the energy of the directions between the two
+// planes (a few percent at the silhouette of a coarse mesh, none where the normals agree).
+inline bool shading_agrees(glm::vec3 w, glm::vec3 ns, glm::vec3 ng) {
+  return (glm::dot(w, ns) >= 0.0f) == (glm::dot(w, ng) >= 0.0f);
+}
+
 // Where secondary rays start on a smooth-shaded triangle: the hit point x (barycentrics u, v) moved
 // onto the curved surface the vertex normals describe, after Hanika, "Hacking the Shadow
 // Terminator" (Ray Tracing Gems II, 2021, chapter 4): x is projected onto each corner's tangent

@@ -467,6 +467,19 @@ TEST(SceneFileMaterials, EachRuleHasItsMessage) {
             "/materials/0/metallic: must be from 0 to 1, got -0.1");
   EXPECT_EQ(with(R"({"name": "m", "type": "dielectric", "ior": 0})"),
             "/materials/0/ior: must be from 0.1 to 10, got 0");
+  // Within 0.0001 of 1 (but not 1) the BSDFs cannot refract: a rough interface's half vector
+  // cancels to rounding (bsdf.cpp); 1 itself is an invisible interface.
+  EXPECT_EQ(with(R"({"name": "m", "type": "dielectric", "roughness": 0.5, "ior": 1.00001})"),
+            "/materials/0/ior: must be 1 or differ from 1 by at least 0.0001 (closer to 1, a rough "
+            "surface's refraction is lost to float rounding), got 1.00001");
+  EXPECT_EQ(with(R"({"name": "m", "type": "principled", "albedo": [1,1,1], "ior": 0.99995})"),
+            "/materials/0/ior: must be 1 or differ from 1 by at least 0.0001 (closer to 1, a rough "
+            "surface's refraction is lost to float rounding), got 0.99995");
+  for (const char* ior : {"1", "1.0001", "0.9999"}) {
+    EXPECT_NO_THROW(parse(R"({"materials": [{"name": "m", "type": "dielectric", "ior": )" +
+                          std::string(ior) + "}], " + std::string(kOneTriangle) + "}"))
+        << ior;
+  }
   EXPECT_EQ(with(R"({"name": "m", "type": "dielectric", "ior": "glass"})"),
             "/materials/0/ior: must be a number, got 'glass'");
   EXPECT_EQ(with(R"({"name": "m", "type": "dielectric", "albedo": [1, 2, 1]})"),

@@ -36,7 +36,15 @@ struct Lobe {
   float eta = 0.0f;     // relative index of the inside; 0 for no Fresnel factor on Lambert
   glm::vec3 eta_rgb{0.0f}, k_rgb{0.0f};  // a conductor's complex index (unused when eta_rgb.x = 0)
 
-  bool delta() const { return kind != Kind::kLambert && alpha < kSmoothAlpha; }
+  // A perfect mirror or refractor. Glass of relative index 1 is one whatever its roughness: a
+  // microfacet of index 1 neither reflects (F = 0) nor bends light, so every microfacet passes wo
+  // straight on to -wo (Walter et al. 2007's refraction half vector wo + eta wi vanishes there, and
+  // the transmission lobe's width shrinks with |eta - 1| to a delta; pbrt-v4's DielectricBxDF
+  // makes the same choice).
+  bool delta() const {
+    return kind != Kind::kLambert &&
+           (alpha < kSmoothAlpha || (kind == Kind::kDielectric && eta == 1.0f));
+  }
   // A conductor's reflectance at cos_i (from outside).
   glm::vec3 conductor_fresnel(float cos_i) const {
     return eta_rgb.x > 0.0f ? fresnel_conductor(cos_i, eta_rgb, k_rgb)

@@ -62,7 +62,8 @@ Material map_material(const MaterialKeys& keys) {
   }
   const std::optional<float> ior = finite(keys.ior);
   // assimp reports 1 for an MTL without Ni, which would make glass vanish: 1.5 then.
-  if (ior && *ior > 1.0f && *ior <= 4.0f) out.ior = *ior;
+  // Indices within kMinIorOffset of 1, which the BSDFs do not handle, keep 1.5 too.
+  if (ior && *ior > 1.0f && *ior <= 4.0f && ior_supported(*ior)) out.ior = *ior;
   out.albedo_texture = keys.albedo_texture;
   out.emission_texture = keys.emission_texture;
   if (metallic || roughness) {

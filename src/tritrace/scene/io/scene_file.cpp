@@ -407,6 +407,12 @@ class Parser {
         if (!(m.ior >= 1.0f / kMaxIor && m.ior <= kMaxIor)) {
           fail(where + "/ior", "must be from 0.1 to 10, got " + describe(j[i]["ior"]));
         }
+        if (!ior_supported(m.ior)) {
+          fail(where + "/ior",
+               "must be 1 or differ from 1 by at least 0.0001 (closer to 1, "
+               "a rough surface's refraction is lost to float rounding), got " +
+                   describe(j[i]["ior"]));
+        }
       }
       if (j[i].contains("emission")) {
         m.emission = non_negative_vec3(j[i]["emission"], where + "/emission");
