@@ -61,6 +61,24 @@ SECOND_SCENE="$dir/a.json" "${run_mpi[@]}" -x SECOND_SCENE -np 3 "$dir/rank.sh"
 "$cli" render "$dir/a.json" --width 48 --height 40 -q -o "$dir/a.png"
 cmp "$dir/a.png" "$dir/mixed.png" || fail "the wrapper's image differs from one process's"
 
+# The render job's checks are the same under --mpi as in a plain render: --exposure with the lab
+# integrator and an AOV list that only contains the names are refused, naming the flag, and
+# nothing is written.
+if "${run_mpi[@]}" -np 2 "$cli" render --width 48 --height 40 -q --exposure 1 --mpi \
+    -o "$dir/lab_exposure.png" >"$dir/lab_exposure.log" 2>&1; then
+  fail "--exposure with the lab integrator was accepted under --mpi"
+fi
+grep -q -- "--exposure: applies to path images" "$dir/lab_exposure.log" ||
+  { cat "$dir/lab_exposure.log" >&2; fail "no line names --exposure"; }
+[ ! -e "$dir/lab_exposure.png" ] || fail "a refused --exposure wrote its output"
+if "${run_mpi[@]}" -np 2 "$cli" render "${scene[@]}" --aovs albedos,depths --mpi \
+    -o "$dir/aovs.exr" >"$dir/aovs.log" 2>&1; then
+  fail "--aovs albedos,depths was accepted under --mpi"
+fi
+grep -q -- "--aovs: unknown AOV 'albedos'" "$dir/aovs.log" ||
+  { cat "$dir/aovs.log" >&2; fail "no line names --aovs"; }
+[ ! -e "$dir/aovs.exr" ] || fail "a refused --aovs wrote its output"
+
 # Rank 1 dies on its first unit: the job must end (not hang), fail, and name rank 1.
 if TRITRACE_MPI_TEST_DIE=1 "${run_mpi[@]}" -x TRITRACE_MPI_TEST_DIE -np 3 "$cli" render \
     "${scene[@]}" --mpi -o "$dir/dead.pfm" >"$dir/dead.log" 2>&1; then
@@ -69,4 +87,4 @@ fi
 grep -q "rank 1" "$dir/dead.log" || { cat "$dir/dead.log" >&2; fail "no message names rank 1"; }
 [ ! -e "$dir/dead.pfm" ] || fail "a job whose rank died wrote its output"
 echo "mpi_test: 1, 2 and 3 ranks match one process byte for byte, in pieces too; a dying rank" \
-  "and a rank with another scene file are named"
+  "and a rank with another scene file are named; the job's checks refuse what render refuses"
