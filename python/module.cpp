@@ -485,13 +485,7 @@ AovSet aov_set(const py::object& aovs) {
   }
   for (const py::handle item : aovs) {
     const std::string name = string_arg("aovs", py::reinterpret_borrow<py::object>(item));
-    if (name == "albedo") {
-      set.albedo = true;
-    } else if (name == "normal") {
-      set.normal = true;
-    } else if (name == "depth") {
-      set.depth = true;
-    } else {
+    if (!add_aov(name, &set)) {
       throw py::value_error("aovs: unknown AOV '" + name + "' (use albedo, normal, depth)");
     }
   }

@@ -95,6 +95,19 @@ void check_settings(const JobSettings& settings) {
   }
 }
 
+bool add_aov(std::string_view name, AovSet* set) {
+  if (name == "albedo") {
+    set->albedo = true;
+  } else if (name == "normal") {
+    set->normal = true;
+  } else if (name == "depth") {
+    set->depth = true;
+  } else {
+    return false;
+  }
+  return true;
+}
+
 std::optional<AovSet> parse_aovs(const std::string& text, std::string* why) {
   AovSet set;
   size_t start = 0;
@@ -102,13 +115,7 @@ std::optional<AovSet> parse_aovs(const std::string& text, std::string* why) {
     const size_t comma = text.find(',', start);
     const std::string name =
         text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    if (name == "albedo") {
-      set.albedo = true;
-    } else if (name == "normal") {
-      set.normal = true;
-    } else if (name == "depth") {
-      set.depth = true;
-    } else {
+    if (!add_aov(name, &set)) {
       *why = (name.empty() ? std::string("empty AOV name") : "unknown AOV '" + name + "'") +
              " in '" + text + "' (use a comma-separated list of albedo, normal, depth)";
       return std::nullopt;

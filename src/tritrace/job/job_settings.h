@@ -9,6 +9,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/geometry/intersect.h"
@@ -77,6 +78,8 @@ FilterKind filter_choice(const JobSettings& settings);
 AovSet aov_set(const JobSettings& settings);
 std::optional<float> exposure_stops(const JobSettings& settings);
 
+// Adds the AOV `name` (albedo, normal or depth) to `set`; false for any other name.
+bool add_aov(std::string_view name, AovSet* set);
 // "albedo,normal,depth" or any subset, in any order; a name given twice counts once. nullopt with
 // the reason in `why` for an empty list, an empty name or an unknown one.
 std::optional<AovSet> parse_aovs(const std::string& text, std::string* why);

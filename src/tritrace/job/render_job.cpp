@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <utility>
 
-#include "tritrace/error.h"
 #include "tritrace/distributed/partial_film_codec.h"
+#include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/job/setting_values.h"
 #include "tritrace/render/make_integrator.h"
@@ -247,8 +247,8 @@ void RenderJob::write(const Film& film, const std::string& file) const {
 }
 
 void RenderJob::write_part(const Film& film, const std::string& file) const {
-  write_file_atomic(file,
-                    encode_partial_film(pack_part(film, part_.tile, part_.tiles), {identity(), part_}));
+  write_file_atomic(
+      file, encode_partial_film(pack_part(film, part_.tile, part_.tiles), {identity(), part_}));
 }
 
 }  // namespace tritrace
