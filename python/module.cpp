@@ -524,7 +524,8 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
                    const py::object& kernel, const py::object& threads, const py::object& position,
                    const py::object& look_at, const py::object& up, const py::object& vertical_fov,
                    const py::object& focal_length, const py::object& yaw,
-                   const py::object& distance, const py::object& light) {
+                   const py::object& distance, const py::object& light,
+                   const py::object& time_limit) {
   // The CLI's flags, parsed and checked by the CLI's own code.
   FlagTexts texts;
   texts.add_string("--integrator", integrator);
@@ -539,6 +540,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   texts.add_number("--yaw", yaw);
   texts.add_number("--distance", distance);
   texts.add_vec3("--light", light);
+  texts.add_number("--time-limit", time_limit);
   std::shared_ptr<PyAccel> prebuilt;
   if (!accel.is_none() && !py::isinstance<py::str>(accel)) {
     if (!py::isinstance<PyAccel>(accel)) {
@@ -564,7 +566,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   RenderedImage rendered;
   RenderStats stats;
   IntegratorSpec spec;
-  {
+  try {
     py::gil_scoped_release nogil;
     // The view's camera and lights are the scene's while the lock lives: the job is made, builds
     // the tree `tritrace render` would build (or takes the prebuilt accel) and renders under it.
@@ -573,6 +575,10 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
     job.prepare(nullptr, prebuilt ? prebuilt->accel.get() : nullptr);
     rendered = job.render(&stats);
     spec = job.spec();
+  } catch (const Error& e) {
+    // A combination of arguments the job refuses (time_limit with the lab integrator ...).
+    if (e.exit_code() == ExitCode::kUsage) raise_value_error(e);
+    throw;
   }
   const Image& image = rendered.image;
   const Image& albedo_image = rendered.aovs.albedo;
@@ -789,7 +795,7 @@ asked for; integrator, spp, milliseconds, rays, threads: what was rendered and h
         "max_depth"_a = none, "filter"_a = none, "aovs"_a = py::tuple(), "accel"_a = none,
         "kernel"_a = none, "threads"_a = none, "position"_a = none, "look_at"_a = none,
         "up"_a = none, "vertical_fov"_a = none, "focal_length"_a = none, "yaw"_a = none,
-        "distance"_a = none, "light"_a = none,
+        "distance"_a = none, "light"_a = none, "time_limit"_a = none,
         R"(Renders the scene as `tritrace render` does, returning a tritrace.Frame.
 
 The image is bit for bit the one `tritrace render ... -o out.pfm` writes with the same
@@ -797,7 +803,9 @@ settings. Every argument left None is the scene's own (or the CLI's default): in
 ("lab" or "path"), spp, width, height, seed, sampler ("sobol" or "independent"),
 max_depth, filter ("box", "gaussian", "blackman-harris"), accel (a name, or an Accel built
 over this scene, to reuse it across renders), kernel, threads (default all cores), yaw
-(radians, orbiting look_at), distance (to look_at), light (the first point light's position).
+(radians, orbiting look_at), distance (to look_at), light (the first point light's position),
+time_limit (seconds: the path tracer's samples in passes until the time is up, spp the most;
+Frame.spp says how many were reached, and the image is the one that spp gives).
 aovs: any of "albedo", "normal", "depth". Camera settings beyond the CLI's flags, as a
 scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
 focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a

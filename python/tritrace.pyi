@@ -230,6 +230,7 @@ def render(
     yaw: Optional[float] = None,
     distance: Optional[float] = None,
     light: Optional[_Vec3] = None,
+    time_limit: Optional[float] = None,
 ) -> Frame:
     """Renders the scene as `tritrace render` does: the image is bit for bit the one
     `tritrace render ... -o out.pfm` writes with the same settings.
@@ -238,5 +239,7 @@ def render(
     Accel built over this scene (reused across renders). Camera settings beyond the CLI's flags,
     as a scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
     focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a
-    look-at camera. Bad values raise ValueError with the CLI's message, wrong types TypeError.
+    look-at camera. time_limit (seconds): the path tracer's samples in passes until the time is
+    up (spp the most); Frame.spp says how many it reached. Bad values raise ValueError with the
+    CLI's message, wrong types TypeError.
     """

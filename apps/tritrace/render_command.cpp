@@ -51,6 +51,13 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
                   "interleaved to balance the work) and write a partial film (.exr) for "
                   "`tritrace merge`")
       ->type_name("I/N");
+  sub->add_option("--time-limit", args.job.time_limit,
+                  "Render the path tracer's samples in passes until SECONDS have passed (the "
+                  "first pass of 8 samples always; --spp, if given, is the most a pixel takes), "
+                  "then write the image and say how many spp it reached; the image is the one "
+                  "--spp of that many gives")
+      ->type_name("SECONDS")
+      ->check(checked(setting_check("--time-limit")));
   sub->add_flag("--mpi", args.mpi,
                 "Render across the ranks of an MPI job (mpirun -np N tritrace render --mpi ...): "
                 "rank 0 hands out tiles x sample blocks, gathers and writes the image once");
@@ -64,6 +71,12 @@ int run_render(const RenderArgs& args) {
   if (args.mpi) {
     if (partial) {
       throw Error("--mpi", "renders the whole image; it does not take --spp-range or --tile",
+                  ExitCode::kUsage);
+    }
+    if (!settings.time_limit.empty()) {
+      throw Error("--time-limit",
+                  "renders passes on one machine until the time is up; --mpi splits a fixed "
+                  "number of samples among its ranks",
                   ExitCode::kUsage);
     }
     return run_render_mpi(args);
@@ -103,7 +116,8 @@ int run_render(const RenderArgs& args) {
   building.done();
 
   ProgressBar bar(stderr);
-  if (terminal) job.set_progress(&bar);
+  const bool timed = !settings.time_limit.empty();  // passes: no bar (their count is not known)
+  if (terminal && !timed) job.set_progress(&bar);
   const uint32_t spp = job.spec().spp;
   if (job.path()) {
     // A part's share of the paths (tile parts hold about 1/N of the pixels each).
@@ -132,9 +146,11 @@ int run_render(const RenderArgs& args) {
   if (!args.quiet) {
     const Image& image = rendered.image;
     if (job.path()) {
+      const std::string limit =
+          timed ? " (time limit " + settings.time_limit + " s)" : std::string();
       std::printf(
-          "rendered %dx%d, %u spp in %.1f ms (%.3g Mpaths/s, %.3g Mrays/s, %d thread%s) to %s\n",
-          image.width(), image.height(), stats.spp, stats.milliseconds,
+          "rendered %dx%d, %u spp in %.1f ms%s (%.3g Mpaths/s, %.3g Mrays/s, %d thread%s) to %s\n",
+          image.width(), image.height(), stats.spp, stats.milliseconds, limit.c_str(),
           stats.samples_per_second() * 1e-6, stats.mrays_per_second(), stats.threads,
           stats.threads == 1 ? "" : "s", output.c_str());
     } else {

@@ -221,5 +221,53 @@ TEST(RenderJob, PartIdentityIsTheWholeRendersIdentity) {
   EXPECT_FALSE(whole.identity() == other.identity());
 }
 
+TEST(RenderJob, TimeLimitIsForWholePathRenders) {
+  JobSettings s = small("cornell");
+  s.time_limit = "1";
+  EXPECT_EQ(error_of([&] { RenderJob(s, load_job_scene(s)); }).subject(), "--time-limit");
+  s = small("cornell-area");
+  s.time_limit = "1";
+  s.tile = "0/2";
+  EXPECT_EQ(error_of([&] { RenderJob(s, load_job_scene(s)); }).subject(), "--time-limit");
+  s.tile.clear();
+  s.spp_range = "0:8";
+  EXPECT_EQ(error_of([&] { RenderJob(s, load_job_scene(s)); }).subject(), "--time-limit");
+  for (const char* bad : {"0", "-1", "inf", "1e9", "soon"}) {
+    JobSettings t;
+    t.time_limit = bad;
+    EXPECT_EQ(error_of([&] { check_settings(t); }).subject(), "--time-limit") << bad;
+  }
+}
+
+// Passes add whole sample ranges to one film, so a time-limited render is the image of the spp it
+// reached, bit for bit. The counts here do not depend on the clock: a limit that is over at once
+// still renders the first pass of 8, and one that never ends stops at --spp.
+TEST(RenderJob, TimeLimitRendersTheImageOfTheSppItReached) {
+  struct Case {
+    const char* limit;
+    const char* spp;  // empty: no cap
+    uint32_t reached;
+  };
+  for (const Case& c : {Case{"1e-9", "", 8u}, Case{"1e-9", "5", 5u}, Case{"1e6", "20", 20u},
+                        Case{"1e6", "3", 3u}}) {
+    JobSettings s = small("cornell-area", c.spp);
+    s.time_limit = c.limit;
+    s.aovs = "depth";
+    RenderJob timed(s, load_job_scene(s));
+    timed.prepare();
+    RenderStats stats;
+    const RenderedImage got = timed.render(&stats);
+    EXPECT_EQ(stats.spp, c.reached) << c.limit << " " << c.spp;
+
+    JobSettings fixed = small("cornell-area", std::to_string(c.reached));
+    fixed.aovs = "depth";
+    RenderJob plain(fixed, load_job_scene(fixed));
+    plain.prepare();
+    const RenderedImage want = plain.render();
+    EXPECT_TRUE(same_pixels(got.image, want.image)) << c.limit << " " << c.spp;
+    EXPECT_TRUE(same_pixels(got.aovs.depth, want.aovs.depth));
+  }
+}
+
 }  // namespace
 }  // namespace tritrace

@@ -46,6 +46,22 @@ def test_path_traced_image_is_the_clis(tmp_path, kwargs, flags):
                                             "--height", 32, "--spp", 4, *flags))
 
 
+def test_a_time_limited_render_is_the_image_of_the_spp_it_reached(tmp_path):
+    # A limit that is over at once still renders the first pass of 8 samples; one that never ends
+    # stops at spp. Neither depends on the clock.
+    scene = tritrace.Scene.builtin("cornell-area")
+    quick = tritrace.render(scene, width=24, height=16, time_limit=1e-9)
+    assert quick.spp == 8
+    capped = tritrace.render(scene, width=24, height=16, spp=12, time_limit=1e6)
+    assert capped.spp == 12
+    assert_same_bits(capped.image, cli_image(tmp_path, "--scene", "cornell-area", "--width", 24,
+                                             "--height", 16, "--spp", 12))
+    with pytest.raises(ValueError, match="time_limit: must be a number of seconds"):
+        tritrace.render(scene, time_limit=0)
+    with pytest.raises(ValueError, match="time_limit: applies to the path tracer"):
+        tritrace.render(tritrace.Scene.builtin("cornell"), time_limit=1)
+
+
 def test_integrator_and_kernel_choices_are_the_clis(tmp_path, cornell):
     frame = tritrace.render(cornell, integrator="path", spp=2, width=32, height=24,
                             kernel="moller-trumbore", accel="bvh-single")

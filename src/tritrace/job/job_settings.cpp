@@ -52,6 +52,15 @@ std::string check_exposure(const std::string& s) {
   return parse_float(s) ? std::string() : "must be a finite number, got '" + s + "'";
 }
 
+// A year: any longer is a mistake, and the seconds stay exact as a double's milliseconds.
+constexpr double kMaxTimeLimitSeconds = 365.0 * 24 * 3600;
+std::string check_time_limit(const std::string& s) {
+  const std::optional<double> t = parse_finite(s);
+  if (t && *t > 0.0 && *t <= kMaxTimeLimitSeconds) return "";
+  return "must be a number of seconds greater than 0 and at most " +
+         format_double(kMaxTimeLimitSeconds) + ", got '" + s + "'";
+}
+
 constexpr SettingRule kRules[] = {
     {"--scene", &JobSettings::scene, check_builtin_scene},
     {"--width", &JobSettings::width, check_side},
@@ -69,6 +78,7 @@ constexpr SettingRule kRules[] = {
     {"--sampler", &JobSettings::sampler, check_sampler},
     {"--max-depth", &JobSettings::max_depth, check_max_depth},
     {"--filter", &JobSettings::filter, check_filter},
+    {"--time-limit", &JobSettings::time_limit, check_time_limit},
     {"--aovs", &JobSettings::aovs, check_aovs},
     {"--exposure", &JobSettings::exposure, check_exposure},
 };
@@ -181,6 +191,11 @@ AovSet aov_set(const JobSettings& settings) {
 std::optional<float> exposure_stops(const JobSettings& settings) {
   if (settings.exposure.empty()) return std::nullopt;
   return parse_float(settings.exposure);
+}
+
+std::optional<double> time_limit_seconds(const JobSettings& settings) {
+  if (settings.time_limit.empty()) return std::nullopt;
+  return parse_finite(settings.time_limit);
 }
 
 std::string loading_phase(const JobSettings& settings) {

@@ -40,6 +40,7 @@ struct JobSettings {
   std::string sampler;
   std::string max_depth;
   std::string filter = "box";
+  std::string time_limit;  // seconds: whole passes of samples until the time is up
   // What to write.
   std::string output;         // empty: the scene file's output, else <file stem>.png
   bool output_given = false;  // the caller named an output (its value may still be empty)
@@ -77,6 +78,7 @@ IntegratorSpec integrator_spec(const JobSettings& settings, const IntegratorSpec
 FilterKind filter_choice(const JobSettings& settings);
 AovSet aov_set(const JobSettings& settings);
 std::optional<float> exposure_stops(const JobSettings& settings);
+std::optional<double> time_limit_seconds(const JobSettings& settings);
 
 // Adds the AOV `name` (albedo, normal or depth) to `set`; false for any other name.
 bool add_aov(std::string_view name, AovSet* set);

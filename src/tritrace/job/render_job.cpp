@@ -2,6 +2,8 @@
 // the same way whichever front end asked.
 #include "tritrace/job/render_job.h"
 
+#include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <utility>
 
@@ -156,6 +158,21 @@ RenderJob::RenderJob(const JobSettings& settings, const Scene& scene,
 
 void RenderJob::set_up() {
   check_exposure(settings_, path());
+  if (!settings_.time_limit.empty()) {
+    if (!path()) {
+      throw Error("--time-limit",
+                  "applies to the path tracer; the lab integrator takes one sample per pixel",
+                  ExitCode::kUsage);
+    }
+    if (!settings_.spp_range.empty() || !settings_.tile.empty()) {
+      throw Error("--time-limit",
+                  "renders passes until the time is up, so a part's samples are not known in "
+                  "advance; it does not take --spp-range or --tile",
+                  ExitCode::kUsage);
+    }
+    // --spp is the most samples a pixel takes; without it, passes go on until the time is up.
+    if (settings_.spp.empty()) spec_.spp = kMaxSpp;
+  }
   accel_kind_ = tritrace::accel_kind(settings_);
   kernel_ = kernel_choice(settings_);
   aovs_ = aov_set(settings_);
@@ -224,6 +241,9 @@ void RenderJob::render_to_film(Film& film, const RenderOptions& options, RenderS
 }
 
 RenderedImage RenderJob::render(RenderStats* stats) const {
+  if (const std::optional<double> seconds = time_limit_seconds(settings_)) {
+    return render_for(*seconds, stats);
+  }
   RenderedImage out;
   if (aovs_.any()) {
     Film film = make_film();
@@ -233,6 +253,53 @@ RenderedImage RenderJob::render(RenderStats* stats) const {
   } else {
     // The same bits as a film's resolve, without the film's memory.
     out.image = tritrace::render(*scene_, *accel_, *integrator_, options_, stats);
+  }
+  return out;
+}
+
+RenderedImage RenderJob::render_for(double seconds, RenderStats* stats) const {
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point start = Clock::now();
+  const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  Film film = make_film();
+  RenderStats total;
+  uint32_t taken = 0;
+  const uint32_t cap = spec_.spp;
+  while (taken < cap) {
+    // Passes of whole sample blocks, each at most as many samples as the film holds (so the time
+    // per sample is measured again before a long pass), as many as the time left fits at the
+    // time per sample so far. The first pass is always rendered: an image needs samples.
+    uint32_t n = std::min(cap - taken, kSampleBlock);
+    if (taken > 0) {
+      const double per_sample = elapsed() / taken;
+      const double fit = (seconds - elapsed()) / per_sample;
+      if (cap - taken < kSampleBlock) {
+        n = fit >= static_cast<double>(cap - taken) ? cap - taken : 0;
+      } else {
+        const double most =
+            std::min({fit, static_cast<double>(taken), static_cast<double>(cap - taken)});
+        n = most >= kSampleBlock ? static_cast<uint32_t>(most) / kSampleBlock * kSampleBlock : 0;
+      }
+      if (n == 0) break;
+    }
+    RenderOptions options = options_;
+    options.first_sample = taken;
+    options.spp = n;
+    options.progress = nullptr;
+    RenderStats pass;
+    render_to_film(film, options, &pass);
+    total.rays += pass.rays;
+    total.samples += pass.samples;
+    total.threads = std::max(total.threads, pass.threads);
+    taken += n;
+  }
+  total.spp = taken;
+  total.milliseconds = elapsed() * 1e3;
+  if (stats) *stats = total;
+  RenderedImage out;
+  out.image = film.resolve();
+  if (aovs_.any()) {
+    out.aovs = {film.resolve_albedo(), film.resolve_normal(), film.resolve_depth()};
   }
   return out;
 }

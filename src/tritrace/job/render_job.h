@@ -91,7 +91,9 @@ class RenderJob {
   // Renders `options` (default: the job's) into `film`; prepare() first.
   void render_to_film(Film& film, RenderStats* stats = nullptr) const;
   void render_to_film(Film& film, const RenderOptions& options, RenderStats* stats) const;
-  // The whole render (not a part): the image and the AOVs asked for.
+  // The whole render (not a part): the image and the AOVs asked for. With --time-limit, whole
+  // passes of samples until the time is up (stats->spp says how many each pixel took; the image is
+  // bit for bit the one --spp of that many makes).
   RenderedImage render(RenderStats* stats = nullptr) const;
   // Writes a whole render to `file` (write_render).
   void write(const RenderedImage& rendered, const std::string& file) const;
@@ -101,6 +103,7 @@ class RenderJob {
 
  private:
   void set_up();
+  RenderedImage render_for(double seconds, RenderStats* stats) const;
 
   JobSettings settings_;
   std::optional<LoadedScene> loaded_;
