@@ -1,0 +1,319 @@
+// The denoiser against synthetic images with known answers, no rendering: constants stay
+// constant, a noisy smooth function converges to itself as the noise falls, steps in albedo,
+// normal and depth stay steps (and blur when the feature is left out, so the tests can fail),
+// the mean is kept, the half-buffer variance agrees with the known variance, and the result is
+// the same bits for any thread count.
+#include "tritrace/denoise/denoiser.h"
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <numbers>
+#include <vector>
+
+#include "tritrace/error.h"
+#include "tritrace/math/random.h"
+
+namespace tritrace {
+namespace {
+
+Image filled(int w, int h, glm::vec3 v) {
+  Image image(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) image.at(x, y) = v;
+  }
+  return image;
+}
+
+Image from_function(int w, int h, const std::function<glm::vec3(int, int)>& f) {
+  Image image(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) image.at(x, y) = f(x, y);
+  }
+  return image;
+}
+
+// Standard normal numbers by Box-Muller from PCG32, so the images are the same on any standard
+// library.
+class Gaussian {
+ public:
+  explicit Gaussian(uint64_t seed) : rng_(seed, 7) {}
+  float operator()() {
+    const double u1 = (static_cast<double>(rng_.next_u32()) + 0.5) * 0x1p-32;
+    const double u2 = static_cast<double>(rng_.next_u32()) * 0x1p-32;
+    return static_cast<float>(std::sqrt(-2.0 * std::log(u1)) *
+                              std::cos(2.0 * std::numbers::pi * u2));
+  }
+  double uniform() { return (static_cast<double>(rng_.next_u32()) + 0.5) * 0x1p-32; }
+
+ private:
+  Pcg32 rng_;
+};
+
+Image add_noise(const Image& clean, float sigma, uint64_t seed) {
+  Gaussian g(seed);
+  Image noisy = clean;
+  for (int y = 0; y < clean.height(); ++y) {
+    for (int x = 0; x < clean.width(); ++x) {
+      for (int k = 0; k < 3; ++k) noisy.at(x, y)[k] += sigma * g();
+    }
+  }
+  return noisy;
+}
+
+double rmse(const Image& a, const Image& b) {
+  double sum = 0.0;
+  for (int y = 0; y < a.height(); ++y) {
+    for (int x = 0; x < a.width(); ++x) {
+      for (int k = 0; k < 3; ++k) {
+        const double d = static_cast<double>(a.at(x, y)[k]) - b.at(x, y)[k];
+        sum += d * d;
+      }
+    }
+  }
+  return std::sqrt(sum / (3.0 * a.width() * a.height()));
+}
+
+double mean(const Image& image) {
+  double sum = 0.0;
+  for (const glm::vec3& v : image.pixels()) sum += static_cast<double>(v.x) + v.y + v.z;
+  return sum / (3.0 * static_cast<double>(image.pixels().size()));
+}
+
+// The mean of the red channel over the columns [x0, x1) of all rows.
+double column_mean(const Image& image, int x0, int x1) {
+  double sum = 0.0;
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = x0; x < x1; ++x) sum += image.at(x, y).x;
+  }
+  return sum / (static_cast<double>(image.height()) * (x1 - x0));
+}
+
+// Features of one flat, uniformly coloured plane facing the camera.
+struct Flat {
+  Image albedo, normal, depth;
+  Flat(int w, int h, glm::vec3 albedo_value = glm::vec3(0.5f))
+      : albedo(filled(w, h, albedo_value)),
+        normal(filled(w, h, glm::vec3(0.0f, 0.0f, 1.0f))),
+        depth(filled(w, h, glm::vec3(2.0f))) {}
+  DenoiseFeatures features() const { return {albedo, normal, depth}; }
+};
+
+TEST(Denoiser, ConstantImageStaysConstant) {
+  const int w = 97, h = 70;  // not a multiple of the tile size
+  const glm::vec3 c(0.3f, 0.5f, 0.7f);
+  const Image colour = filled(w, h, c);
+  const Flat flat(w, h, glm::vec3(0.8f, 0.6f, 0.4f));
+  DenoiseOptions plain;
+  plain.demodulate_albedo = false;
+  for (float variance : {0.0f, 0.01f, 10.0f}) {
+    const Image v = filled(w, h, glm::vec3(variance));
+    EXPECT_EQ(denoise(colour, v, flat.features(), plain).pixels(), colour.pixels())
+        << "the same bits without demodulation, variance " << variance;
+    // Dividing by the albedo and multiplying back rounds twice: within 2 ulp.
+    const Image out = denoise(colour, v, flat.features());
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        for (int k = 0; k < 3; ++k) {
+          ASSERT_NEAR(out.at(x, y)[k], c[k], 0x1p-22f * c[k])
+              << "pixel (" << x << ", " << y << "), variance " << variance;
+        }
+      }
+    }
+  }
+}
+
+TEST(Denoiser, ImageWithoutNoiseAndWithoutEqualNeighboursIsKept) {
+  // Zero variance: every difference in colour is signal, so no neighbour gets weight.
+  const int w = 40, h = 30;
+  const Image colour =
+      from_function(w, h, [](int x, int y) { return glm::vec3(0.1f + 0.01f * x + 0.3f * y); });
+  const Flat flat(w, h);
+  const Image out = denoise(colour, filled(w, h, glm::vec3(0.0f)), flat.features());
+  EXPECT_LT(rmse(out, colour), 1e-6);
+}
+
+glm::vec3 smooth_function(int x, int y, int w, int h) {
+  const float u = static_cast<float>(x) / w, v = static_cast<float>(y) / h;
+  const float pi = std::numbers::pi_v<float>;
+  const float s = std::sin(3.0f * pi * u) * std::cos(2.0f * pi * v);
+  return glm::vec3(0.5f + 0.25f * s, 0.4f + 0.2f * u, 0.6f - 0.15f * s * v);
+}
+
+TEST(Denoiser, NoisySmoothFunctionConvergesAsNoiseFalls) {
+  const int w = 128, h = 128;
+  const Image clean =
+      from_function(w, h, [&](int x, int y) { return smooth_function(x, y, w, h); });
+  const Flat flat(w, h);
+  double previous = 1e30;
+  for (float sigma : {0.2f, 0.1f, 0.05f, 0.025f, 0.0125f, 0.00625f}) {
+    const Image noisy = add_noise(clean, sigma, 11);
+    const Image out = denoise(noisy, filled(w, h, glm::vec3(sigma * sigma)), flat.features());
+    const double noisy_error = rmse(noisy, clean);
+    const double error = rmse(out, clean);
+    std::printf("sigma %g: noisy %g denoised %g ratio %g\n", sigma, noisy_error, error,
+                error / noisy_error);
+    EXPECT_LT(error, previous) << "sigma " << sigma;
+    EXPECT_LT(error, 0.35 * noisy_error) << "sigma " << sigma;
+    previous = error;
+  }
+}
+
+// Two half buffers of n samples per pixel each, their samples the clean value plus Gaussian
+// noise of standard deviation sigma.
+struct Halves {
+  Image a, b;
+};
+Halves make_halves(const Image& clean, float sigma, int samples_per_half, uint64_t seed) {
+  Gaussian g(seed);
+  Halves halves{clean, clean};
+  const float sigma_mean = sigma / std::sqrt(static_cast<float>(samples_per_half));
+  for (int y = 0; y < clean.height(); ++y) {
+    for (int x = 0; x < clean.width(); ++x) {
+      for (int k = 0; k < 3; ++k) {
+        halves.a.at(x, y)[k] += sigma_mean * g();
+        halves.b.at(x, y)[k] += sigma_mean * g();
+      }
+    }
+  }
+  return halves;
+}
+
+TEST(Denoiser, HalfBuffersConvergeAsNoiseFalls) {
+  const int w = 128, h = 128;
+  const Image clean =
+      from_function(w, h, [&](int x, int y) { return smooth_function(x, y, w, h); });
+  const Flat flat(w, h);
+  double previous = 1e30;
+  for (int spp : {4, 16, 64, 256, 1024}) {
+    const Halves halves = make_halves(clean, 0.5f, spp / 2, 23);
+    const Image noisy = average_halves(halves.a, halves.b);
+    const Image out = denoise_halves(halves.a, halves.b, flat.features());
+    const double noisy_error = rmse(noisy, clean);
+    const double error = rmse(out, clean);
+    std::printf("spp %d: noisy %g denoised %g ratio %g\n", spp, noisy_error, error,
+                error / noisy_error);
+    EXPECT_LT(error, previous) << spp << " spp";
+    EXPECT_LT(error, 0.35 * noisy_error) << spp << " spp";
+    previous = error;
+  }
+}
+
+// A step between the left and the right half of the image, in colour and in one feature; the
+// colour step is smaller than the noise, so the colour alone cannot tell it from noise.
+struct Step {
+  Image colour, variance, albedo, normal, depth;
+  float left, right;  // the clean red values
+  DenoiseFeatures features() const { return {albedo, normal, depth}; }
+};
+
+enum class StepFeature { kAlbedo, kNormal, kDepth };
+
+constexpr int kStepWidth = 64, kStepHeight = 512;
+constexpr float kStepSigma = 0.2f;
+
+Step make_step(StepFeature feature) {
+  const int w = kStepWidth, h = kStepHeight;
+  Step s{Image(),
+         filled(w, h, glm::vec3(kStepSigma * kStepSigma)),
+         filled(w, h, glm::vec3(0.5f)),
+         filled(w, h, glm::vec3(0.0f, 0.0f, 1.0f)),
+         filled(w, h, glm::vec3(2.0f)),
+         0.5f,
+         0.6f};
+  for (int y = 0; y < h; ++y) {
+    for (int x = w / 2; x < w; ++x) {
+      switch (feature) {
+        case StepFeature::kAlbedo:
+          // The demodulated colour steps too (0.5 / 0.5 against 0.6 / 0.4).
+          s.albedo.at(x, y) = glm::vec3(0.4f);
+          s.left = 0.5f;
+          s.right = 0.6f;
+          break;
+        case StepFeature::kNormal:
+          s.normal.at(x, y) = glm::vec3(0.6f, 0.0f, 0.8f);
+          break;
+        case StepFeature::kDepth:
+          s.depth.at(x, y) = glm::vec3(3.0f);
+          break;
+      }
+    }
+  }
+  const Image clean =
+      from_function(w, h, [&](int x, int) { return glm::vec3(x < w / 2 ? s.left : s.right); });
+  s.colour = add_noise(clean, kStepSigma, 5);
+  return s;
+}
+
+// How far the mean of the columns 2 to 4 pixels from the edge, on either side, is from its
+// side's clean value (the larger of the two).
+double step_leak(const Step& s, const Image& out) {
+  const int e = kStepWidth / 2;
+  const double left = std::abs(column_mean(out, e - 5, e - 2) - s.left);
+  const double right = std::abs(column_mean(out, e + 2, e + 5) - s.right);
+  std::printf("leak left %g right %g\n", left, right);
+  return std::max(left, right);
+}
+
+TEST(Denoiser, AlbedoStepStaysAStep) {
+  const Step s = make_step(StepFeature::kAlbedo);
+  const Image out = denoise(s.colour, s.variance, s.features());
+  EXPECT_LT(step_leak(s, out), 0.008);
+  EXPECT_LT(rmse(out, out), 1.0);
+  DenoiseOptions blind;
+  blind.albedo_scale = 0.0f;
+  blind.demodulate_albedo = false;
+  EXPECT_GT(step_leak(s, denoise(s.colour, s.variance, s.features(), blind)), 0.015)
+      << "without the albedo the step blurs: the test can fail";
+}
+
+TEST(Denoiser, NormalStepStaysAStep) {
+  const Step s = make_step(StepFeature::kNormal);
+  EXPECT_LT(step_leak(s, denoise(s.colour, s.variance, s.features())), 0.008);
+  DenoiseOptions blind;
+  blind.normal_scale = 0.0f;
+  EXPECT_GT(step_leak(s, denoise(s.colour, s.variance, s.features(), blind)), 0.015)
+      << "without the normal the step blurs: the test can fail";
+}
+
+TEST(Denoiser, DepthStepStaysAStep) {
+  const Step s = make_step(StepFeature::kDepth);
+  EXPECT_LT(step_leak(s, denoise(s.colour, s.variance, s.features())), 0.008);
+  DenoiseOptions blind;
+  blind.depth_scale = 0.0f;
+  EXPECT_GT(step_leak(s, denoise(s.colour, s.variance, s.features(), blind)), 0.015)
+      << "without the depth the step blurs: the test can fail";
+}
+
+TEST(Denoiser, KeepsTheMeanOfANoisyImage) {
+  // Skewed noise, as Monte Carlo noise is: each pixel the mean of 16 exponentially distributed
+  // samples (relative standard deviation 25% per pixel), split into two halves by parity.
+  const int w = 128, h = 128, spp = 16;
+  const Image clean =
+      from_function(w, h, [&](int x, int y) { return smooth_function(x, y, w, h); });
+  Gaussian g(31);
+  Image a(w, h), b(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      for (int k = 0; k < 3; ++k) {
+        double sums[2] = {0.0, 0.0};
+        for (int s = 0; s < spp; ++s) sums[s % 2] += -clean.at(x, y)[k] * std::log(g.uniform());
+        a.at(x, y)[k] = static_cast<float>(sums[0] / (spp / 2));
+        b.at(x, y)[k] = static_cast<float>(sums[1] / (spp / 2));
+      }
+    }
+  }
+  const Flat flat(w, h);
+  const Image noisy = average_halves(a, b);
+  const Image out = denoise_halves(a, b, flat.features());
+  std::printf("mean noisy %g denoised %g clean %g; rmse noisy %g denoised %g\n", mean(noisy),
+              mean(out), mean(clean), rmse(noisy, clean), rmse(out, clean));
+  EXPECT_NEAR(mean(out) / mean(noisy), 1.0, 0.005);
+  EXPECT_LT(rmse(out, clean), 0.35 * rmse(noisy, clean));
+}
+
+}  // namespace
+}  // namespace tritrace
