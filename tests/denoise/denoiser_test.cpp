@@ -154,10 +154,8 @@ TEST(Denoiser, NoisySmoothFunctionConvergesAsNoiseFalls) {
     const Image out = denoise(noisy, filled(w, h, glm::vec3(sigma * sigma)), flat.features());
     const double noisy_error = rmse(noisy, clean);
     const double error = rmse(out, clean);
-    std::printf("sigma %g: noisy %g denoised %g ratio %g\n", sigma, noisy_error, error,
-                error / noisy_error);
     EXPECT_LT(error, previous) << "sigma " << sigma;
-    EXPECT_LT(error, 0.35 * noisy_error) << "sigma " << sigma;
+    EXPECT_LT(error, 0.35 * noisy_error) << "sigma " << sigma << ": rmse " << error;
     previous = error;
   }
 }
@@ -194,10 +192,8 @@ TEST(Denoiser, HalfBuffersConvergeAsNoiseFalls) {
     const Image out = denoise_halves(halves.a, halves.b, flat.features());
     const double noisy_error = rmse(noisy, clean);
     const double error = rmse(out, clean);
-    std::printf("spp %d: noisy %g denoised %g ratio %g\n", spp, noisy_error, error,
-                error / noisy_error);
     EXPECT_LT(error, previous) << spp << " spp";
-    EXPECT_LT(error, 0.35 * noisy_error) << spp << " spp";
+    EXPECT_LT(error, 0.35 * noisy_error) << spp << " spp: rmse " << error;
     previous = error;
   }
 }
@@ -254,7 +250,6 @@ double step_leak(const Step& s, const Image& out) {
   const int e = kStepWidth / 2;
   const double left = std::abs(column_mean(out, e - 5, e - 2) - s.left);
   const double right = std::abs(column_mean(out, e + 2, e + 5) - s.right);
-  std::printf("leak left %g right %g\n", left, right);
   return std::max(left, right);
 }
 
@@ -309,10 +304,132 @@ TEST(Denoiser, KeepsTheMeanOfANoisyImage) {
   const Flat flat(w, h);
   const Image noisy = average_halves(a, b);
   const Image out = denoise_halves(a, b, flat.features());
-  std::printf("mean noisy %g denoised %g clean %g; rmse noisy %g denoised %g\n", mean(noisy),
-              mean(out), mean(clean), rmse(noisy, clean), rmse(out, clean));
-  EXPECT_NEAR(mean(out) / mean(noisy), 1.0, 0.005);
+  EXPECT_NEAR(mean(out) / mean(noisy), 1.0, 0.005) << "clean mean " << mean(clean);
   EXPECT_LT(rmse(out, clean), 0.35 * rmse(noisy, clean));
+}
+
+// The variance of the mean of 2 n samples, Gaussian of standard deviation sigma, estimated from
+// its two halves of n samples: (a - b)^2 / 4 has expectation sigma^2 / (2 n), and over P pixels
+// and channels the sum of (a - b)^2 / (4 sigma^2 / (2 n)) is chi-square with P degrees of
+// freedom, so its deviation from P is within 4 standard deviations, sqrt(2 P).
+TEST(Denoiser, HalfBufferVarianceIsChiSquareAroundTheKnownVariance) {
+  const int w = 64, h = 64, n = 8;
+  const float sigma = 0.3f;
+  const Halves halves = make_halves(filled(w, h, glm::vec3(1.0f)), sigma, n, 41);
+  const double known = sigma * sigma / (2.0 * n);
+  const Image raw = variance_from_halves(halves.a, halves.b, 0);
+  double chi2 = 0.0;
+  for (const glm::vec3& v : raw.pixels()) chi2 += (v.x + v.y + v.z) / known;
+  const double dof = 3.0 * w * h;
+  EXPECT_LT(std::abs(chi2 - dof), 4.0 * std::sqrt(2.0 * dof));
+  // The smoothed estimate (5 x 5 pixels, 25 degrees of freedom away from the border) keeps the
+  // mean and has about 1/5 of the raw estimate's relative spread, sqrt(2 / 25) = 0.28.
+  const Image smooth = variance_from_halves(halves.a, halves.b, 2);
+  double sum = 0.0, sum2 = 0.0, count = 0.0;
+  for (int y = 2; y < h - 2; ++y) {
+    for (int x = 2; x < w - 2; ++x) {
+      for (int k = 0; k < 3; ++k) {
+        const double r = smooth.at(x, y)[k] / known;
+        sum += r;
+        sum2 += r * r;
+        count += 1.0;
+      }
+    }
+  }
+  const double mean_ratio = sum / count;
+  const double spread = std::sqrt(sum2 / count - mean_ratio * mean_ratio);
+  EXPECT_NEAR(mean_ratio, 1.0, 0.05);
+  EXPECT_NEAR(spread, std::sqrt(2.0 / 25.0), 0.05);
+}
+
+// Against the sample variance of each pixel's own samples (what independent renders would show),
+// with skewed samples as Monte Carlo gives: exponential, mean mu, variance mu^2. The two
+// estimates of the variance of the mean agree in the mean over pixels, within 4 standard errors
+// of their difference.
+TEST(Denoiser, HalfBufferVarianceAgreesWithTheSampleVariance) {
+  const int w = 64, h = 64, spp = 32;
+  Gaussian g(43);
+  Image a(w, h), b(w, h);
+  std::vector<double> differences;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const double mu = 0.2 + 0.01 * x;
+      for (int k = 0; k < 3; ++k) {
+        double sums[2] = {0.0, 0.0};
+        double sum = 0.0, sum2 = 0.0;
+        for (int s = 0; s < spp; ++s) {
+          const double v = -mu * std::log(g.uniform());
+          sums[s % 2] += v;
+          sum += v;
+          sum2 += v * v;
+        }
+        a.at(x, y)[k] = static_cast<float>(sums[0] / (spp / 2));
+        b.at(x, y)[k] = static_cast<float>(sums[1] / (spp / 2));
+        const double sample_variance = (sum2 - sum * sum / spp) / (spp - 1);
+        const double d = static_cast<double>(a.at(x, y)[k]) - b.at(x, y)[k];
+        // Relative to the known variance of the mean, so pixels weigh alike.
+        differences.push_back((d * d / 4.0 - sample_variance / spp) / (mu * mu / spp));
+      }
+    }
+  }
+  double sum = 0.0, sum2 = 0.0;
+  for (double d : differences) {
+    sum += d;
+    sum2 += d * d;
+  }
+  const double count = static_cast<double>(differences.size());
+  const double mean_difference = sum / count;
+  const double standard_error =
+      std::sqrt((sum2 / count - mean_difference * mean_difference) / count);
+  EXPECT_LT(std::abs(mean_difference), 4.0 * standard_error);
+  EXPECT_LT(standard_error, 0.05) << "the test's power";
+}
+
+TEST(Denoiser, SameBitsForAnyThreadCount) {
+  const int w = 150, h = 90;  // several tiles, partial ones at the edges
+  const Step s = make_step(StepFeature::kNormal);
+  Image colour(w, h), variance(w, h), albedo(w, h), normal(w, h), depth(w, h);
+  Gaussian g(3);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      colour.at(x, y) = s.colour.at(x % kStepWidth, y) * (1.0f + 0.1f * g());
+      variance.at(x, y) = glm::vec3(0.01f + 0.01f * std::abs(g()));
+      albedo.at(x, y) = glm::vec3(x < 70 ? 0.3f : 0.7f, 0.5f, 0.0f);  // blue: black
+      normal.at(x, y) = y < 40 ? glm::vec3(0.0f) : s.normal.at(x % kStepWidth, y);
+      depth.at(x, y) = glm::vec3(y < 40 ? 0.0f : 1.0f + 0.01f * x);
+    }
+  }
+  const DenoiseFeatures features{albedo, normal, depth};
+  Image one;
+  tbb::task_arena(1).execute([&] { one = denoise(colour, variance, features); });
+  const Image all = denoise(colour, variance, features);  // every core
+  ASSERT_EQ(one.pixels().size(), all.pixels().size());
+  EXPECT_EQ(std::memcmp(one.pixels().data(), all.pixels().data(),
+                        one.pixels().size() * sizeof(glm::vec3)),
+            0);
+  EXPECT_GT(rmse(one, colour), 0.0) << "it did something";
+}
+
+TEST(Denoiser, RejectsMismatchedSizesAndNonFiniteValues) {
+  const Flat flat(8, 8);
+  const Image colour = filled(8, 8, glm::vec3(1.0f));
+  EXPECT_THROW((void)denoise(colour, filled(8, 7, glm::vec3(0.0f)), flat.features()), Error);
+  const Flat small(8, 7);
+  EXPECT_THROW((void)denoise(colour, filled(8, 8, glm::vec3(0.0f)), small.features()), Error);
+  Image bad = colour;
+  bad.at(3, 4).y = std::nanf("");
+  EXPECT_THROW((void)denoise(bad, filled(8, 8, glm::vec3(0.0f)), flat.features()), Error);
+  EXPECT_THROW((void)variance_from_halves(colour, filled(7, 8, glm::vec3(0.0f))), Error);
+  DenoiseOptions options;
+  options.search_radius = -1;
+  EXPECT_THROW((void)denoise(colour, colour, flat.features(), options), Error);
+}
+
+TEST(Denoiser, EmptyImageGivesEmptyImage) {
+  const Image empty;
+  const Image out = denoise(empty, empty, {empty, empty, empty});
+  EXPECT_EQ(out.width(), 0);
+  EXPECT_TRUE(out.pixels().empty());
 }
 
 }  // namespace

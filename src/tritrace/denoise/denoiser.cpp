@@ -24,14 +24,17 @@ constexpr float kColourEpsilon = 1e-10f;
 constexpr int kTileSize = 64;
 
 // e^-x for x >= 0 (larger than 80 and NaN count as 80, e^-80 ~ 1.8e-35), to a relative error
-// below 2e-6: 2^(integer part) times the Taylor polynomial of the rest. Written without
-// branches or library calls so that the loops over a row vectorise; every pixel computes it the
-// same way, so the results stay the same for any thread count.
+// below 4e-6: 2^k times the Taylor polynomial of e^f, where k is log2(e^-x) rounded to the nearest
+// integer (by adding 1.5 * 2^23, whose float has no bits below 1) and f the rest times ln 2.
+// Written without branches, conversions or library calls so that the loops over a row
+// vectorise (a float-to-int conversion keeps GCC 12 from vectorising them); every pixel computes
+// it the same way, so the results stay the same for any thread count.
 inline float exp_neg(float x) {
   x = x < 80.0f ? x : 80.0f;
-  const float t = x * -1.44269504f;                            // log2(e^-x), in [-115.5, 0]
-  const int i = static_cast<int>(t);                           // toward zero: t - i in (-1, 0]
-  const float f = (t - static_cast<float>(i)) * 0.693147181f;  // in (-0.694, 0]
+  const float t = x * -1.44269504f;  // log2(e^-x), in [-115.5, 0]
+  const float shifted = t + 12582912.0f;
+  const float f = (t - (shifted - 12582912.0f)) * 0.693147181f;  // in [-0.35, 0.35]
+  const int32_t k = std::bit_cast<int32_t>(shifted) - 0x4B400000;
   float p = 1.0f / 5040.0f;
   p = p * f + 1.0f / 720.0f;
   p = p * f + 1.0f / 120.0f;
@@ -40,7 +43,22 @@ inline float exp_neg(float x) {
   p = p * f + 0.5f;
   p = p * f + 1.0f;
   p = p * f + 1.0f;
-  return p * std::bit_cast<float>(static_cast<uint32_t>(i + 127) << 23);
+  return p * std::bit_cast<float>(static_cast<uint32_t>(k + 127) << 23);
+}
+
+// distance[i] becomes the weight e^-max(distance[i], feature[i]).
+void weights(float* __restrict distance, const float* __restrict feature, int n) {
+  for (int i = 0; i < n; ++i) {
+    const float d = distance[i] > feature[i] ? distance[i] : feature[i];
+    distance[i] = exp_neg(d);
+  }
+}
+
+// The weighted sum of the neighbours' differences from the pixel's own value: equal neighbours
+// add exactly nothing (a constant image keeps its bits) and large values lose no precision.
+void accumulate(const float* __restrict weight, const float* __restrict neighbour,
+                const float* __restrict own, float* __restrict sum, int n) {
+  for (int i = 0; i < n; ++i) sum[i] += weight[i] * (neighbour[i] - own[i]);
 }
 
 // One float channel of the image with a border of `margin` pixels on each side holding the
@@ -222,10 +240,9 @@ void filter_tile(const Planes& p, const DenoiseOptions& options, int width, int 
         for (int j = 0; j < eh; ++j) {
           const float* erow = e.data() + static_cast<size_t>(j) * ew;
           float* hrow = hsum.data() + static_cast<size_t>(j) * tw;
-          for (int i = 0; i < tw; ++i) {
-            float s = 0.0f;
-            for (int t = 0; t <= 2 * f; ++t) s += erow[i + t];
-            hrow[i] = s;
+          for (int i = 0; i < tw; ++i) hrow[i] = erow[i];
+          for (int t = 1; t <= 2 * f; ++t) {
+            for (int i = 0; i < tw; ++i) hrow[i] += erow[i + t];
           }
         }
       }
@@ -294,17 +311,12 @@ void filter_tile(const Planes& p, const DenoiseOptions& options, int width, int 
         const float* pr = p.colour[0].row(qx0, y);
         const float* pg = p.colour[1].row(qx0, y);
         const float* pb = p.colour[2].row(qx0, y);
-        for (int i = 0; i < n; ++i) {
-          // min(w_colour, w_features) of Rousselle et al. 2013. The sums are of differences
-          // from the pixel's own value, so that equal neighbours add exactly nothing (a
-          // constant image stays the same bits) and large values lose no precision.
-          const float d = dst[i] > feature[i] ? dst[i] : feature[i];
-          const float w = exp_neg(d);
-          ar[i] += w * (ur[i] - pr[i]);
-          ag[i] += w * (ug[i] - pg[i]);
-          ab[i] += w * (ub[i] - pb[i]);
-          aw[i] += w;
-        }
+        // min(w_colour, w_features) of Rousselle et al. 2013.
+        weights(dst, feature.data(), n);
+        accumulate(dst, ur, pr, ar, n);
+        accumulate(dst, ug, pg, ag, n);
+        accumulate(dst, ub, pb, ab, n);
+        for (int i = 0; i < n; ++i) aw[i] += dst[i];
       }
     }
   }
