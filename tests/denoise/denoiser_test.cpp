@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -260,6 +261,7 @@ TEST(Denoiser, AlbedoStepStaysAStep) {
   EXPECT_LT(rmse(out, out), 1.0);
   DenoiseOptions blind;
   blind.albedo_scale = 0.0f;
+  blind.albedo_relative_scale = 0.0f;
   blind.demodulate_albedo = false;
   EXPECT_GT(step_leak(s, denoise(s.colour, s.variance, s.features(), blind)), 0.015)
       << "without the albedo the step blurs: the test can fail";
@@ -493,6 +495,42 @@ TEST(Denoiser, EmptyImageGivesEmptyImage) {
   const Image out = denoise(empty, empty, {empty, empty, empty});
   EXPECT_EQ(out.width(), 0);
   EXPECT_TRUE(out.pixels().empty());
+}
+
+TEST(Denoiser, EdgeOfALightGainsNoLight) {
+  // A light source (albedo 0, radiance 10) beside a lit wall (albedo 0.8), with a column of
+  // edge pixels that are 95% light and 5% wall, as anti-aliasing makes them; the variance is
+  // estimated from the image, so it is large at the edge. Demodulated, the edge pixels' colour
+  // is 9.5 / 0.043, far below the light's 10 / 0.003: if they were averaged with the light and
+  // multiplied back by their own albedo they would gain light.
+  const int w = 64, h = 64;
+  Image colour(w, h), albedo(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const bool light = x < 20, edge = x == 20;
+      albedo.at(x, y) = glm::vec3(light ? 0.0f : edge ? 0.04f : 0.8f);
+      colour.at(x, y) = glm::vec3(light ? 10.0f : edge ? 9.525f : 0.5f);
+    }
+  }
+  Image noisy = add_noise(colour, 0.05f, 53);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < 20; ++x) noisy.at(x, y) = colour.at(x, y);  // a light has no noise
+  }
+  const Flat flat(w, h);
+  const DenoiseFeatures features{albedo, flat.normal, flat.depth};
+  const Image variance = estimate_variance_spatially(noisy, albedo);
+  const Image out = denoise(noisy, variance, features);
+  float largest = 0.0f;
+  for (const glm::vec3& v : out.pixels()) largest = std::max({largest, v.x, v.y, v.z});
+  EXPECT_LT(largest, 10.5f);
+  EXPECT_NEAR(mean(out) / mean(noisy), 1.0, 0.005);
+  DenoiseOptions absolute_only;
+  absolute_only.albedo_relative_scale = 0.0f;
+  const Image wrong = denoise(noisy, variance, features, absolute_only);
+  float wrong_largest = 0.0f;
+  for (const glm::vec3& v : wrong.pixels())
+    wrong_largest = std::max({wrong_largest, v.x, v.y, v.z});
+  EXPECT_GT(wrong_largest, 10.5f) << "comparing albedos in absolute terms only gains light";
 }
 
 }  // namespace

@@ -156,7 +156,7 @@ Planes make_planes(const Image& colour, const Image& variance, const DenoiseFeat
         for (int k = 0; k < 3; ++k) {
           p.colour[k].at(x, y) = colour.at(x, y)[k] / m[k];
           p.variance[k].at(x, y) = std::max(variance.at(x, y)[k], 0.0f) / (m[k] * m[k]);
-          p.albedo[k].at(x, y) = a[k];
+          p.albedo[k].at(x, y) = a[k] + kAlbedoEpsilon;
           p.normal[k].at(x, y) = features.normal.at(x, y)[k];
         }
       }
@@ -201,6 +201,10 @@ void filter_tile(const Planes& p, const DenoiseOptions& options, int width, int 
   const bool use_normal = options.normal_scale > 0.0f;
   const bool use_depth = options.depth_scale > 0.0f;
   const float inv_a2 = use_albedo ? 1.0f / (options.albedo_scale * options.albedo_scale) : 0.0f;
+  const bool use_relative_albedo = options.albedo_relative_scale > 0.0f;
+  const float inv_r2 = use_relative_albedo
+                           ? 1.0f / (options.albedo_relative_scale * options.albedo_relative_scale)
+                           : 0.0f;
   const float inv_n2 = use_normal ? 1.0f / (options.normal_scale * options.normal_scale) : 0.0f;
   const float z2 = options.depth_scale * options.depth_scale;
 
@@ -266,13 +270,14 @@ void filter_tile(const Planes& p, const DenoiseOptions& options, int width, int 
         }
         std::array<float, 256> feature{};  // per pixel of the row; kTileSize <= 256
         for (int i = 0; i < n; ++i) feature[i] = 0.0f;
-        if (use_albedo) {
+        if (use_albedo || use_relative_albedo) {
           for (int k = 0; k < 3; ++k) {
             const float* ap = p.albedo[k].row(qx0, y);
             const float* aq = p.albedo[k].row(qx0 + dx, y + dy);
             for (int i = 0; i < n; ++i) {
               const float d = ap[i] - aq[i];
-              feature[i] += d * d * inv_a2;
+              const float larger = ap[i] > aq[i] ? ap[i] : aq[i];
+              feature[i] += d * d * (inv_a2 + inv_r2 / (larger * larger));
             }
           }
         }
@@ -343,8 +348,8 @@ void check_options(const DenoiseOptions& options) {
     throw Error("denoise",
                 "patch radius " + std::to_string(options.patch_radius) + " is outside 0..8");
   }
-  for (float v :
-       {options.colour_strength, options.albedo_scale, options.normal_scale, options.depth_scale}) {
+  for (float v : {options.colour_strength, options.albedo_scale, options.albedo_relative_scale,
+                  options.normal_scale, options.depth_scale}) {
     if (!std::isfinite(v)) throw Error("denoise", "a strength or scale is not finite");
   }
 }

@@ -27,10 +27,16 @@ struct DenoiseOptions {
   // k^2 (var_p + var_q); larger k smooths more. 0 leaves the colour term out (features only).
   float colour_strength = 0.45f;
   // The feature distances: squared differences in units of these. A feature with scale 0 (or
-  // less) is left out. Albedo is compared per channel, normals as unit vectors (0.25 ~ 14
-  // degrees), depth as the relative error of a planar (first-order) prediction of inverse depth
-  // from the pixel's own depth gradient, so that a slanted plane is one surface.
+  // less) is left out. Albedo is compared per channel, both in absolute terms and relative to
+  // the larger of the two (albedo + kAlbedoEpsilon, so that black compares with black): among
+  // dark albedos a small difference is a large ratio, and demodulated neighbours whose albedos
+  // differ by a large ratio would be multiplied back by the wrong one (the pixels at the edge of
+  // a light source, whose albedo is a small fraction of a lit surface's, then gain light).
+  // Normals are compared as unit vectors (0.25 ~ 14 degrees), depth as the relative error of a
+  // planar (first-order) prediction of inverse depth from the pixel's own depth gradient, so
+  // that a slanted plane is one surface.
   float albedo_scale = 0.05f;
+  float albedo_relative_scale = 0.25f;
   float normal_scale = 0.25f;
   float depth_scale = 0.02f;
   // Divide colour by (albedo + kAlbedoEpsilon) before filtering and multiply back after.
