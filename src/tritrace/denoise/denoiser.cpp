@@ -22,6 +22,8 @@ namespace {
 constexpr float kColourEpsilon = 1e-10f;
 // Tiles are fixed by the image size alone; each pixel's result does not depend on them either.
 constexpr int kTileSize = 64;
+constexpr int kMaxTileSize = 256;  // the per-row feature distances live on the stack
+static_assert(kTileSize <= kMaxTileSize);
 
 // e^-x for x >= 0 (larger than 80 and NaN count as 80, e^-80 ~ 1.8e-35), to a relative error
 // below 4e-6: 2^k times the Taylor polynomial of e^f, where k is log2(e^-x) rounded to the nearest
@@ -214,6 +216,7 @@ void filter_tile(const Planes& p, const DenoiseOptions& options, int width, int 
   std::array<std::vector<float>, 3> acc;
   for (auto& a : acc) a.assign(static_cast<size_t>(tw) * th, 0.0f);
   std::vector<float> acc_w(static_cast<size_t>(tw) * th, 0.0f);
+  std::array<float, kMaxTileSize> feature{};  // one row's feature distances
 
   for (int dy = -r; dy <= r; ++dy) {
     for (int dx = -r; dx <= r; ++dx) {
@@ -268,7 +271,6 @@ void filter_tile(const Planes& p, const DenoiseOptions& options, int width, int 
           const float colour_d = use_colour ? dst[i] * patch_norm : 0.0f;
           dst[i] = colour_d > 0.0f ? colour_d : 0.0f;
         }
-        std::array<float, 256> feature{};  // per pixel of the row; kTileSize <= 256
         for (int i = 0; i < n; ++i) feature[i] = 0.0f;
         if (use_albedo || use_relative_albedo) {
           for (int k = 0; k < 3; ++k) {

@@ -43,8 +43,8 @@ struct DenoiseOptions {
   bool demodulate_albedo = true;
 };
 
-// The added to the albedo when dividing colour by it, so that black and missing albedo (0 where
-// nothing was hit) divide safely; the same amount is multiplied back.
+// The amount added to the albedo when dividing colour by it, so that black and missing albedo (0
+// where nothing was hit) divide safely; the same amount is multiplied back.
 inline constexpr float kAlbedoEpsilon = 0.00316f;
 
 // The first hit's features, each the colour's size: albedo (RGB), world-space normal (XYZ; zero
