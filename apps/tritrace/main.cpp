@@ -13,6 +13,7 @@
 
 #include "bench_command.h"
 #include "build_info.h"
+#include "denoise_command.h"
 #include "flags/flag_values.h"
 #include "info_command.h"
 #include "merge_command.h"
@@ -28,10 +29,10 @@ std::string usage_message(const CLI::ParseError& e, int argc, char** argv) {
     if (argc > 1 && argv[1][0] != '-') {
       return std::string(argv[1]) +
              ": unknown command (use 'tritrace render', 'tritrace view', 'tritrace info', "
-             "'tritrace merge' or 'tritrace bench'; see --help)";
+             "'tritrace merge', 'tritrace denoise' or 'tritrace bench'; see --help)";
     }
     return "missing command: use 'tritrace render', 'tritrace view', 'tritrace info', "
-           "'tritrace merge' or 'tritrace bench' (see --help)";
+           "'tritrace merge', 'tritrace denoise' or 'tritrace bench' (see --help)";
   }
   return tritrace::cli::one_line_usage_message(e);
 }
@@ -78,6 +79,8 @@ int main(int argc, char** argv) {
   CLI::App* info = tritrace::cli::add_info_command(app, info_args);
   tritrace::cli::MergeArgs merge_args;
   CLI::App* merge = tritrace::cli::add_merge_command(app, merge_args);
+  tritrace::cli::DenoiseArgs denoise_args;
+  CLI::App* denoise = tritrace::cli::add_denoise_command(app, denoise_args);
 
   try {
     app.parse(argc, argv);
@@ -97,6 +100,7 @@ int main(int argc, char** argv) {
     if (bench->parsed()) return tritrace::cli::run_bench(bench_args);
     if (info->parsed()) return tritrace::cli::run_info(info_args);
     if (merge->parsed()) return tritrace::cli::run_merge(merge_args);
+    if (denoise->parsed()) return tritrace::cli::run_denoise(denoise_args);
   } catch (const tritrace::Error& e) {
     std::fprintf(stderr, "tritrace: %s\n", e.what());
     return static_cast<int>(e.exit_code());

@@ -3,6 +3,10 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfOutputFile.h>
 #include <OpenEXRConfig.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -1812,6 +1816,138 @@ TEST_F(DistributedCliTest, InfoPrintsAPartsMetadata) {
   }
   EXPECT_TRUE(std::regex_search(r.out, std::regex("render: [0-9a-f]{16}\n"))) << r.out;
   EXPECT_NE(r.out.find("settings: integrator=path spp=20 "), std::string::npos) << r.out;
+}
+
+// ---- denoise -------------------------------------------------------------------------------
+
+// The median squared difference between horizontally neighbouring pixels' red values: the
+// noise (edges are too few to move the median).
+double NeighbourDifference(const std::vector<float>& red, int width, int height) {
+  std::vector<double> squares;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x + 1 < width; ++x) {
+      const double d =
+          red[static_cast<size_t>(y) * width + x + 1] - red[static_cast<size_t>(y) * width + x];
+      squares.push_back(d * d);
+    }
+  }
+  std::nth_element(squares.begin(), squares.begin() + squares.size() / 2, squares.end());
+  return squares[squares.size() / 2];
+}
+
+double Mean(const std::vector<float>& values) {
+  double sum = 0.0;
+  for (float v : values) sum += v;
+  return sum / static_cast<double>(values.size());
+}
+
+TEST_F(CliTest, DenoiseWritesALessNoisyImageWithTheInputsLayers) {
+  RenderQuietly({"--scene", "cornell-area", "--width", "64", "--height", "64", "--spp", "4",
+                 "--aovs", "albedo,normal,depth"},
+                "in.exr");
+  const RunResult r = Run({"denoise", "in.exr", "-o", "out.exr"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_TRUE(std::regex_match(
+      r.out, std::regex(R"(denoised in\.exr \(64x64, variance estimated from the image\) in )"
+                        R"([0-9]+(\.[0-9]+)? ms to out\.exr\n)")))
+      << r.out;
+  ExpectOnlyFiles(work_, {"in.exr", "out.exr"});
+  const auto in = tritrace::testing::read_exr_channels((work_ / "in.exr").string());
+  const auto out = tritrace::testing::read_exr_channels((work_ / "out.exr").string());
+  for (const char* name : {"R", "G", "B", "albedo.R", "albedo.G", "albedo.B", "normal.X",
+                           "normal.Y", "normal.Z", "Z"}) {
+    ASSERT_EQ(out.channels.count(name), 1u) << name;
+  }
+  EXPECT_EQ(out.channels.at("albedo.G").values, in.channels.at("albedo.G").values);
+  EXPECT_EQ(out.channels.at("Z").values, in.channels.at("Z").values);
+  const auto& red_in = in.channels.at("R").values;
+  const auto& red_out = out.channels.at("R").values;
+  EXPECT_LT(NeighbourDifference(red_out, 64, 64), 0.5 * NeighbourDifference(red_in, 64, 64));
+  EXPECT_NEAR(Mean(red_out) / Mean(red_in), 1.0, 0.02);
+}
+
+// An EXR of `side` x `side` pixels whose channels hold the values `fill` gives each.
+void WriteExr(const fs::path& path, int side,
+              const std::vector<std::pair<std::string, float (*)(int, int)>>& channels) {
+  Imf::Header header(side, side);
+  std::vector<std::vector<float>> planes;
+  for (const auto& [name, fill] : channels) {
+    header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    planes.emplace_back(static_cast<size_t>(side) * side);
+    for (int y = 0; y < side; ++y) {
+      for (int x = 0; x < side; ++x) planes.back()[static_cast<size_t>(y) * side + x] = fill(x, y);
+    }
+  }
+  Imf::FrameBuffer frame;
+  for (size_t c = 0; c < channels.size(); ++c) {
+    frame.insert(channels[c].first,
+                 Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(planes[c].data()), sizeof(float),
+                            sizeof(float) * side));
+  }
+  Imf::OutputFile file(path.c_str(), header);
+  file.setFrameBuffer(frame);
+  file.writePixels(side);
+}
+
+float Checker(int x, int y) {
+  return ((x / 3 + y / 3) % 2) != 0 ? 0.25f : 0.75f;
+}
+float Half(int, int) {
+  return 0.5f;
+}
+float Zero(int, int) {
+  return 0.0f;
+}
+float One(int, int) {
+  return 1.0f;
+}
+
+TEST_F(CliTest, DenoiseReadsTheVarianceLayer) {
+  // Zero variance says every difference is real: the checker stays as it is. Without the layer,
+  // the variance estimated from the image is large, and the checker blurs.
+  std::vector<std::pair<std::string, float (*)(int, int)>> channels = {
+      {"R", Checker},     {"G", Checker},     {"B", Checker},     {"albedo.R", Half},
+      {"albedo.G", Half}, {"albedo.B", Half}, {"normal.X", Zero}, {"normal.Y", Zero},
+      {"normal.Z", One},  {"Z", One}};
+  WriteExr(work_ / "plain.exr", 24, channels);
+  for (const char* name : {"variance.R", "variance.G", "variance.B"})
+    channels.push_back({name, Zero});
+  WriteExr(work_ / "exact.exr", 24, channels);
+  for (const char* in : {"plain", "exact"}) {
+    const RunResult r =
+        Run({"denoise", std::string(in) + ".exr", "-o", std::string(in) + "_out.exr", "-q"});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.out + r.err, "");
+  }
+  const auto exact = tritrace::testing::read_exr_channels((work_ / "exact_out.exr").string());
+  const auto plain = tritrace::testing::read_exr_channels((work_ / "plain_out.exr").string());
+  double exact_error = 0.0, plain_error = 0.0;
+  for (int y = 0; y < 24; ++y) {
+    for (int x = 0; x < 24; ++x) {
+      const size_t i = static_cast<size_t>(y) * 24 + x;
+      exact_error =
+          std::max<double>(exact_error, std::abs(exact.channels.at("R").values[i] - Checker(x, y)));
+      plain_error =
+          std::max<double>(plain_error, std::abs(plain.channels.at("R").values[i] - Checker(x, y)));
+    }
+  }
+  EXPECT_LT(exact_error, 1e-6);
+  EXPECT_GT(plain_error, 0.01);
+}
+
+TEST_F(CliTest, DenoiseNamesTheFileAndTheMissingLayer) {
+  RenderQuietly({"--scene", "cornell-area", "--width", "16", "--height", "16", "--spp", "1",
+                 "--aovs", "albedo,depth"},
+                "in.exr");
+  ExpectErrorLine(Run({"denoise", "in.exr", "-o", "out.exr"}), 1, "in.exr",
+                  "has no normal layer (normal.X, .Y, .Z)");
+  ExpectErrorLine(Run({"denoise", "none.exr", "-o", "out.exr"}), 1, "none.exr", "no such file");
+  WriteExr(work_ / "partial.exr", 4, {{"R", Half}, {"G", Half}, {"B", Half}, {"albedo.R", Half}});
+  ExpectErrorLine(Run({"denoise", "partial.exr", "-o", "out.exr"}), 1, "partial.exr",
+                  "has channel albedo.R but not albedo.G");
+  ExpectErrorLine(Run({"denoise", "in.exr", "-o", "out.txt"}), 2, "--output", "unknown extension");
+  ExpectOnlyFiles(work_, {"in.exr", "partial.exr"});
 }
 
 }  // namespace

@@ -310,6 +310,75 @@ Image read_image_float(const std::string& path) {
   return image;
 }
 
+std::vector<Image> read_exr_layers(const std::string& path,
+                                   std::span<const std::array<std::string, 3>> layers) {
+  if (!std::filesystem::is_regular_file(path)) throw Error(path, "cannot read image: no such file");
+  const std::vector<uint8_t> bytes = read_file_bytes(path);
+  check_exr_header(bytes, path);
+  try {
+    ExrMemoryInputStream in(bytes, path.c_str());
+    Imf::InputFile file(in);
+    const Imath::Box2i window = file.header().dataWindow();
+    const int w = window.max.x - window.min.x + 1, h = window.max.y - window.min.y + 1;
+    check_image_sides(w, h, path);
+    const Imf::ChannelList& channels = file.header().channels();
+    const size_t pixels = static_cast<size_t>(w) * static_cast<size_t>(h);
+    const ptrdiff_t origin = static_cast<ptrdiff_t>(window.min.y) * w + window.min.x;
+    // One plane per distinct channel name read.
+    std::vector<std::string> names;
+    std::vector<std::vector<float>> planes;
+    std::vector<bool> present(layers.size(), false);
+    for (size_t l = 0; l < layers.size(); ++l) {
+      std::string have, missing;
+      for (const std::string& name : layers[l]) {
+        std::string& slot = channels.findChannel(name) ? have : missing;
+        if (slot.empty()) slot = name;
+      }
+      if (have.empty()) continue;
+      if (!missing.empty()) throw Error(path, "has channel " + have + " but not " + missing);
+      present[l] = true;
+      for (const std::string& name : layers[l]) {
+        if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+      }
+    }
+    planes.resize(names.size(), std::vector<float>(pixels, 0.0f));
+    Imf::FrameBuffer frame;
+    for (size_t c = 0; c < names.size(); ++c) {
+      char* base = reinterpret_cast<char*>(planes[c].data() - origin);
+      frame.insert(names[c],
+                   Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * w, 1, 1, 0.0));
+    }
+    file.setFrameBuffer(frame);
+    file.readPixels(window.min.y, window.max.y);
+    std::vector<Image> out(layers.size());
+    for (size_t l = 0; l < layers.size(); ++l) {
+      if (!present[l]) continue;
+      out[l] = Image(w, h);
+      for (int k = 0; k < 3; ++k) {
+        const size_t c = static_cast<size_t>(std::find(names.begin(), names.end(), layers[l][k]) -
+                                             names.begin());
+        for (int y = 0; y < h; ++y) {
+          for (int x = 0; x < w; ++x) {
+            const float v = planes[c][static_cast<size_t>(y) * w + x];
+            if (!std::isfinite(v)) {
+              throw Error(path, "channel " + names[c] + " is not finite at pixel (" +
+                                    std::to_string(x) + ", " + std::to_string(y) + ")");
+            }
+            out[l].at(x, y)[k] = v;
+          }
+        }
+      }
+    }
+    return out;
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    std::string reason = e.what();
+    std::replace(reason.begin(), reason.end(), '\n', ' ');
+    throw Error(path, "cannot read image: " + reason);
+  }
+}
+
 void write_radiance_hdr(const Image& image, const std::string& path) {
   std::vector<float> rgb;
   rgb.reserve(image.pixels().size() * 3);

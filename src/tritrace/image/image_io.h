@@ -2,6 +2,7 @@
 // OpenEXR (float or half, with AOV layers), chosen by the file's extension; every write is atomic.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -74,6 +75,14 @@ Image decode_exr_image(std::span<const uint8_t> bytes, const std::string& subjec
 
 // The extensions read_image_float knows, as error messages list them.
 inline constexpr std::string_view kFloatImageExtensions = ".hdr or .exr";
+
+// Layers of an OpenEXR file, each a triple of channel names (a single-channel layer such as the
+// depth "Z" names it three times), read as 32-bit floats into one image per layer, in the order
+// asked. A layer none of whose channels the file has comes back empty (0 x 0). Throws
+// Error(path, reason) for an unreadable file, a layer with only some of its channels (naming the
+// missing one), or a non-finite value (naming the channel and pixel). For `tritrace denoise`.
+std::vector<Image> read_exr_layers(const std::string& path,
+                                   std::span<const std::array<std::string, 3>> layers);
 
 // Writes a Radiance HDR file (RGBE, run-length encoded, through stb_image_write), atomically.
 void write_radiance_hdr(const Image& image, const std::string& path);

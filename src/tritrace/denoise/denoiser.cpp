@@ -1,0 +1,477 @@
+// The joint non-local-means denoiser (denoiser.h): the inputs are copied into padded planar float
+// arrays, the image is cut into fixed tiles, and each tile loops over the neighbour offsets with
+// contiguous per-row inner loops that the compiler vectorises.
+#include "tritrace/denoise/denoiser.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tritrace/error.h"
+#include "tritrace/parallel.h"
+
+namespace tritrace {
+namespace {
+
+// The colour term's epsilon of Rousselle et al. 2012: keeps the distance finite where both
+// variances are 0 (then any difference makes the neighbour's weight vanish).
+constexpr float kColourEpsilon = 1e-10f;
+// Tiles are fixed by the image size alone; each pixel's result does not depend on them either.
+constexpr int kTileSize = 64;
+constexpr int kMaxTileSize = 256;  // the per-row feature distances live on the stack
+static_assert(kTileSize <= kMaxTileSize);
+
+// e^-x for x >= 0 (larger than 80 and NaN count as 80, e^-80 ~ 1.8e-35), to a relative error
+// below 4e-6: 2^k times the Taylor polynomial of e^f, where k is log2(e^-x) rounded to the nearest
+// integer (by adding 1.5 * 2^23, whose float has no bits below 1) and f the rest times ln 2.
+// Written without branches, conversions or library calls so that the loops over a row
+// vectorise (a float-to-int conversion keeps GCC 12 from vectorising them); every pixel computes
+// it the same way, so the results stay the same for any thread count.
+inline float exp_neg(float x) {
+  x = x < 80.0f ? x : 80.0f;
+  const float t = x * -1.44269504f;  // log2(e^-x), in [-115.5, 0]
+  const float shifted = t + 12582912.0f;
+  const float f = (t - (shifted - 12582912.0f)) * 0.693147181f;  // in [-0.35, 0.35]
+  const int32_t k = std::bit_cast<int32_t>(shifted) - 0x4B400000;
+  float p = 1.0f / 5040.0f;
+  p = p * f + 1.0f / 720.0f;
+  p = p * f + 1.0f / 120.0f;
+  p = p * f + 1.0f / 24.0f;
+  p = p * f + 1.0f / 6.0f;
+  p = p * f + 0.5f;
+  p = p * f + 1.0f;
+  p = p * f + 1.0f;
+  return p * std::bit_cast<float>(static_cast<uint32_t>(k + 127) << 23);
+}
+
+// distance[i] becomes the weight e^-max(distance[i], feature[i]).
+void weights(float* __restrict distance, const float* __restrict feature, int n) {
+  for (int i = 0; i < n; ++i) {
+    const float d = distance[i] > feature[i] ? distance[i] : feature[i];
+    distance[i] = exp_neg(d);
+  }
+}
+
+// The weighted sum of the neighbours' differences from the pixel's own value: equal neighbours
+// add exactly nothing (a constant image keeps its bits) and large values lose no precision.
+void accumulate(const float* __restrict weight, const float* __restrict neighbour,
+                const float* __restrict own, float* __restrict sum, int n) {
+  for (int i = 0; i < n; ++i) sum[i] += weight[i] * (neighbour[i] - own[i]);
+}
+
+// One float channel of the image with a border of `margin` pixels on each side holding the
+// nearest edge pixel's value (clamp to edge).
+class Plane {
+ public:
+  Plane(int width, int height, int margin)
+      : width_(width),
+        height_(height),
+        margin_(margin),
+        stride_(width + 2 * margin),
+        values_(static_cast<size_t>(stride_) * (height + 2 * margin)) {}
+
+  float& at(int x, int y) { return values_[index(x, y)]; }
+  float at(int x, int y) const { return values_[index(x, y)]; }
+  const float* row(int x, int y) const { return values_.data() + index(x, y); }
+  int stride() const { return stride_; }
+
+  // Copies the edge pixels outwards into the border.
+  void fill_border() {
+    for (int y = 0; y < height_; ++y) {
+      for (int x = -margin_; x < 0; ++x) at(x, y) = at(0, y);
+      for (int x = width_; x < width_ + margin_; ++x) at(x, y) = at(width_ - 1, y);
+    }
+    for (int y = -margin_; y < 0; ++y) {
+      std::copy_n(row(-margin_, 0), stride_, &at(-margin_, y));
+    }
+    for (int y = height_; y < height_ + margin_; ++y) {
+      std::copy_n(row(-margin_, height_ - 1), stride_, &at(-margin_, y));
+    }
+  }
+
+ private:
+  size_t index(int x, int y) const {
+    return static_cast<size_t>(y + margin_) * stride_ + static_cast<size_t>(x + margin_);
+  }
+  int width_, height_, margin_, stride_;
+  std::vector<float> values_;
+};
+
+void check_size(const Image& image, const Image& colour, const char* name) {
+  if (image.width() != colour.width() || image.height() != colour.height()) {
+    throw Error("denoise", std::string(name) + " is " + std::to_string(image.width()) + " x " +
+                               std::to_string(image.height()) + ", the colour " +
+                               std::to_string(colour.width()) + " x " +
+                               std::to_string(colour.height()));
+  }
+}
+
+void check_finite(const Image& image, const char* name) {
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = 0; x < image.width(); ++x) {
+      const glm::vec3& v = image.at(x, y);
+      if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
+        throw Error("denoise", std::string(name) + " is not finite at pixel (" + std::to_string(x) +
+                                   ", " + std::to_string(y) + ")");
+      }
+    }
+  }
+}
+
+// The slope of the two one-sided differences that agree in sign, the smaller one (0 when they
+// disagree): at a pixel beside a depth edge it is the slope of the pixel's own surface.
+float minmod(float backward, float forward) {
+  if (backward * forward <= 0.0f) return 0.0f;
+  return std::abs(backward) < std::abs(forward) ? backward : forward;
+}
+
+// The filter's inputs, planar and padded: the demodulated colour and its variance, the
+// features, and the per-pixel gradient of inverse depth.
+struct Planes {
+  std::array<Plane, 3> colour, variance, albedo, normal;
+  Plane inverse_depth, depth_dx, depth_dy;
+  std::vector<glm::vec3> modulation;  // what the filtered colour is multiplied by (unpadded)
+};
+
+Planes make_planes(const Image& colour, const Image& variance, const DenoiseFeatures& features,
+                   const DenoiseOptions& options, int margin) {
+  const int w = colour.width(), h = colour.height();
+  auto planes3 = [&] {
+    return std::array<Plane, 3>{Plane(w, h, margin), Plane(w, h, margin), Plane(w, h, margin)};
+  };
+  Planes p{planes3(),           planes3(),
+           planes3(),           planes3(),
+           Plane(w, h, margin), Plane(w, h, margin),
+           Plane(w, h, margin), std::vector<glm::vec3>(static_cast<size_t>(w) * h)};
+  parallel::for_range(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      for (int x = 0; x < w; ++x) {
+        const glm::vec3 a = features.albedo.at(x, y);
+        const glm::vec3 m = options.demodulate_albedo ? a + kAlbedoEpsilon : glm::vec3(1.0f);
+        p.modulation[static_cast<size_t>(y) * w + x] = m;
+        const float z = features.depth.at(x, y).x;
+        p.inverse_depth.at(x, y) = z > 0.0f ? 1.0f / z : 0.0f;
+        for (int k = 0; k < 3; ++k) {
+          p.colour[k].at(x, y) = colour.at(x, y)[k] / m[k];
+          p.variance[k].at(x, y) = std::max(variance.at(x, y)[k], 0.0f) / (m[k] * m[k]);
+          p.albedo[k].at(x, y) = a[k] + kAlbedoEpsilon;
+          p.normal[k].at(x, y) = features.normal.at(x, y)[k];
+        }
+      }
+    }
+  });
+  // The gradient needs the whole inverse-depth plane, so it is a second pass.
+  parallel::for_range(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
+    const Plane& z = p.inverse_depth;
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      for (int x = 0; x < w; ++x) {
+        const float c = z.at(x, y);
+        const float left = x > 0 ? c - z.at(x - 1, y) : z.at(x + 1 < w ? x + 1 : x, y) - c;
+        const float right = x + 1 < w ? z.at(x + 1, y) - c : left;
+        const float up = y > 0 ? c - z.at(x, y - 1) : z.at(x, y + 1 < h ? y + 1 : y) - c;
+        const float down = y + 1 < h ? z.at(x, y + 1) - c : up;
+        p.depth_dx.at(x, y) = minmod(left, right);
+        p.depth_dy.at(x, y) = minmod(up, down);
+      }
+    }
+  });
+  for (auto* group : {&p.colour, &p.variance, &p.albedo, &p.normal}) {
+    for (Plane& plane : *group) plane.fill_border();
+  }
+  p.inverse_depth.fill_border();
+  p.depth_dx.fill_border();
+  p.depth_dy.fill_border();
+  return p;
+}
+
+// Filters the pixels [x0, x1) x [y0, y1) into `out` (the demodulated colour's weighted means,
+// multiplied back by the modulation).
+void filter_tile(const Planes& p, const DenoiseOptions& options, int width, int height, int x0,
+                 int x1, int y0, int y1, Image& out) {
+  const int r = options.search_radius;
+  const int f = options.patch_radius;
+  const int tw = x1 - x0, th = y1 - y0;
+  const int ew = tw + 2 * f, eh = th + 2 * f;  // the patch-distance region
+  const bool use_colour = options.colour_strength > 0.0f;
+  const float k2 = options.colour_strength * options.colour_strength;
+  const float patch_norm = 1.0f / (3.0f * static_cast<float>((2 * f + 1) * (2 * f + 1)));
+  const bool use_albedo = options.albedo_scale > 0.0f;
+  const bool use_normal = options.normal_scale > 0.0f;
+  const bool use_depth = options.depth_scale > 0.0f;
+  const float inv_a2 = use_albedo ? 1.0f / (options.albedo_scale * options.albedo_scale) : 0.0f;
+  const bool use_relative_albedo = options.albedo_relative_scale > 0.0f;
+  const float inv_r2 = use_relative_albedo
+                           ? 1.0f / (options.albedo_relative_scale * options.albedo_relative_scale)
+                           : 0.0f;
+  const float inv_n2 = use_normal ? 1.0f / (options.normal_scale * options.normal_scale) : 0.0f;
+  const float z2 = options.depth_scale * options.depth_scale;
+
+  std::vector<float> e(static_cast<size_t>(ew) * eh);     // per-pixel colour distance
+  std::vector<float> hsum(static_cast<size_t>(tw) * eh);  // summed along rows of the patch
+  std::vector<float> dist(static_cast<size_t>(tw));       // one row's patch distance
+  std::array<std::vector<float>, 3> acc;
+  for (auto& a : acc) a.assign(static_cast<size_t>(tw) * th, 0.0f);
+  std::vector<float> acc_w(static_cast<size_t>(tw) * th, 0.0f);
+  std::array<float, kMaxTileSize> feature{};  // one row's feature distances
+
+  for (int dy = -r; dy <= r; ++dy) {
+    for (int dx = -r; dx <= r; ++dx) {
+      // The rows and columns of the tile whose neighbour at (dx, dy) is inside the image.
+      const int qx0 = std::max(x0, -dx), qx1 = std::min(x1, width - dx);
+      const int qy0 = std::max(y0, -dy), qy1 = std::min(y1, height - dy);
+      if (qx0 >= qx1 || qy0 >= qy1) continue;
+      if (use_colour) {
+        // Rousselle et al. 2012, eq. 4: ((u_p - u_q)^2 - (var_p + min(var_p, var_q))) /
+        // (eps + k^2 (var_p + var_q)), summed over the channels; the subtraction cancels the
+        // expected squared difference that noise alone makes.
+        for (int j = 0; j < eh; ++j) {
+          float* row = e.data() + static_cast<size_t>(j) * ew;
+          const int y = y0 - f + j;
+          for (int i = 0; i < ew; ++i) row[i] = 0.0f;
+          for (int k = 0; k < 3; ++k) {
+            const float* up = p.colour[k].row(x0 - f, y);
+            const float* uq = p.colour[k].row(x0 - f + dx, y + dy);
+            const float* vp = p.variance[k].row(x0 - f, y);
+            const float* vq = p.variance[k].row(x0 - f + dx, y + dy);
+            for (int i = 0; i < ew; ++i) {
+              const float d = up[i] - uq[i];
+              const float vmin = vp[i] < vq[i] ? vp[i] : vq[i];
+              row[i] += (d * d - (vp[i] + vmin)) / (kColourEpsilon + k2 * (vp[i] + vq[i]));
+            }
+          }
+        }
+        for (int j = 0; j < eh; ++j) {
+          const float* erow = e.data() + static_cast<size_t>(j) * ew;
+          float* hrow = hsum.data() + static_cast<size_t>(j) * tw;
+          for (int i = 0; i < tw; ++i) hrow[i] = erow[i];
+          for (int t = 1; t <= 2 * f; ++t) {
+            for (int i = 0; i < tw; ++i) hrow[i] += erow[i + t];
+          }
+        }
+      }
+      for (int y = qy0; y < qy1; ++y) {
+        const int j = y - y0;
+        if (use_colour) {
+          for (int i = 0; i < tw; ++i) dist[i] = 0.0f;
+          for (int t = 0; t <= 2 * f; ++t) {
+            const float* hrow = hsum.data() + static_cast<size_t>(j + t) * tw;
+            for (int i = 0; i < tw; ++i) dist[i] += hrow[i];
+          }
+        }
+        const int n = qx1 - qx0;
+        const int i0 = qx0 - x0;
+        float* dst = dist.data() + i0;
+        // The feature distances of Rousselle et al. 2013, without their variance terms (the
+        // features are taken as exact).
+        for (int i = 0; i < n; ++i) {
+          const float colour_d = use_colour ? dst[i] * patch_norm : 0.0f;
+          dst[i] = colour_d > 0.0f ? colour_d : 0.0f;
+        }
+        for (int i = 0; i < n; ++i) feature[i] = 0.0f;
+        if (use_albedo || use_relative_albedo) {
+          for (int k = 0; k < 3; ++k) {
+            const float* ap = p.albedo[k].row(qx0, y);
+            const float* aq = p.albedo[k].row(qx0 + dx, y + dy);
+            for (int i = 0; i < n; ++i) {
+              const float d = ap[i] - aq[i];
+              const float larger = ap[i] > aq[i] ? ap[i] : aq[i];
+              feature[i] += d * d * (inv_a2 + inv_r2 / (larger * larger));
+            }
+          }
+        }
+        if (use_normal) {
+          for (int k = 0; k < 3; ++k) {
+            const float* np = p.normal[k].row(qx0, y);
+            const float* nq = p.normal[k].row(qx0 + dx, y + dy);
+            for (int i = 0; i < n; ++i) {
+              const float d = np[i] - nq[i];
+              feature[i] += d * d * inv_n2;
+            }
+          }
+        }
+        if (use_depth) {
+          const float* zp = p.inverse_depth.row(qx0, y);
+          const float* zq = p.inverse_depth.row(qx0 + dx, y + dy);
+          const float* gx = p.depth_dx.row(qx0, y);
+          const float* gy = p.depth_dy.row(qx0, y);
+          const float fdx = static_cast<float>(dx), fdy = static_cast<float>(dy);
+          for (int i = 0; i < n; ++i) {
+            // The planar prediction of the neighbour's inverse depth (exact for a plane seen in
+            // perspective), its error relative to the nearer of the two.
+            const float residual = zq[i] - (zp[i] + (gx[i] * fdx + gy[i] * fdy));
+            const float scale = zp[i] > zq[i] ? zp[i] : zq[i];
+            const float ratio = residual * residual / (z2 * scale * scale + 1e-30f);
+            feature[i] += residual == 0.0f ? 0.0f : ratio;
+          }
+        }
+        float* ar = acc[0].data() + static_cast<size_t>(j) * tw + i0;
+        float* ag = acc[1].data() + static_cast<size_t>(j) * tw + i0;
+        float* ab = acc[2].data() + static_cast<size_t>(j) * tw + i0;
+        float* aw = acc_w.data() + static_cast<size_t>(j) * tw + i0;
+        const float* ur = p.colour[0].row(qx0 + dx, y + dy);
+        const float* ug = p.colour[1].row(qx0 + dx, y + dy);
+        const float* ub = p.colour[2].row(qx0 + dx, y + dy);
+        const float* pr = p.colour[0].row(qx0, y);
+        const float* pg = p.colour[1].row(qx0, y);
+        const float* pb = p.colour[2].row(qx0, y);
+        // min(w_colour, w_features) of Rousselle et al. 2013.
+        weights(dst, feature.data(), n);
+        accumulate(dst, ur, pr, ar, n);
+        accumulate(dst, ug, pg, ag, n);
+        accumulate(dst, ub, pb, ab, n);
+        for (int i = 0; i < n; ++i) aw[i] += dst[i];
+      }
+    }
+  }
+  for (int j = 0; j < th; ++j) {
+    for (int i = 0; i < tw; ++i) {
+      const size_t t = static_cast<size_t>(j) * tw + i;
+      const glm::vec3& m = p.modulation[static_cast<size_t>(y0 + j) * width + (x0 + i)];
+      // The pixel's own weight is 1, so the sum of weights is at least 1.
+      const float inv = 1.0f / acc_w[t];
+      const int x = x0 + i, y = y0 + j;
+      out.at(x, y) = glm::vec3((p.colour[0].at(x, y) + acc[0][t] * inv) * m.x,
+                               (p.colour[1].at(x, y) + acc[1][t] * inv) * m.y,
+                               (p.colour[2].at(x, y) + acc[2][t] * inv) * m.z);
+    }
+  }
+}
+
+void check_options(const DenoiseOptions& options) {
+  if (options.search_radius < 0 || options.search_radius > 32) {
+    throw Error("denoise",
+                "search radius " + std::to_string(options.search_radius) + " is outside 0..32");
+  }
+  if (options.patch_radius < 0 || options.patch_radius > 8) {
+    throw Error("denoise",
+                "patch radius " + std::to_string(options.patch_radius) + " is outside 0..8");
+  }
+  for (float v : {options.colour_strength, options.albedo_scale, options.albedo_relative_scale,
+                  options.normal_scale, options.depth_scale}) {
+    if (!std::isfinite(v)) throw Error("denoise", "a strength or scale is not finite");
+  }
+}
+
+}  // namespace
+
+Image denoise(const Image& colour, const Image& variance, const DenoiseFeatures& features,
+              const DenoiseOptions& options) {
+  check_options(options);
+  check_size(variance, colour, "the variance");
+  check_size(features.albedo, colour, "the albedo");
+  check_size(features.normal, colour, "the normal");
+  check_size(features.depth, colour, "the depth");
+  check_finite(colour, "the colour");
+  check_finite(variance, "the variance");
+  check_finite(features.albedo, "the albedo");
+  check_finite(features.normal, "the normal");
+  check_finite(features.depth, "the depth");
+  const int w = colour.width(), h = colour.height();
+  Image out(w, h);
+  if (w == 0 || h == 0) return out;
+
+  const Planes planes = make_planes(colour, variance, features, options,
+                                    options.search_radius + options.patch_radius);
+  const int tiles_x = (w + kTileSize - 1) / kTileSize;
+  const int tiles_y = (h + kTileSize - 1) / kTileSize;
+  parallel::for_range(tbb::blocked_range<int>(0, tiles_x * tiles_y, 1),
+                      [&](const tbb::blocked_range<int>& tiles) {
+                        for (int t = tiles.begin(); t < tiles.end(); ++t) {
+                          const int x0 = (t % tiles_x) * kTileSize;
+                          const int y0 = (t / tiles_x) * kTileSize;
+                          filter_tile(planes, options, w, h, x0, std::min(x0 + kTileSize, w), y0,
+                                      std::min(y0 + kTileSize, h), out);
+                        }
+                      });
+  return out;
+}
+
+Image average_halves(const Image& half_a, const Image& half_b) {
+  check_size(half_b, half_a, "the second half buffer");
+  Image out(half_a.width(), half_a.height());
+  for (int y = 0; y < half_a.height(); ++y) {
+    for (int x = 0; x < half_a.width(); ++x) {
+      out.at(x, y) = 0.5f * (half_a.at(x, y) + half_b.at(x, y));
+    }
+  }
+  return out;
+}
+
+namespace {
+
+// The mean over the (2 radius + 1)^2 pixels around each pixel (clamped at the border, so border
+// pixels count their edge neighbours more than once), in a fixed order.
+Image box_mean(const Image& image, int radius) {
+  const int w = image.width(), h = image.height();
+  Image rows(w, h), out(w, h);
+  const float norm = 1.0f / static_cast<float>(2 * radius + 1);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      glm::vec3 s(0.0f);
+      for (int t = -radius; t <= radius; ++t) s += image.at(std::clamp(x + t, 0, w - 1), y);
+      rows.at(x, y) = s * norm;
+    }
+  }
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      glm::vec3 s(0.0f);
+      for (int t = -radius; t <= radius; ++t) s += rows.at(x, std::clamp(y + t, 0, h - 1));
+      out.at(x, y) = s * norm;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+Image variance_from_halves(const Image& half_a, const Image& half_b, int radius) {
+  check_size(half_b, half_a, "the second half buffer");
+  if (radius < 0) throw Error("denoise", "variance radius " + std::to_string(radius) + " < 0");
+  Image raw(half_a.width(), half_a.height());
+  for (int y = 0; y < half_a.height(); ++y) {
+    for (int x = 0; x < half_a.width(); ++x) {
+      const glm::vec3 d = half_a.at(x, y) - half_b.at(x, y);
+      raw.at(x, y) = 0.25f * d * d;
+    }
+  }
+  return radius == 0 ? raw : box_mean(raw, radius);
+}
+
+Image denoise_halves(const Image& half_a, const Image& half_b, const DenoiseFeatures& features,
+                     const DenoiseOptions& options) {
+  return denoise(average_halves(half_a, half_b), variance_from_halves(half_a, half_b), features,
+                 options);
+}
+
+Image estimate_variance_spatially(const Image& colour, const Image& albedo) {
+  check_size(albedo, colour, "the albedo");
+  const int w = colour.width(), h = colour.height();
+  Image u(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) u.at(x, y) = colour.at(x, y) / (albedo.at(x, y) + kAlbedoEpsilon);
+  }
+  const Image mean = box_mean(u, 1);
+  Image squared(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const glm::vec3 d = u.at(x, y) - mean.at(x, y);
+      squared.at(x, y) = d * d;
+    }
+  }
+  // A pixel's residual from the 3 x 3 mean that includes it has (8/9) of its variance (white
+  // noise); the demodulated variance is multiplied back by the albedo's square.
+  Image out = box_mean(squared, 2);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const glm::vec3 m = albedo.at(x, y) + kAlbedoEpsilon;
+      out.at(x, y) = out.at(x, y) * (9.0f / 8.0f) * m * m;
+    }
+  }
+  return out;
+}
+
+}  // namespace tritrace
