@@ -468,7 +468,7 @@ py::array_t<bool> occluded(const PyAccel& self, const py::object& origins,
 
 struct Frame {
   py::array_t<float> image;
-  py::object albedo = py::none(), normal = py::none(), depth = py::none();
+  py::object albedo = py::none(), normal = py::none(), depth = py::none(), variance = py::none();
   std::string integrator;
   uint32_t spp = 0;
   double milliseconds = 0.0;
@@ -480,28 +480,22 @@ AovSet aov_set(const py::object& aovs) {
   AovSet set;
   if (aovs.is_none()) return set;
   if (py::isinstance<py::str>(aovs) || !py::isinstance<py::sequence>(aovs)) {
-    raise_type_error("aovs: must be a sequence of names (albedo, normal, depth), got " +
+    raise_type_error("aovs: must be a sequence of names (albedo, normal, depth, variance), got " +
                      std::string(Py_TYPE(aovs.ptr())->tp_name));
   }
   for (const py::handle item : aovs) {
     const std::string name = string_arg("aovs", py::reinterpret_borrow<py::object>(item));
     if (!add_aov(name, &set)) {
-      throw py::value_error("aovs: unknown AOV '" + name + "' (use albedo, normal, depth)");
+      throw py::value_error("aovs: unknown AOV '" + name +
+                            "' (use albedo, normal, depth, variance)");
     }
   }
   return set;
 }
 
-// The job setting's text for `set`: "albedo,normal,depth" or a subset; empty for none.
+// The job setting's text for `set`: "albedo,normal,depth,variance" or a subset; empty for none.
 std::string aov_names(const AovSet& set) {
-  std::string text;
-  for (const auto& [on, name] : {std::pair{set.albedo, "albedo"}, std::pair{set.normal, "normal"},
-                                 std::pair{set.depth, "depth"}}) {
-    if (!on) continue;
-    if (!text.empty()) text += ",";
-    text += name;
-  }
-  return text;
+  return aov_list(set);
 }
 
 // An H x W x channels float32 array of an image's first `channels` channels, row 0 at the top.
@@ -588,6 +582,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   if (aov.albedo) frame.albedo = image_array(albedo_image, 3);
   if (aov.normal) frame.normal = image_array(normal_image, 3);
   if (aov.depth) frame.depth = image_array(depth_image, 1);
+  if (aov.variance) frame.variance = image_array(rendered.aovs.variance, 3);
   frame.integrator = std::string(integrator_name(spec.kind));
   frame.spp = stats.spp;
   frame.milliseconds = stats.milliseconds;
@@ -774,11 +769,13 @@ bit for bit.)")
 
 image: float32 (height, width, 3), linear radiance (row 0 at the top: a PFM file stores rows
 bottom-up); albedo, normal: (height, width, 3) and depth: (height, width), or None when not
-asked for; integrator, spp, milliseconds, rays, threads: what was rendered and how.)")
+asked for; variance: (height, width, 3), the estimated variance of each pixel's mean (from
+the halves of its samples split by sample index parity), or None; integrator, spp, milliseconds, rays, threads: what was rendered and how.)")
       .def_readonly("image", &Frame::image)
       .def_readonly("albedo", &Frame::albedo)
       .def_readonly("normal", &Frame::normal)
       .def_readonly("depth", &Frame::depth)
+      .def_readonly("variance", &Frame::variance)
       .def_readonly("integrator", &Frame::integrator)
       .def_readonly("spp", &Frame::spp)
       .def_readonly("milliseconds", &Frame::milliseconds)
@@ -806,7 +803,7 @@ over this scene, to reuse it across renders), kernel, threads (default all cores
 (radians, orbiting look_at), distance (to look_at), light (the first point light's position),
 time_limit (seconds: the path tracer's samples in passes until the time is up, spp the most;
 Frame.spp says how many were reached, and the image is the one that spp gives).
-aovs: any of "albedo", "normal", "depth". Camera settings beyond the CLI's flags, as a
+aovs: any of "albedo", "normal", "depth", "variance". Camera settings beyond the CLI's flags, as a
 scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
 focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a
 look-at camera. Bad values raise ValueError with the CLI's message.)");

@@ -185,7 +185,8 @@ class Frame:
 
     image: (height, width, 3) linear radiance, row 0 at the top (a PFM file stores rows
     bottom-up); albedo, normal: (height, width, 3) and depth: (height, width), or None when not
-    asked for.
+    asked for; variance: (height, width, 3), the estimated variance of each pixel's mean (from the
+    halves of its samples split by sample index parity), or None.
     """
 
     @property
@@ -196,6 +197,8 @@ class Frame:
     def normal(self) -> Optional[npt.NDArray[np.float32]]: ...
     @property
     def depth(self) -> Optional[npt.NDArray[np.float32]]: ...
+    @property
+    def variance(self) -> Optional[npt.NDArray[np.float32]]: ...
     @property
     def integrator(self) -> Literal["lab", "path"]: ...
     @property
@@ -218,7 +221,7 @@ def render(
     sampler: Optional[Literal["sobol", "independent"]] = None,
     max_depth: Optional[int] = None,
     filter: Optional[Literal["box", "gaussian", "blackman-harris"]] = None,
-    aovs: Sequence[Literal["albedo", "normal", "depth"]] = (),
+    aovs: Sequence[Literal["albedo", "normal", "depth", "variance"]] = (),
     accel: Union[str, Accel, None] = None,
     kernel: Optional[str] = None,
     threads: Optional[int] = None,

@@ -49,8 +49,7 @@ int run_merge(const MergeArgs& args) {
   const bool path = info.render.integrator == "path";
   check_exposure(settings, path);
   const Film film = merge_parts(args.parts);
-  const RenderedImage rendered{
-      film.resolve(), {film.resolve_albedo(), film.resolve_normal(), film.resolve_depth()}};
+  const RenderedImage rendered{film.resolve(), film.resolve_aovs()};
   write_render(rendered, args.output, path, settings);
   const Image& image = rendered.image;
   const double ms =

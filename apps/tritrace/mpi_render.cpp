@@ -63,7 +63,7 @@ std::vector<PartRange> make_units(int ranks, uint32_t spp, int width, int height
 }
 
 size_t floats_per_pixel(const AovSet& aovs) {
-  return aovs.any() ? 11 : 4;
+  return 4 + (aovs.any() ? 7 : 0) + (aovs.variance ? 4 : 0);
 }
 
 // A unit's packed film (pack_part) as floats: per layer the unit's pixels' (R, G, B, W), then
@@ -82,6 +82,9 @@ std::vector<float> pack(const Film& packed, size_t pixels) {
       for (size_t p = 0; p < pixels; ++p) {
         out.insert(out.end(), {a[p].albedo.x, a[p].albedo.y, a[p].albedo.z, a[p].normal.x,
                                a[p].normal.y, a[p].normal.z, a[p].depth});
+        if (packed.aovs().variance) {
+          out.insert(out.end(), {a[p].even.x, a[p].even.y, a[p].even.z, a[p].even.w});
+        }
       }
     }
   }
@@ -114,6 +117,10 @@ Film unpack(const std::vector<float>& data, const RenderIdentity& r, const PartR
       for (size_t p = 0; p < shape.pixels; ++p, i += 7) {
         a[p] = {glm::vec3(data[i], data[i + 1], data[i + 2]),
                 glm::vec3(data[i + 3], data[i + 4], data[i + 5]), data[i + 6]};
+        if (r.aovs.variance) {
+          a[p].even = glm::vec4(data[i + 7], data[i + 8], data[i + 9], data[i + 10]);
+          i += 4;
+        }
       }
     }
   }

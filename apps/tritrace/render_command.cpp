@@ -28,14 +28,18 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
       ->type_name("PATH")
       ->each([&args](const std::string&) { args.job.output_given = true; });
   sub->add_option("--aovs", args.job.aovs,
-                  "Extra EXR layers of the first hit, comma-separated: albedo (albedo.R/G/B), "
-                  "normal (normal.X/Y/Z, world space, facing the camera), depth (Z, distance "
-                  "along the camera ray; 0 where nothing is hit); needs an .exr output")
+                  "Extra EXR layers for denoisers, comma-separated: albedo (albedo.R/G/B) and "
+                  "normal (normal.X/Y/Z, world space, shading normal facing the ray) of the first "
+                  "non-specular hit (path: through perfect mirrors and smooth glass, albedo times "
+                  "their tint), depth (Z, distance along the camera ray to the first hit; 0 where "
+                  "nothing is hit), variance (variance.R/G/B, the estimated variance of each "
+                  "pixel's mean, from the halves of its samples split by sample index parity); "
+                  "needs an .exr output")
       ->type_name("LIST")
       ->check(checked(setting_check("--aovs")));
   sub->add_flag("--exr-half", args.job.exr_half,
                 "Store the EXR's colour channels as 16-bit half floats instead of 32-bit floats "
-                "(depth stays 32-bit); needs an .exr output");
+                "(depth and variance stay 32-bit); needs an .exr output");
   sub->add_option("--exposure", args.job.exposure,
                   "Scale path images by 2^STOPS before the sRGB curve of .png and .ppm outputs "
                   "(default 0); float outputs store the radiance unscaled")

@@ -509,7 +509,7 @@ INSTANTIATE_TEST_SUITE_P(
                   2,
                   "--aovs",
                   "unknown AOV 'colour' in 'albedo,colour' (use a comma-separated list of albedo, "
-                  "normal, depth)"},
+                  "normal, depth, variance)"},
         ErrorCase{"AovsEmptyName",
                   {"--aovs", "albedo,,depth", "-o", "x.exr"},
                   2,
@@ -1479,7 +1479,7 @@ TEST_F(CliTest, CornellAreaExrHasTheAovLayersAndTheSameRadianceAsThePfm) {
   const std::vector<std::string> args = {"--scene", "cornell-area", "--spp",    "4",
                                          "--width", "32",           "--height", "32"};
   std::vector<std::string> with_aovs = args;
-  with_aovs.insert(with_aovs.end(), {"--aovs", "albedo,normal,depth"});
+  with_aovs.insert(with_aovs.end(), {"--aovs", "albedo,normal,depth,variance"});
   RenderQuietly(with_aovs, "x.exr");
   RenderQuietly(args, "x.pfm");
   ExpectOnlyFiles(work_, {"x.exr", "x.pfm"});
@@ -1488,7 +1488,8 @@ TEST_F(CliTest, CornellAreaExrHasTheAovLayersAndTheSameRadianceAsThePfm) {
   ASSERT_EQ(exr.height, 32);
   EXPECT_EQ(ChannelNames(exr),
             (std::set<std::string>{"R", "G", "B", "albedo.R", "albedo.G", "albedo.B", "normal.X",
-                                   "normal.Y", "normal.Z", "Z"}));
+                                   "normal.Y", "normal.Z", "Z", "variance.R", "variance.G",
+                                   "variance.B"}));
   for (const auto& [name, data] : exr.channels) EXPECT_EQ(data.stored, Imf::FLOAT) << name;
   ExpectExrRgbEqualsPfm(exr, ReadPfm(work_ / "x.pfm"));
 
@@ -1500,7 +1501,9 @@ TEST_F(CliTest, CornellAreaExrHasTheAovLayersAndTheSameRadianceAsThePfm) {
   EXPECT_EQ(Channel(exr, "normal.Z", 16, 12), -1.0f);
   EXPECT_EQ(Channel(exr, "albedo.G", 16, 12), 0.75f);
   // Every pixel sees some surface of the closed-looking box: unit-or-shorter normals (means of
-  // unit normals), albedos within [0, 1], positive depths, finite non-negative radiance.
+  // unit normals), albedos within [0, 1], positive depths, finite non-negative radiance and
+  // variance.
+  int positive_variances = 0;
   for (int y = 0; y < 32; ++y) {
     for (int x = 0; x < 32; ++x) {
       const float nx = Channel(exr, "normal.X", x, y), ny = Channel(exr, "normal.Y", x, y),
@@ -1514,14 +1517,38 @@ TEST_F(CliTest, CornellAreaExrHasTheAovLayersAndTheSameRadianceAsThePfm) {
       for (const std::string c : {"R", "G", "B"}) {
         EXPECT_TRUE(std::isfinite(Channel(exr, c, x, y)) && Channel(exr, c, x, y) >= 0.0f);
       }
+      for (const std::string c : {"variance.R", "variance.G", "variance.B"}) {
+        const float v = Channel(exr, c, x, y);
+        EXPECT_TRUE(std::isfinite(v) && v >= 0.0f) << c << " " << x << "," << y;
+        positive_variances += v > 0.0f;
+      }
     }
   }
+  // Four samples of a noisy path render: two differing halves almost everywhere.
+  EXPECT_GT(positive_variances, 3 * 32 * 32 / 2);
+}
+
+// The AOVs follow paths through the glass sphere, but the radiance stays the image rendered without
+// them (no random number is drawn for them), and so does a file with only depth.
+TEST_F(CliTest, AovsThroughGlassLeaveTheRadianceUnchanged) {
+  const std::vector<std::string> args = {std::string(TRITRACE_SOURCE_DIR) + "/scenes/glass.json",
+                                         "--spp",
+                                         "4",
+                                         "--width",
+                                         "40",
+                                         "--height",
+                                         "40"};
+  std::vector<std::string> with_aovs = args;
+  with_aovs.insert(with_aovs.end(), {"--aovs", "albedo,normal,depth,variance"});
+  RenderQuietly(with_aovs, "g.exr");
+  RenderQuietly(args, "g.pfm");
+  ExpectExrRgbEqualsPfm(read_exr_channels((work_ / "g.exr").string()), ReadPfm(work_ / "g.pfm"));
 }
 
 TEST_F(CliTest, ExrHalfStoresHalfColourAndFloatDepth) {
-  const std::vector<std::string> args = {"--scene", "cornell-area", "--spp",    "2",
-                                         "--width", "24",           "--height", "24",
-                                         "--aovs",  "normal,depth"};
+  const std::vector<std::string> args = {
+      "--scene", "cornell-area", "--spp", "2",      "--width",
+      "24",      "--height",     "24",    "--aovs", "normal,depth,variance"};
   RenderQuietly(args, "f.exr");
   std::vector<std::string> half = args;
   half.push_back("--exr-half");
@@ -1529,12 +1556,14 @@ TEST_F(CliTest, ExrHalfStoresHalfColourAndFloatDepth) {
   const ExrContents f = read_exr_channels((work_ / "f.exr").string());
   const ExrContents h = read_exr_channels((work_ / "h.exr").string());
   EXPECT_EQ(ChannelNames(h),
-            (std::set<std::string>{"R", "G", "B", "normal.X", "normal.Y", "normal.Z", "Z"}));
+            (std::set<std::string>{"R", "G", "B", "normal.X", "normal.Y", "normal.Z", "Z",
+                                   "variance.R", "variance.G", "variance.B"}));
   for (const auto& [name, data] : h.channels) {
-    EXPECT_EQ(data.stored, name == "Z" ? Imf::FLOAT : Imf::HALF) << name;
+    const bool full = name == "Z" || name.starts_with("variance.");
+    EXPECT_EQ(data.stored, full ? Imf::FLOAT : Imf::HALF) << name;
     for (size_t i = 0; i < data.values.size(); ++i) {
       const float want = f.channels.at(name).values[i];
-      if (name == "Z") {
+      if (full) {
         EXPECT_EQ(data.values[i], want);
       } else {
         // Half rounds to 11 significant bits; below 2^-14 its steps are 2^-24.
@@ -1678,11 +1707,18 @@ TEST_F(DistributedCliTest, TilePartsAndRangesOfTilesMergeBitForBit) {
 }
 
 TEST_F(DistributedCliTest, AovsAndTheLabImageMergeBitForBit) {
-  const std::string whole = Whole("whole.exr", {"--aovs", "albedo,normal,depth"});
-  RenderPart("a.exr", {"--aovs", "albedo,normal,depth", "--spp-range", "0:8"});
-  RenderPart("b.exr", {"--aovs", "albedo,normal,depth", "--spp-range", "8:20"});
+  const std::string whole = Whole("whole.exr", {"--aovs", "albedo,normal,depth,variance"});
+  RenderPart("a.exr", {"--aovs", "albedo,normal,depth,variance", "--spp-range", "0:8"});
+  RenderPart("b.exr", {"--aovs", "albedo,normal,depth,variance", "--spp-range", "8:20"});
   ASSERT_EQ(Merge({"a.exr", "b.exr"}, "merged.exr").exit_code, 0);
   EXPECT_TRUE(ReadFile(work_ / "merged.exr") == whole) << "radiance and every AOV";
+  // Tile parts of sample ranges, the variance's half buffers included.
+  RenderPart("t0a.exr", {"--aovs", "variance", "--tile", "0/2", "--spp-range", "0:8"});
+  RenderPart("t0b.exr", {"--aovs", "variance", "--tile", "0/2", "--spp-range", "8:20"});
+  RenderPart("t1.exr", {"--aovs", "variance", "--tile", "1/2"});
+  const std::string variance_only = Whole("variance.exr", {"--aovs", "variance"});
+  ASSERT_EQ(Merge({"t1.exr", "t0b.exr", "t0a.exr"}, "tiles.exr").exit_code, 0);
+  EXPECT_TRUE(ReadFile(work_ / "tiles.exr") == variance_only) << "variance from tile parts";
 
   const std::vector<std::string> lab = {"render", "--width", "40", "--height", "40", "-q"};
   auto run_lab = [&](std::vector<std::string> extra) {

@@ -15,12 +15,12 @@ scene=(--scene cornell-area --spp 20 --width 48 --height 40 --threads 1 -q)
 fail() { echo "mpi_test: $*" >&2; exit 1; }
 
 "$cli" render "${scene[@]}" -o "$dir/one.pfm"
-"$cli" render "${scene[@]}" --aovs albedo,depth -o "$dir/one.exr"
+"$cli" render "${scene[@]}" --aovs albedo,depth,variance -o "$dir/one.exr"
 for np in 1 2 3; do
   "${run_mpi[@]}" -np "$np" "$cli" render "${scene[@]}" --mpi -o "$dir/mpi$np.pfm"
   cmp "$dir/one.pfm" "$dir/mpi$np.pfm" || fail "$np ranks: the image differs from one process's"
 done
-"${run_mpi[@]}" -np 3 "$cli" render "${scene[@]}" --aovs albedo,depth --mpi -o "$dir/mpi.exr"
+"${run_mpi[@]}" -np 3 "$cli" render "${scene[@]}" --aovs albedo,depth,variance --mpi -o "$dir/mpi.exr"
 cmp "$dir/one.exr" "$dir/mpi.exr" || fail "3 ranks with AOVs: the EXR differs from one process's"
 # The lab image too (one sample per pixel, tile parts only).
 "$cli" render --width 48 --height 40 -q -o "$dir/lab.png"
@@ -29,7 +29,7 @@ cmp "$dir/lab.png" "$dir/lab_mpi.png" || fail "the lab image differs"
 
 # Results cut into pieces (TRITRACE_MPI_TEST_PIECE_BYTES; 2^30 bytes by default) arrive whole.
 TRITRACE_MPI_TEST_PIECE_BYTES=1001 "${run_mpi[@]}" -x TRITRACE_MPI_TEST_PIECE_BYTES -np 3 "$cli" \
-  render "${scene[@]}" --aovs albedo,depth --mpi -o "$dir/pieces.exr"
+  render "${scene[@]}" --aovs albedo,depth,variance --mpi -o "$dir/pieces.exr"
 cmp "$dir/one.exr" "$dir/pieces.exr" || fail "results sent in pieces: the EXR differs"
 
 # Rank 2 loads another scene file (one material changed): the job stops before rendering, with

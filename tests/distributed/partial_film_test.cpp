@@ -21,7 +21,7 @@ namespace tritrace {
 namespace {
 
 constexpr uint32_t kSpp = 20;  // two whole blocks of 8 and a partial one
-const AovSet kAllAovs{true, true, true};
+const AovSet kAllAovs{true, true, true, true};
 
 class PartialFilmTest : public ::testing::Test {
  protected:

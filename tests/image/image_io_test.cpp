@@ -315,12 +315,14 @@ Image layer_image(int width, int height, float base) {
 
 TEST_F(TempDir, ExrAovLayersHaveTheirNamesAndValues) {
   const Image radiance = layer_image(5, 3, 1.0f);
-  AovImages aovs{layer_image(5, 3, 10.0f), layer_image(5, 3, 20.0f), layer_image(5, 3, 30.0f)};
+  AovImages aovs{layer_image(5, 3, 10.0f), layer_image(5, 3, 20.0f), layer_image(5, 3, 30.0f),
+                 layer_image(5, 3, 40.0f)};
   write_exr(radiance, path("aov.exr"), aovs);
   const ExrContents back = read_exr_channels(path("aov.exr"));
   EXPECT_EQ(channel_names(back),
             (std::set<std::string>{"R", "G", "B", "albedo.R", "albedo.G", "albedo.B", "normal.X",
-                                   "normal.Y", "normal.Z", "Z"}));
+                                   "normal.Y", "normal.Z", "Z", "variance.R", "variance.G",
+                                   "variance.B"}));
   for (int y = 0; y < 3; ++y) {
     for (int x = 0; x < 5; ++x) {
       for (int c = 0; c < 3; ++c) {
@@ -329,6 +331,8 @@ TEST_F(TempDir, ExrAovLayersHaveTheirNamesAndValues) {
                   aovs.albedo.at(x, y)[c]);
         EXPECT_EQ(channel_at(back, std::string("normal.") + "XYZ"[c], x, y),
                   aovs.normal.at(x, y)[c]);
+        EXPECT_EQ(channel_at(back, std::string("variance.") + "RGB"[c], x, y),
+                  aovs.variance.at(x, y)[c]);
       }
       EXPECT_EQ(channel_at(back, "Z", x, y), aovs.depth.at(x, y).r);
     }
@@ -336,15 +340,19 @@ TEST_F(TempDir, ExrAovLayersHaveTheirNamesAndValues) {
   for (const auto& [name, data] : back.channels) EXPECT_EQ(data.stored, Imf::FLOAT) << name;
 }
 
-TEST_F(TempDir, ExrHalfKeepsDepthInFloat) {
+TEST_F(TempDir, ExrHalfKeepsDepthAndVarianceInFloat) {
   const Image radiance = layer_image(2, 2, 1.0f);
-  Image depth(2, 2);
-  depth.at(1, 1) = glm::vec3(4097.3f);  // half would store 4096
-  write_exr(radiance, path("d.exr"), {Image(), layer_image(2, 2, 0.5f), depth},
+  Image depth(2, 2), variance(2, 2);
+  depth.at(1, 1) = glm::vec3(4097.3f);   // half would store 4096
+  variance.at(1, 0) = glm::vec3(1e-7f);  // half's subnormals step by 6e-8
+  write_exr(radiance, path("d.exr"), {Image(), layer_image(2, 2, 0.5f), depth, variance},
             ExrPixelType::kHalf);
   const ExrContents back = read_exr_channels(path("d.exr"));
   EXPECT_EQ(channel_names(back),
-            (std::set<std::string>{"R", "G", "B", "normal.X", "normal.Y", "normal.Z", "Z"}));
+            (std::set<std::string>{"R", "G", "B", "normal.X", "normal.Y", "normal.Z", "Z",
+                                   "variance.R", "variance.G", "variance.B"}));
+  EXPECT_EQ(back.channels.at("variance.G").stored, Imf::FLOAT);
+  EXPECT_EQ(channel_at(back, "variance.B", 1, 0), 1e-7f);
   EXPECT_EQ(back.channels.at("Z").stored, Imf::FLOAT);
   EXPECT_EQ(back.channels.at("normal.X").stored, Imf::HALF);
   EXPECT_EQ(back.channels.at("R").stored, Imf::HALF);
@@ -355,7 +363,7 @@ TEST_F(TempDir, ExrHalfKeepsDepthInFloat) {
 TEST_F(TempDir, ExrWithOnlyDepthHasRgbAndZ) {
   Image depth(2, 1);
   depth.at(0, 0) = glm::vec3(2.5f);
-  write_exr(layer_image(2, 1, 0.0f), path("z.exr"), {Image(), Image(), depth});
+  write_exr(layer_image(2, 1, 0.0f), path("z.exr"), {Image(), Image(), depth, Image()});
   const ExrContents back = read_exr_channels(path("z.exr"));
   EXPECT_EQ(channel_names(back), (std::set<std::string>{"R", "G", "B", "Z"}));
   EXPECT_EQ(channel_at(back, "Z", 0, 0), 2.5f);
@@ -364,7 +372,7 @@ TEST_F(TempDir, ExrWithOnlyDepthHasRgbAndZ) {
 TEST_F(TempDir, ExrAovOfAnotherSizeThrowsAndWritesNothing) {
   const std::string p = path("bad.exr");
   try {
-    write_exr(layer_image(4, 4, 0.0f), p, {layer_image(4, 3, 0.0f), Image(), Image()});
+    write_exr(layer_image(4, 4, 0.0f), p, {layer_image(4, 3, 0.0f), Image(), Image(), Image()});
     FAIL() << "expected an Error";
   } catch (const Error& e) {
     EXPECT_EQ(e.subject(), p);

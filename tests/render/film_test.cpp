@@ -32,6 +32,31 @@ TEST(Film, ResolvesWeightedMeans) {
   EXPECT_TRUE(film.resolve_normal().pixels().empty()) << "not kept";
 }
 
+// Four unit samples per pixel, R: 1, 3, 2, 6 (even half 1, 2: mean 1.5; odd 3, 6: mean 4.5), G:
+// 5 each, B: 0, 0, 4, 0. The variance of the mean of two independent halves' mean is a quarter of
+// their squared difference: (1.5 - 4.5)^2 / 4 = 2.25, 0, (2 - 0)^2 / 4 = 1. Three samples 1, 4,
+// 3 (even 1, 3: mean 2; odd 4): sigma^2 (1/2 + 1) = (2 - 4)^2 estimates sigma^2 = 8/3, and the
+// mean of three has sigma^2 / 3 = 8/9. One sample: no odd half, no estimate (0).
+TEST(Film, VarianceFromTheHalfBuffers) {
+  Film film(3, 1, AovSet{.variance = true});
+  film.set_layout(0, 4, {});
+  film.sums(0)[0] = glm::vec4(12.0f, 20.0f, 4.0f, 4.0f);
+  film.aov_sums(0)[0].even = glm::vec4(3.0f, 10.0f, 4.0f, 2.0f);
+  film.sums(0)[1] = glm::vec4(8.0f, 0.0f, 0.0f, 3.0f);
+  film.aov_sums(0)[1].even = glm::vec4(4.0f, 0.0f, 0.0f, 2.0f);
+  film.sums(0)[2] = glm::vec4(7.0f, 7.0f, 7.0f, 1.0f);
+  film.aov_sums(0)[2].even = glm::vec4(7.0f, 7.0f, 7.0f, 1.0f);
+  const Image v = film.resolve_variance();
+  EXPECT_EQ(v.at(0, 0), glm::vec3(2.25f, 0.0f, 1.0f));
+  EXPECT_NEAR(v.at(1, 0).x, 8.0f / 9.0f, 1e-6f);
+  EXPECT_EQ(v.at(2, 0), glm::vec3(0.0f));
+  EXPECT_TRUE(film.resolve_albedo().pixels().empty()) << "not kept";
+  const AovImages all = film.resolve_aovs();
+  EXPECT_EQ(all.variance.at(0, 0), v.at(0, 0));
+  EXPECT_TRUE(all.depth.pixels().empty());
+  EXPECT_TRUE(Film(1, 1).resolve_variance().pixels().empty()) << "not kept";
+}
+
 TEST(Film, OneUnitSampleResolvesToItselfBitForBit) {
   Film film(1, 1);
   film.set_layout(0, 1, {});

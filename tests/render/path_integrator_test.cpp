@@ -828,5 +828,215 @@ TEST(PathEnvironmentMap, CameraRaysThatMissSeeTheMap) {
   EXPECT_EQ(image.at(12, 12), glm::vec3(0.0f));
 }
 
+// ---- The AOVs: albedo and normal of the first non-specular hit, depth of the first hit, and the
+// variance of each pixel's mean from the halves of its samples split by sample index parity.
+
+// A quad [x0, x1] x [y0, y1] at z (facing -z), or [x0, x1] x [z0, z1] at y (facing +y).
+void add_quad_at_z(TriangleMesh& mesh, float x0, float x1, float y0, float y1, float z,
+                   uint32_t m) {
+  mesh.add({x0, y0, z}, {x1, y0, z}, {x1, y1, z}, m);
+  mesh.add({x0, y0, z}, {x1, y1, z}, {x0, y1, z}, m);
+}
+void add_quad_at_y(TriangleMesh& mesh, float x0, float x1, float z0, float z1, float y,
+                   uint32_t m) {
+  mesh.add({x0, y, z0}, {x1, y, z0}, {x1, y, z1}, m);
+  mesh.add({x0, y, z0}, {x1, y, z1}, {x0, y, z1}, m);
+}
+
+// Mean of an image's channel c over all pixels.
+double image_mean(const Image& image, int c) {
+  double sum = 0.0;
+  for (const glm::vec3& p : image.pixels()) sum += p[c];
+  return sum / static_cast<double>(image.pixels().size());
+}
+
+// A floor (y = 0, world y up here) that is a perfect white mirror (Schlick's F0 = 1: F = 1 at
+// every angle, so the specular tint is exactly 1) and a diffuse wall at z = 5 above it; the camera
+// at (0, 1, 0) looks down at the floor, whose every pixel reflects the wall: the albedo AOV is the
+// wall's albedo, the normal the wall's facing the reflected ray (0, 0, -1), and depth the
+// distance to the mirror (the first hit), sqrt(5) along the centre ray to (0, 0, 2).
+TEST(PathAovs, MirrorFloorShowsTheReflectedWall) {
+  Scene scene;
+  const glm::vec3 wall_albedo(0.2f, 0.5f, 0.7f);
+  scene.materials = {
+      Material{.albedo = glm::vec3(1.0f), .type = MaterialType::kConductor, .roughness = 0.0f},
+      Material{.albedo = wall_albedo}};
+  add_quad_at_y(scene.mesh, -10.0f, 10.0f, -10.0f, 10.0f, 0.0f, 0);
+  add_quad_at_z(scene.mesh, -10.0f, 10.0f, 0.0f, 20.0f, 5.0f, 1);
+  scene.camera = Camera::look_at(16, 16, {0.0f, 1.0f, 0.0f}, {0.0f, 0.0f, 2.0f}, {0.0f, 1.0f, 0.0f},
+                                 Camera::focal_for_vertical_fov(16, 20.0));
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator pt(scene);
+  Film film(16, 16, AovSet{.albedo = true, .normal = true, .depth = true});
+  render_to_film(scene, accel, pt, film, {.threads = 1, .spp = 8});
+  const Image albedo = film.resolve_albedo(), normal = film.resolve_normal();
+  const Image depth = film.resolve_depth();
+  for (int y = 0; y < 16; ++y) {
+    for (int x = 0; x < 16; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(albedo.at(x, y)[c], wall_albedo[c], 1e-6f) << x << "," << y;
+        EXPECT_NEAR(normal.at(x, y)[c], glm::vec3(0.0f, 0.0f, -1.0f)[c], 1e-6f) << x << "," << y;
+      }
+    }
+  }
+  // Pixels (7, 7) to (8, 8) surround the centre ray; the first hit is on the floor, between the
+  // distances of the rays 1 pixel above and below the centre (f = 8 / tan 10 deg).
+  const double f = 8.0 / std::tan(10.0 * std::numbers::pi / 180.0);
+  const double centre = std::atan(0.5);  // below the horizon
+  const double near = 1.0 / std::sin(centre + std::atan(1.0 / f));
+  const double far = 1.0 / std::sin(centre - std::atan(1.0 / f));
+  EXPECT_GT(depth.at(8, 8).x, near * 0.999);
+  EXPECT_LT(depth.at(7, 7).x, far * 1.001);
+  EXPECT_NEAR(depth.at(8, 8).x, std::sqrt(5.0), far - near);
+}
+
+// A smooth glass slab (index 1.5, transmission tint c) between the camera and a diffuse wall, seen
+// at near-normal incidence (a 6 degree field of view), where a face reflects F = ((1.5 - 1) /
+// (1.5 + 1))^2 = 0.04. The albedo AOV follows the path's own choice at each face: out through
+// both faces (tint c^2, the 1/eta^2 and eta^2 of the crossing cancelled) to the wall, or back to
+// the camera (escapes: 0), with any even number of reflections inside: its mean is
+// a c^2 (1 - F)^2 (1 + F^2 + F^4 + ...) = a c^2 (1 - F) / (1 + F).
+TEST(PathAovs, SmoothGlassShowsTheWallBehindItTinted) {
+  Scene scene;
+  const glm::vec3 wall_albedo(0.6f, 0.4f, 0.2f), tint(0.5f, 0.8f, 1.0f);
+  scene.materials = {
+      Material{.albedo = tint, .type = MaterialType::kDielectric, .roughness = 0.0f, .ior = 1.5f},
+      Material{.albedo = wall_albedo}};
+  add_quad_at_z(scene.mesh, -10.0f, 10.0f, -10.0f, 10.0f, 2.0f, 0);
+  add_quad_at_z(scene.mesh, -10.0f, 10.0f, -10.0f, 10.0f, 2.5f, 0);
+  add_quad_at_z(scene.mesh, -10.0f, 10.0f, -10.0f, 10.0f, 5.0f, 1);
+  constexpr int kSide = 32;
+  constexpr uint32_t kSpp = 16;
+  scene.camera = Camera::look_at(kSide, kSide, {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f},
+                                 {0.0f, 1.0f, 0.0f}, Camera::focal_for_vertical_fov(kSide, 6.0));
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator pt(scene);
+  Film film(kSide, kSide, AovSet{.albedo = true, .depth = true});
+  render_to_film(scene, accel, pt, film, {.threads = 1, .spp = kSpp});
+  const double r = 0.04, through = (1.0 - r) / (1.0 + r);
+  // Each sample's albedo is a c^2 with probability about p = through, else (nearly always) 0:
+  // the standard error of the mean of N samples is a c^2 sqrt(p (1 - p) / N). Russian roulette
+  // (from the third bounce on) may end a path after two reflections inside, leaving the glass's
+  // own provisional values: at most F^2 = 0.0016 of the mean's weight.
+  const double n = static_cast<double>(kSide * kSide) * kSpp;
+  const double se = std::sqrt(through * (1.0 - through) / n);
+  for (int c = 0; c < 3; ++c) {
+    const double full = wall_albedo[c] * tint[c] * tint[c];
+    EXPECT_NEAR(image_mean(film.resolve_albedo(), c), full * through, full * (4.0 * se) + r * r)
+        << "channel " << c;
+  }
+  // Depth is the first hit's: the slab's front face, 2 along the axis, at most 2 / cos(theta) at
+  // the image's corners, tan(theta) = sqrt(2) tan(3 deg).
+  const Image depth = film.resolve_depth();
+  const double corner = std::atan(std::sqrt(2.0) * std::tan(3.0 * std::numbers::pi / 180.0));
+  for (const glm::vec3& d : depth.pixels()) {
+    EXPECT_GE(d.x, 2.0f);
+    EXPECT_LE(d.x, 2.0 / std::cos(corner) * 1.0001);
+  }
+}
+
+// With vertex normals, the normal AOV is the interpolated shading normal, not the facet's: a
+// single triangle whose corners' normals all lean the same way shows that normal.
+TEST(PathAovs, NormalIsTheShadingNormalWhereTheMeshIsSmooth) {
+  Scene scene;
+  scene.materials = {Material{.albedo = glm::vec3(0.5f)}};
+  const glm::vec3 lean = glm::normalize(glm::vec3(0.3f, 0.0f, -1.0f));
+  scene.mesh.add({-10.0f, -10.0f, 3.0f}, {10.0f, -10.0f, 3.0f}, {0.0f, 20.0f, 3.0f}, 0,
+                 {lean, lean, lean});
+  scene.camera = Camera::look_at(8, 8, {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, {0.0f, 1.0f, 0.0f},
+                                 Camera::focal_for_vertical_fov(8, 10.0));
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator pt(scene);
+  Film film(8, 8, AovSet{.normal = true});
+  render_to_film(scene, accel, pt, film, {.threads = 1, .spp = 4});
+  const Image normal = film.resolve_normal();
+  for (const glm::vec3& n : normal.pixels()) {
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(n[c], lean[c], 1e-5f);
+  }
+}
+
+// The even half buffer holds the samples of even global index: sample 0 of [0, 2) (its sum is
+// the film of [0, 1)'s), also when the film is rendered in calls [0, 1) then [1, 2), where a
+// call-local parity would count sample 1 as even; and a film continued call by call ends with the
+// bits of one call.
+TEST(PathAovs, VarianceHalvesFollowTheGlobalSampleIndex) {
+  const Scene scene = make_cornell_area({.width = 8, .height = 8});
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator pt(scene);
+  const AovSet variance{.variance = true};
+  Film one(8, 8, variance), two(8, 8, variance), stepped(8, 8, variance);
+  render_to_film(scene, accel, pt, one, {.spp = 1});
+  render_to_film(scene, accel, pt, two, {.spp = 2});
+  render_to_film(scene, accel, pt, stepped, {.spp = 1});
+  render_to_film(scene, accel, pt, stepped, {.spp = 1, .first_sample = 1});
+  for (int y = 0; y < 8; ++y) {
+    for (int x = 0; x < 8; ++x) {
+      EXPECT_EQ(one.pixel_aov_sums(x, y).even, one.pixel_sums(x, y));
+      EXPECT_EQ(two.pixel_aov_sums(x, y).even, one.pixel_sums(x, y));
+      EXPECT_EQ(stepped.pixel_aov_sums(x, y).even, one.pixel_sums(x, y));
+    }
+  }
+  Film whole(8, 8, variance), calls(8, 8, variance);
+  render_to_film(scene, accel, pt, whole, {.spp = 21});
+  for (auto [a, b] :
+       {std::pair{0u, 3u}, std::pair{3u, 9u}, std::pair{9u, 16u}, std::pair{16u, 21u}}) {
+    render_to_film(scene, accel, pt, calls, {.spp = b - a, .first_sample = a});
+  }
+  ASSERT_EQ(whole.layer_count(), calls.layer_count());
+  for (size_t k = 0; k < whole.layer_count(); ++k) {
+    EXPECT_EQ(std::memcmp(whole.aov_sums(k), calls.aov_sums(k), 64 * sizeof(AovSums)), 0) << k;
+  }
+  EXPECT_TRUE(same_bits(whole.resolve_variance(), calls.resolve_variance()));
+}
+
+// The half-buffer estimate of the variance of a pixel's mean agrees with the spread of that mean
+// over independent renders (independent samples: Sobol's halves are stratified together, and the
+// estimate is then conservative). Per seed r, X_r = sum over pixels and channels of the estimate
+// minus R / (R - 1) (m_r - mean m)^2: their mean is the sum of the estimates minus the sum of the
+// sample variances over seeds, which must be zero within 4 standard errors of the X_r. The same
+// test with the estimate's 1/4 left out fails by far (a ratio of 4).
+TEST(PathAovs, HalfBufferVarianceMatchesTheSpreadOfIndependentRenders) {
+  const Scene scene = make_cornell_area({.width = 8, .height = 8});
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator pt(scene);
+  constexpr int kSeeds = 48;
+  constexpr size_t kValues = 8 * 8 * 3;
+  std::vector<std::vector<double>> means(kSeeds), estimates(kSeeds);
+  std::vector<double> average(kValues, 0.0);
+  for (int r = 0; r < kSeeds; ++r) {
+    Film film(8, 8, AovSet{.variance = true});
+    render_to_film(
+        scene, accel, pt, film,
+        {.spp = 16, .seed = static_cast<uint64_t>(r + 1), .sampler = SamplerKind::kIndependent});
+    const Image image = film.resolve(), variance = film.resolve_variance();
+    for (size_t p = 0; p < 64; ++p) {
+      for (int c = 0; c < 3; ++c) {
+        means[r].push_back(image.pixels()[p][c]);
+        estimates[r].push_back(variance.pixels()[p][c]);
+        average[p * 3 + static_cast<size_t>(c)] += image.pixels()[p][c] / kSeeds;
+      }
+    }
+  }
+  std::vector<double> x(kSeeds, 0.0);
+  double estimated = 0.0, observed = 0.0;
+  for (int r = 0; r < kSeeds; ++r) {
+    for (size_t v = 0; v < kValues; ++v) {
+      const double d = means[r][v] - average[v];
+      const double spread = d * d * kSeeds / (kSeeds - 1.0);
+      x[r] += estimates[r][v] - spread;
+      estimated += estimates[r][v] / kSeeds;
+      observed += spread / kSeeds;
+    }
+  }
+  double mean_x = 0.0, var_x = 0.0;
+  for (double v : x) mean_x += v / kSeeds;
+  for (double v : x) var_x += (v - mean_x) * (v - mean_x) / (kSeeds - 1.0);
+  const double se = std::sqrt(var_x / kSeeds);
+  EXPECT_GT(observed, 0.0);
+  EXPECT_LT(std::abs(mean_x), 4.0 * se)
+      << "estimated " << estimated << ", observed " << observed << ", se " << se;
+  EXPECT_LT(std::abs(estimated / observed - 1.0), 0.5) << "and not far off as a ratio";
+}
+
 }  // namespace
 }  // namespace tritrace

@@ -69,6 +69,10 @@ constexpr LayerChannel kLayerChannels[] = {
     {"normal.Y", offsetof(AovSums, normal) + 4, true, [](const AovSet& a) { return a.normal; }},
     {"normal.Z", offsetof(AovSums, normal) + 8, true, [](const AovSet& a) { return a.normal; }},
     {"Z", offsetof(AovSums, depth), true, [](const AovSet& a) { return a.depth; }},
+    {"even.R", offsetof(AovSums, even), true, [](const AovSet& a) { return a.variance; }},
+    {"even.G", offsetof(AovSums, even) + 4, true, [](const AovSet& a) { return a.variance; }},
+    {"even.B", offsetof(AovSums, even) + 8, true, [](const AovSet& a) { return a.variance; }},
+    {"even.W", offsetof(AovSums, even) + 12, true, [](const AovSet& a) { return a.variance; }},
 };
 
 size_t channels_per_layer(const AovSet& aovs) {
@@ -272,6 +276,7 @@ PartInfo check_header(const HeaderFacts& f, const std::string& name, uint64_t fi
   r.aovs.albedo = aovs.find("albedo") != std::string::npos;
   r.aovs.normal = aovs.find("normal") != std::string::npos;
   r.aovs.depth = aovs.find("depth") != std::string::npos;
+  r.aovs.variance = aovs.find("variance") != std::string::npos;
   if (aov_list(r.aovs) != aovs) throw bad("tritrace.aovs");
   if (!parse_pair(std::string_view(need("tritrace.size")), 'x', r.width, r.height)) {
     throw bad("tritrace.size");

@@ -99,7 +99,7 @@ std::string hit_rule(std::string_view accel, std::string_view kernel) {
 std::string aov_list(const AovSet& a) {
   std::string s;
   for (auto [on, name] : {std::pair{a.albedo, "albedo"}, std::pair{a.normal, "normal"},
-                          std::pair{a.depth, "depth"}}) {
+                          std::pair{a.depth, "depth"}, std::pair{a.variance, "variance"}}) {
     if (!on) continue;
     if (!s.empty()) s += ",";
     s += name;

@@ -26,9 +26,7 @@ struct RenderIdentity {
   AovSet aovs;
 
   bool operator==(const RenderIdentity& o) const {
-    return hash == o.hash && settings == o.settings && build == o.build &&
-           aovs.albedo == o.aovs.albedo && aovs.normal == o.aovs.normal &&
-           aovs.depth == o.aovs.depth;
+    return hash == o.hash && settings == o.settings && build == o.build && aovs == o.aovs;
   }
 };
 

@@ -35,13 +35,15 @@ std::vector<Channel> channels_of(const Image& image, const AovImages& aovs, ExrP
   const Imf::PixelType colour = type == ExrPixelType::kHalf ? Imf::HALF : Imf::FLOAT;
   std::vector<Channel> channels = {
       {"R", &image, 0, colour}, {"G", &image, 1, colour}, {"B", &image, 2, colour}};
-  auto add_layer = [&](const Image& aov, const char* layer, const char* names) {
+  auto add_layer = [&](const Image& aov, const char* layer, const char* names,
+                       Imf::PixelType pixel = Imf::NUM_PIXELTYPES) {
     if (aov.width() == 0 && aov.height() == 0) return;
     if (aov.width() != image.width() || aov.height() != image.height()) {
       throw Error("exr", std::string("the ") + layer + " AOV's size differs from the image's");
     }
     for (int c = 0; c < 3; ++c) {
-      channels.push_back({std::string(layer) + "." + names[c], &aov, c, colour});
+      channels.push_back({std::string(layer) + "." + names[c], &aov, c,
+                          pixel == Imf::NUM_PIXELTYPES ? colour : pixel});
     }
   };
   add_layer(aovs.albedo, "albedo", "RGB");
@@ -52,6 +54,7 @@ std::vector<Channel> channels_of(const Image& image, const AovImages& aovs, ExrP
     }
     channels.push_back({"Z", &aovs.depth, 0, Imf::FLOAT});
   }
+  add_layer(aovs.variance, "variance", "RGB", Imf::FLOAT);
   return channels;
 }
 

@@ -1,5 +1,5 @@
-// OpenEXR encoding: linear float RGB plus optional AOV layers (albedo, normal, depth), the inputs
-// denoisers such as Open Image Denoise take, in one single-part scanline file.
+// OpenEXR encoding: linear float RGB plus optional AOV layers (albedo, normal, depth, variance),
+// the inputs denoisers such as Open Image Denoise take, in one single-part scanline file.
 #pragma once
 
 #include <string_view>
@@ -14,17 +14,20 @@ namespace tritrace {
 // How an EXR stores radiance, albedo and normal: 32-bit floats, or 16-bit half floats (half the
 // size; 11 significant bits, largest finite value 65504, larger values become infinity). Depth is
 // always 32-bit: half would round distances beyond 2048 to whole units and lose the far plane.
+// Variance too: a converged pixel's variance (1e-6 and less) is below half's normal range.
 enum class ExrPixelType { kFloat, kHalf };
 
-// The first hit's AOVs to store beside the radiance; an empty (0 x 0) image is left out. Each must
-// have the radiance image's size. Channel names follow the OpenEXR layer convention
-// (layer.channel) that Nuke, Blender, oiiotool and OpenImageIO read:
+// The AOVs to store beside the radiance; an empty (0 x 0) image is left out. Each must have the
+// radiance image's size. Channel names follow the OpenEXR layer convention (layer.channel) that
+// Nuke, Blender, oiiotool and OpenImageIO read:
 //   radiance R, G, B; albedo albedo.R, albedo.G, albedo.B; normal normal.X, normal.Y, normal.Z;
-//   depth Z, OpenEXR's standard depth channel (the red channel of `depth`).
+//   depth Z, OpenEXR's standard depth channel (the red channel of `depth`); variance variance.R,
+//   variance.G, variance.B (the estimated variance of the pixel's mean, per channel).
 struct AovImages {
   Image albedo;
   Image normal;
   Image depth;
+  Image variance;
 };
 
 // The file's bytes: scanlines top row first, ZIP compression (lossless), values stored as they

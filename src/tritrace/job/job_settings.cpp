@@ -112,6 +112,8 @@ bool add_aov(std::string_view name, AovSet* set) {
     set->normal = true;
   } else if (name == "depth") {
     set->depth = true;
+  } else if (name == "variance") {
+    set->variance = true;
   } else {
     return false;
   }
@@ -127,7 +129,7 @@ std::optional<AovSet> parse_aovs(const std::string& text, std::string* why) {
         text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     if (!add_aov(name, &set)) {
       *why = (name.empty() ? std::string("empty AOV name") : "unknown AOV '" + name + "'") +
-             " in '" + text + "' (use a comma-separated list of albedo, normal, depth)";
+             " in '" + text + "' (use a comma-separated list of albedo, normal, depth, variance)";
       return std::nullopt;
     }
     if (comma == std::string::npos) return set;

@@ -44,7 +44,7 @@ struct JobSettings {
   // What to write.
   std::string output;         // empty: the scene file's output, else <file stem>.png
   bool output_given = false;  // the caller named an output (its value may still be empty)
-  std::string aovs;           // "albedo,normal,depth" or a subset
+  std::string aovs;           // "albedo,normal,depth,variance" or a subset
   bool exr_half = false;
   std::string exposure;   // stops, for the path tracer's 8-bit outputs
   std::string spp_range;  // "A:B": samples [A, B) of every pixel, as a partial film
@@ -80,10 +80,10 @@ AovSet aov_set(const JobSettings& settings);
 std::optional<float> exposure_stops(const JobSettings& settings);
 std::optional<double> time_limit_seconds(const JobSettings& settings);
 
-// Adds the AOV `name` (albedo, normal or depth) to `set`; false for any other name.
+// Adds the AOV `name` (albedo, normal, depth or variance) to `set`; false for any other name.
 bool add_aov(std::string_view name, AovSet* set);
-// "albedo,normal,depth" or any subset, in any order; a name given twice counts once. nullopt with
-// the reason in `why` for an empty list, an empty name or an unknown one.
+// "albedo,normal,depth,variance" or any subset, in any order; a name given twice counts once.
+// nullopt with the reason in `why` for an empty list, an empty name or an unknown one.
 std::optional<AovSet> parse_aovs(const std::string& text, std::string* why);
 
 // What the CLI's phase line and the viewer's loading window say while the scene loads ("making

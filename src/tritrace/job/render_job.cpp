@@ -249,7 +249,7 @@ RenderedImage RenderJob::render(RenderStats* stats) const {
     Film film = make_film();
     render_to_film(film, stats);
     out.image = film.resolve();
-    out.aovs = {film.resolve_albedo(), film.resolve_normal(), film.resolve_depth()};
+    out.aovs = film.resolve_aovs();
   } else {
     // The same bits as a film's resolve, without the film's memory.
     out.image = tritrace::render(*scene_, *accel_, *integrator_, options_, stats);
@@ -299,7 +299,7 @@ RenderedImage RenderJob::render_for(double seconds, RenderStats* stats) const {
   RenderedImage out;
   out.image = film.resolve();
   if (aovs_.any()) {
-    out.aovs = {film.resolve_albedo(), film.resolve_normal(), film.resolve_depth()};
+    out.aovs = film.resolve_aovs();
   }
   return out;
 }
@@ -309,8 +309,7 @@ void RenderJob::write(const RenderedImage& rendered, const std::string& file) co
 }
 
 void RenderJob::write(const Film& film, const std::string& file) const {
-  write({film.resolve(), {film.resolve_albedo(), film.resolve_normal(), film.resolve_depth()}},
-        file);
+  write({film.resolve(), film.resolve_aovs()}, file);
 }
 
 void RenderJob::write_part(const Film& film, const std::string& file) const {

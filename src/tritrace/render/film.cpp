@@ -90,6 +90,36 @@ Image Film::resolve_depth() const {
   return resolve_aov(aovs_.depth, [](const AovSums& s) { return glm::vec3(s.depth); });
 }
 
+Image Film::resolve_variance() const {
+  if (!aovs_.variance) return {};
+  Image image(width_, height_);
+  for (int y = 0; y < height_; ++y) {
+    for (int x = 0; x < width_; ++x) {
+      image.at(x, y) = half_buffer_variance(pixel_sums(x, y), pixel_aov_sums(x, y).even);
+    }
+  }
+  return image;
+}
+
+AovImages Film::resolve_aovs() const {
+  return {resolve_albedo(), resolve_normal(), resolve_depth(), resolve_variance()};
+}
+
+glm::vec3 half_buffer_variance(glm::vec4 total, glm::vec4 even) {
+  // In double: the odd half is a difference, and so is m_e - m_o.
+  const double w = total.w, w_even = even.w, w_odd = w - w_even;
+  if (!(w_even > 0.0 && w_odd > 0.0)) return glm::vec3(0.0f);
+  const double scale = w_even * w_odd / (w * w);
+  glm::vec3 v;
+  for (int c = 0; c < 3; ++c) {
+    const double m_even = even[c] / w_even;
+    const double m_odd = (static_cast<double>(total[c]) - even[c]) / w_odd;
+    const double d = m_even - m_odd;
+    v[c] = static_cast<float>(d * d * scale);
+  }
+  return v;
+}
+
 std::string_view filter_name(FilterKind kind) {
   switch (kind) {
     case FilterKind::kBox:

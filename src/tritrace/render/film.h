@@ -1,8 +1,9 @@
 // Film: per pixel, the sums of weighted radiance and of weights over the samples taken, plus the
-// same sums of the first hit's albedo, normal and depth (AOVs, the inputs of denoisers). The image
-// is the film resolved (sum / weight), never the other way round. Sums are kept unnormalised and
-// added in the fixed order of render/sample_blocks.h, so that films of sample ranges or tiles
-// rendered apart combine into exactly the film of one render.
+// same sums of the AOVs (albedo and normal of the first non-specular hit, depth of the first hit)
+// and the half buffer of the variance AOV (the sums over even sample indices), the inputs of
+// denoisers. The image is the film resolved (sum / weight), never the other way round. Sums are
+// kept unnormalised and added in the fixed order of render/sample_blocks.h, so that films of
+// sample ranges or tiles rendered apart combine into exactly the film of one render.
 #pragma once
 
 #include <cstdint>
@@ -12,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "tritrace/image/exr.h"
 #include "tritrace/image/image.h"
 #include "tritrace/render/sample_blocks.h"
 
@@ -22,7 +24,11 @@ struct AovSet {
   bool albedo = false;
   bool normal = false;
   bool depth = false;
-  bool any() const { return albedo || normal || depth; }
+  // The estimated variance of each pixel's mean, from the halves of its samples split by the
+  // parity of their global sample index (AovSums::even).
+  bool variance = false;
+  bool any() const { return albedo || normal || depth || variance; }
+  bool operator==(const AovSet&) const = default;
 };
 
 // One sample's contribution to its pixel.
@@ -84,6 +90,14 @@ class Film {
   Image resolve_albedo() const;
   Image resolve_normal() const;
   Image resolve_depth() const;
+  // Per channel, the estimated variance of the pixel's mean (resolve()'s value): with m_e and m_o
+  // the weighted means of the even and odd halves and W_e, W_o their weights (W = W_e + W_o),
+  // (m_e - m_o)^2 W_e W_o / W^2, which for equal halves is the (m_e - m_o)^2 / 4 of the half-buffer
+  // estimators (Rousselle et al. 2012; Bitterli et al. 2016, NFOR). Zero where a half is empty.
+  // Empty when the film does not keep it.
+  Image resolve_variance() const;
+  // All four, each empty where not kept.
+  AovImages resolve_aovs() const;
 
  private:
   size_t index(int x, int y) const { return static_cast<size_t>(y) * width_ + x; }
@@ -105,6 +119,10 @@ class Film {
 inline glm::vec3 resolve_pixel(glm::vec4 sums) {
   return sums.w != 0.0f ? glm::vec3(sums) / sums.w : glm::vec3(0.0f);
 }
+
+// Film::resolve_variance's estimate for one pixel, from its total (weight x radiance, weight) and
+// the same sums over its even samples.
+glm::vec3 half_buffer_variance(glm::vec4 total, glm::vec4 even);
 
 // The pixel filter, sampled rather than splatted (as pbrt-v4's film does): each sample lands in its
 // own pixel at an offset drawn from the filter's distribution, weighted by filter / pdf. Tiles then

@@ -23,8 +23,10 @@ struct SampleBatch {
   std::span<Sampler> samplers{};
 };
 
-// Where an integrator writes: radiance always; the AOVs of the first hit (albedo, geometric normal,
-// distance along the camera ray; zero where the ray escapes) when their spans are not empty.
+// Where an integrator writes: radiance always; the AOVs when their spans are not empty: albedo and
+// normal (world space, facing the ray) of the first hit (lab: geometric normal) or of the first
+// non-specular hit (path: path_integrator.cpp), depth the distance along the camera ray to the
+// first hit; zero where the ray escapes.
 struct SampleOutput {
   std::span<glm::vec3> radiance{};
   std::span<glm::vec3> albedo{};

@@ -136,6 +136,10 @@ PathIntegrator::PathIntegrator(const Scene& scene, const PathSettings& settings,
         return m.is_diffuse() && !m.albedo_texture.present() && !m.emission_texture.present();
       });
   uniform_environment_ = !scene.environment_map && max_component(scene.environment) > 0.0f;
+  specular_.reserve(scene.materials.size());
+  for (const Material& m : scene.materials) {
+    specular_.push_back(!m.is_diffuse() && Bsdf(m).all_delta() ? 1 : 0);
+  }
 }
 
 uint64_t PathIntegrator::radiance(const SampleBatch& batch, const SampleOutput& out,
@@ -167,6 +171,17 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
   std::array<float, kMaxBatch> environment_pdf;
   std::array<uint16_t, kMaxBatch> path;  // active slot -> path index
   ShadowRays shadows(scratch.shadow_rays);
+  // The albedo and normal AOVs are those of the first surface that is not specular (every lobe a
+  // delta), as Open Image Denoise and Cycles' denoising passes take them: through perfect mirrors
+  // and smooth glass the path is followed on, the albedo multiplied by the tint of each delta
+  // bounce (BsdfSample weight without refraction's 1 / eta^2; a dielectric's choice between
+  // reflection and refraction is the path's own, so the AOV's mean weighs the two by Fresnel).
+  // A specular surface writes its own values provisionally (tint x its colour, its normal); they
+  // stay where the path ends there (Russian roulette, the depth limit), and are zero where it
+  // escapes, as for a camera ray that meets nothing.
+  const bool surface_aovs = !out.albedo.empty() || !out.normal.empty();
+  std::array<glm::vec3, kMaxBatch> aov_tint;
+  std::array<uint8_t, kMaxBatch> aov_open;
 
   for (size_t i = 0; i < n; ++i) {
     out.radiance[i] = glm::vec3(0.0f);
@@ -174,10 +189,20 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
     path[i] = static_cast<uint16_t>(i);
     scratch.rays[i] = batch.rays[i];
   }
+  if (surface_aovs) {
+    for (size_t i = 0; i < n; ++i) {
+      aov_tint[i] = glm::vec3(1.0f);
+      aov_open[i] = 1;
+      if (!out.albedo.empty()) out.albedo[i] = glm::vec3(0.0f);
+      if (!out.normal.empty()) out.normal[i] = glm::vec3(0.0f);
+    }
+  }
   size_t active = n;
   uint64_t traced = n;
   accel.intersect(std::span<const Ray>(scratch.rays.data(), n), std::span(scratch.hits).first(n));
-  write_first_hit_aovs(scene, batch.rays, std::span<const Hit>(scratch.hits.data(), n), out);
+  // Depth is the first hit's, whatever it is.
+  write_first_hit_aovs(scene, batch.rays, std::span<const Hit>(scratch.hits.data(), n),
+                       SampleOutput{.depth = out.depth});
 
   for (int depth = 0; active > 0; ++depth) {
     shadows.count = 0;
@@ -186,6 +211,10 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       const Hit& hit = scratch.hits[k];
       const uint16_t i = path[k];
       if (!hit.found()) {
+        if (surface_aovs && aov_open[i]) {
+          if (!out.albedo.empty()) out.albedo[i] = glm::vec3(0.0f);
+          if (!out.normal.empty()) out.normal[i] = glm::vec3(0.0f);
+        }
         if (const EnvironmentLight* env = lights_.environment()) {
           // The map is a light too: after a non-delta bounce, weighted against light sampling's
           // density for this direction (or left to light sampling alone under kLightOnly).
@@ -238,6 +267,20 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       glm::vec3 albedo = material.albedo;
       if (!kPlainDiffuse && material.albedo_texture.present()) {
         albedo = textured(scene, material.albedo_texture, albedo, uv());
+      }
+      if (surface_aovs && aov_open[i]) {
+        // The normal the diffuse branch below shades with: the shading normal on the side the
+        // path arrived from, unless the two normals disagree about wo.
+        const glm::vec3 n_face = glm::dot(n_lab, wo) >= 0.0f ? n_lab : -n_lab;
+        glm::vec3 n_aov = n_face;
+        if (smooth) {
+          glm::vec3 ns = oriented_shading_normal(corners, hit.u, hit.v, n_lab);
+          if (!(n_face == n_lab)) ns = -ns;
+          if (shading_agrees(wo, ns, n_face)) n_aov = ns;
+        }
+        if (!out.albedo.empty()) out.albedo[i] = aov_tint[i] * albedo;
+        if (!out.normal.empty()) out.normal[i] = n_aov;
+        if (kPlainDiffuse || !specular_[tri.material]) aov_open[i] = 0;
       }
       if (material.emits()) {
         glm::vec3 le = emitted_radiance(material, n_lab, wo);
@@ -318,6 +361,8 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
         }
         if (!(max_component(t) > 0.0f)) continue;
         throughput[i] = t;
+        // Open only at a specular surface, whose sample is a delta lobe's.
+        if (surface_aovs && aov_open[i]) aov_tint[i] *= bs.weight * (1.0f / bs.radiance_scale);
         bsdf_pdf[i] = bs.pdf;  // infinite for a delta lobe: emission found by it gets weight 1
         environment_pdf[i] =
             bs.wi.z * wo_local.z > 0.0f ? cosine_hemisphere_pdf(std::abs(bs.wi.z)) : 0.0f;

@@ -7,6 +7,9 @@
 // batch query to the accel (traced ray by ray: bounce rays are incoherent).
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "tritrace/math/offset_ray.h"
 #include "tritrace/render/integrator.h"
 #include "tritrace/render/light_sampler.h"
@@ -49,6 +52,9 @@ class PathIntegrator final : public Integrator {
   RayOffsetParams offset_;
   LightSampler lights_;
   bool plain_diffuse_ = false;  // every material diffuse and untextured, flat shading, no instances
+  // Per material: whether every lobe of its BSDF is a delta lobe (a perfect mirror, smooth glass),
+  // which the albedo and normal AOVs look through.
+  std::vector<uint8_t> specular_;
   // A constant environment that emits (no map): light-sampled uniformly over the sphere at every
   // vertex, beside the light the light sampler chooses.
   bool uniform_environment_ = false;

@@ -173,6 +173,14 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
             if (aovs.normal) open_aovs[i].normal += wi * normal[i];
             if (aovs.depth) open_aovs[i].depth += wi * depth[i];
           }
+          // The even half buffer, by the parity of the global sample index (a part starting at
+          // sample 8 continues the same split), summed exactly as the total is above.
+          if (aovs.variance && s % 2 == 0) {
+            for (size_t i = 0; i < count; ++i) {
+              const float wi = w ? w[i] : 1.0f;
+              open_aovs[i].even += glm::vec4(wi * radiance[i], wi);
+            }
+          }
         }
         if ((s + 1) % kSampleBlock == 0) {
           // The block is complete: it becomes a node, and pairs of siblings merge.

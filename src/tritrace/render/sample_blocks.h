@@ -92,14 +92,19 @@ class BlockCounter {
   size_t size_ = 0;
 };
 
-// The AOV sums of a pixel (first-hit albedo, normal, depth, each times the sample's weight).
+// The AOV sums of a pixel (albedo, normal, depth, each times the sample's weight), and the half
+// buffer of the variance AOV: (sum of weight x radiance, sum of weights) over the samples whose
+// global index is even. Only the even half is kept: the odd half is the pixel's total minus it,
+// which saves 16 bytes per pixel and layer (the AOVs' cost is memory traffic) and, being formed
+// in the same order as the total, merges as exactly.
 struct AovSums {
   glm::vec3 albedo{0.0f};
   glm::vec3 normal{0.0f};
   float depth = 0.0f;
+  glm::vec4 even{0.0f};
 };
 inline AovSums operator+(const AovSums& a, const AovSums& b) {
-  return {a.albedo + b.albedo, a.normal + b.normal, a.depth + b.depth};
+  return {a.albedo + b.albedo, a.normal + b.normal, a.depth + b.depth, a.even + b.even};
 }
 
 // Replays `merges` merges on the values of a counter's nodes, values[0, count): the last two

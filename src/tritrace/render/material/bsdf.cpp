@@ -131,7 +131,8 @@ BsdfSample lobe_sample(const Lobe& lobe, glm::vec3 wo, float u_lobe, glm::vec2 u
     const float sin2_t = (1.0f - wo.z * wo.z) * inv_eta * inv_eta;
     if (sin2_t >= 1.0f) return {};
     s.wi = glm::vec3(-wo.x * inv_eta, -wo.y * inv_eta, -std::sqrt(1.0f - sin2_t));
-    s.weight = lobe.colour * (inv_eta * inv_eta);  // (1 - F) / (1 - F), scaled for radiance
+    s.radiance_scale = inv_eta * inv_eta;
+    s.weight = lobe.colour * s.radiance_scale;  // (1 - F) / (1 - F), scaled for radiance
     return s;
   }
   const Ggx ggx{lobe.alpha};

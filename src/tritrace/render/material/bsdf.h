@@ -17,6 +17,9 @@ struct BsdfSample {
   glm::vec3 wi{0.0f};      // local frame, unit length
   glm::vec3 weight{0.0f};  // f |cos theta_i| / pdf; zero when sampling failed
   float pdf = 0.0f;        // solid-angle density; infinite for a delta lobe's direction
+  // The radiance scale 1 / eta^2 of a delta refraction, already in `weight` (1 otherwise): weight /
+  // radiance_scale is the lobe's tint alone, which the albedo AOV follows through glass.
+  float radiance_scale = 1.0f;
   bool delta = false;
   bool valid() const { return weight.x > 0.0f || weight.y > 0.0f || weight.z > 0.0f; }
 };
