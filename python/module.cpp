@@ -519,7 +519,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
                    const py::object& look_at, const py::object& up, const py::object& vertical_fov,
                    const py::object& focal_length, const py::object& yaw,
                    const py::object& distance, const py::object& light,
-                   const py::object& time_limit) {
+                   const py::object& time_limit, const py::object& denoise) {
   // The CLI's flags, parsed and checked by the CLI's own code.
   FlagTexts texts;
   texts.add_string("--integrator", integrator);
@@ -551,6 +551,13 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
     texts.add_string("--kernel", kernel);
   }
   JobSettings settings = texts.parse();
+  if (!denoise.is_none()) {
+    if (!PyBool_Check(denoise.ptr())) {
+      raise_type_error("denoise: must be a bool, got " +
+                       std::string(Py_TYPE(denoise.ptr())->tp_name));
+    }
+    settings.denoise = denoise.cast<bool>();
+  }
   const AovSet aov = aov_set(aovs);
   settings.aovs = aov_names(aov);
   const View view = view_of(*data, camera_pose(position, look_at, up, vertical_fov, focal_length),
@@ -792,7 +799,7 @@ the halves of its samples split by sample index parity), or None; integrator, sp
         "max_depth"_a = none, "filter"_a = none, "aovs"_a = py::tuple(), "accel"_a = none,
         "kernel"_a = none, "threads"_a = none, "position"_a = none, "look_at"_a = none,
         "up"_a = none, "vertical_fov"_a = none, "focal_length"_a = none, "yaw"_a = none,
-        "distance"_a = none, "light"_a = none, "time_limit"_a = none,
+        "distance"_a = none, "light"_a = none, "time_limit"_a = none, "denoise"_a = none,
         R"(Renders the scene as `tritrace render` does, returning a tritrace.Frame.
 
 The image is bit for bit the one `tritrace render ... -o out.pfm` writes with the same
@@ -802,7 +809,8 @@ max_depth, filter ("box", "gaussian", "blackman-harris"), accel (a name, or an A
 over this scene, to reuse it across renders), kernel, threads (default all cores), yaw
 (radians, orbiting look_at), distance (to look_at), light (the first point light's position),
 time_limit (seconds: the path tracer's samples in passes until the time is up, spp the most;
-Frame.spp says how many were reached, and the image is the one that spp gives).
+Frame.spp says how many were reached, and the image is the one that spp gives), denoise (True:
+the path tracer's image through the built-in denoiser, as `tritrace render --denoise`).
 aovs: any of "albedo", "normal", "depth", "variance". Camera settings beyond the CLI's flags, as a
 scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
 focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a

@@ -234,6 +234,7 @@ def render(
     distance: Optional[float] = None,
     light: Optional[_Vec3] = None,
     time_limit: Optional[float] = None,
+    denoise: Optional[bool] = None,
 ) -> Frame:
     """Renders the scene as `tritrace render` does: the image is bit for bit the one
     `tritrace render ... -o out.pfm` writes with the same settings.
@@ -243,6 +244,7 @@ def render(
     as a scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
     focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a
     look-at camera. time_limit (seconds): the path tracer's samples in passes until the time is
-    up (spp the most); Frame.spp says how many it reached. Bad values raise ValueError with the
-    CLI's message, wrong types TypeError.
+    up (spp the most); Frame.spp says how many it reached. denoise=True: the image through the
+    built-in denoiser, as `tritrace render --denoise`. Bad values raise ValueError with the CLI's
+    message, wrong types TypeError.
     """

@@ -68,16 +68,19 @@ int run_denoise(const DenoiseArgs& args) {
   for (int l = 0; l < 4; ++l) {
     if (images[l].pixels().empty()) {
       throw Error(args.input, std::string("has no ") + missing[l] +
-                                  " (render with --aov albedo,normal,depth and -o .exr)");
+                                  " (render with --aovs albedo,normal,depth,variance and -o .exr)");
     }
   }
   const Image& colour = images[0];
   const bool has_variance = !images[4].pixels().empty();
-  const Image variance = has_variance ? images[4] : estimate_variance_spatially(colour, images[1]);
+  // With the render's variance layer, the render's own denoising (render --denoise); without,
+  // the variance estimated from the image.
+  const Image variance =
+      has_variance ? smooth_variance(images[4]) : estimate_variance_spatially(colour, images[1]);
   DenoiseOptions options;
   options.search_radius = args.search_radius;
   RenderedImage rendered{denoise(colour, variance, {images[1], images[2], images[3]}, options),
-                         {images[1], images[2], images[3]}};
+                         {images[1], images[2], images[3], images[4]}};
   write_render(rendered, args.output, true, settings);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

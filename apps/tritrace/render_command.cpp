@@ -62,6 +62,11 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
                   "--spp of that many gives")
       ->type_name("SECONDS")
       ->check(checked(setting_check("--time-limit")));
+  sub->add_flag("--denoise", args.job.denoise,
+                "Denoise the path tracer's image with the built-in feature-guided denoiser "
+                "(docs/DENOISING.md): the film also keeps albedo, normal, depth and the variance "
+                "of each pixel from its two halves of samples; --aovs still chooses which of "
+                "them are written");
   sub->add_flag("--mpi", args.mpi,
                 "Render across the ranks of an MPI job (mpirun -np N tritrace render --mpi ...): "
                 "rank 0 hands out tiles x sample blocks, gathers and writes the image once");
@@ -157,6 +162,7 @@ int run_render(const RenderArgs& args) {
           image.width(), image.height(), stats.spp, stats.milliseconds, limit.c_str(),
           stats.samples_per_second() * 1e-6, stats.mrays_per_second(), stats.threads,
           stats.threads == 1 ? "" : "s", output.c_str());
+      if (settings.denoise) std::printf("denoised in %.1f ms\n", rendered.denoise_ms);
     } else {
       std::printf("rendered %dx%d in %.1f ms (%.3g Mrays/s, %d thread%s) to %s\n", image.width(),
                   image.height(), stats.milliseconds, stats.mrays_per_second(), stats.threads,

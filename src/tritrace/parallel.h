@@ -1,9 +1,9 @@
 // Parallel loops, reductions and task groups over TBB whose hand-overs of work ThreadSanitizer can
 // follow. Debian's libtbb.so is not built with TSan, so TSan cannot see TBB hand a task to another
 // thread, nor a waiting thread learn that the tasks finished, and reports races between a task and
-// the code before the hand-over or after the wait. Here, in a TSan build, each task gets its own
-// synchronisation address: the thread that hands it over releases it and the task acquires it
-// first; each task releases its group's address when it ends, and wait() acquires that. These are
+// the code before the hand-over or after the wait. Here, in a TSan build, each task's own address
+// is its synchronisation address: the thread that hands it over releases it and the task acquires
+// it first; each task releases its group's address when it ends, and wait() acquires that. These are
 // exactly the edges TBB guarantees, and no more: sibling tasks are not ordered with each other,
 // so TSan reports a race between two of them even when one ran after the other had finished
 // (tests/parallel/parallel_tsan_test.cpp). Otherwise these are plain TBB task groups.
@@ -93,25 +93,24 @@ class TaskGroup {
 
  private:
   // TBB moves the task into its own memory on the spawning thread, so each move or copy releases
-  // the task's own address after it; the thread that runs it acquires that address before reading
-  // it, and releases the group's when it has finished.
+  // the new task's own address (`this`) after it; the thread that runs it acquires that address
+  // before reading any of its members (the address is known without reading the task, where an
+  // address kept in a member would itself be read before the acquire), and releases the group's
+  // when it has finished.
   template <typename F>
   class Task {
    public:
     Task(F f, const char* done) : fn_(std::move(f)), done_(done) {}
-    Task(Task&& other) noexcept
-        : fn_(std::move(other.fn_)), done_(other.done_), token_(std::move(other.token_)) {
-      detail::release(token_.get());
+    Task(Task&& other) noexcept : fn_(std::move(other.fn_)), done_(other.done_) {
+      detail::release(this);
     }
-    Task(const Task& other) : fn_(other.fn_), done_(other.done_), token_(other.token_) {
-      detail::release(token_.get());
-    }
+    Task(const Task& other) : fn_(other.fn_), done_(other.done_) { detail::release(this); }
     Task& operator=(const Task&) = delete;
     Task& operator=(Task&&) = delete;
     ~Task() = default;
 
     void operator()() const {
-      detail::acquire(token_.get());
+      detail::acquire(this);
       fn_();
       detail::release(done_);
     }
@@ -119,15 +118,6 @@ class TaskGroup {
    private:
     F fn_;
     const char* done_;
-#ifdef TRITRACE_TSAN
-    // The task's synchronisation address, shared by its copies (TSan builds only).
-    std::shared_ptr<const char> token_ = std::make_shared<const char>(0);
-#else
-    // No address without TSan: release and acquire do nothing.
-    struct NoToken {
-      const void* get() const { return nullptr; }
-    } token_;
-#endif
   };
   tbb::task_group group_;
   // The address every task of this group releases when it ends, and wait() acquires.

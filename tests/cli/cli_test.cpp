@@ -1903,6 +1903,26 @@ TEST_F(CliTest, DenoiseWritesALessNoisyImageWithTheInputsLayers) {
   EXPECT_NEAR(Mean(red_out) / Mean(red_in), 1.0, 0.02);
 }
 
+// render --denoise is the render's AOVs denoised: the same bytes as writing them to an EXR and
+// running `tritrace denoise` on it, as a merged distributed render would be denoised.
+TEST_F(CliTest, RenderDenoiseIsDenoiseOfTheRendersLayers) {
+  const std::vector<std::string> scene = {"--scene",  "cornell-area", "--width", "48",
+                                          "--height", "40",           "--spp",   "8"};
+  std::vector<std::string> denoised = scene;
+  denoised.push_back("--denoise");
+  RenderQuietly(denoised, "direct.pfm");
+  std::vector<std::string> layers = scene;
+  for (const char* a : {"--aovs", "albedo,normal,depth,variance"}) layers.push_back(a);
+  RenderQuietly(layers, "layers.exr");
+  const RunResult r = Run({"denoise", "layers.exr", "-o", "later.pfm", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(work_ / "direct.pfm"), ReadFile(work_ / "later.pfm"));
+  RenderQuietly(scene, "noisy.pfm");
+  EXPECT_NE(ReadFile(work_ / "direct.pfm"), ReadFile(work_ / "noisy.pfm"));
+  const RunResult lab = Run({"render", "--denoise", "-o", "lab.png"});
+  ExpectErrorLine(lab, 2, "--denoise", "applies to the path tracer");
+}
+
 // An EXR of `side` x `side` pixels whose channels hold the values `fill` gives each.
 void WriteExr(const fs::path& path, int side,
               const std::vector<std::pair<std::string, float (*)(int, int)>>& channels) {

@@ -269,5 +269,37 @@ TEST(RenderJob, TimeLimitRendersTheImageOfTheSppItReached) {
   }
 }
 
+TEST(RenderJob, DenoiseIsForWholePathRenders) {
+  JobSettings s = small("cornell");
+  s.denoise = true;
+  EXPECT_EQ(error_of([&] { RenderJob(s, load_job_scene(s)); }).subject(), "--denoise");
+  s = small("cornell-area", "16");
+  s.denoise = true;
+  s.spp_range = "0:8";
+  EXPECT_EQ(error_of([&] { RenderJob(s, load_job_scene(s)); }).subject(), "--denoise");
+}
+
+// --denoise is the denoiser run on the image and features of the render that writes them as AOVs
+// (what `tritrace denoise` reads from its EXR), and writes only the AOVs asked for.
+TEST(RenderJob, DenoisedRenderIsTheDenoiserOnTheFilmsFeatures) {
+  JobSettings s = small("cornell-area", "8");
+  s.denoise = true;
+  s.aovs = "depth";
+  RenderJob job(s, load_job_scene(s));
+  job.prepare();
+  const RenderedImage got = job.render();
+
+  JobSettings plain = small("cornell-area", "8");
+  plain.aovs = "albedo,normal,depth,variance";
+  RenderJob with_aovs(plain, load_job_scene(plain));
+  with_aovs.prepare();
+  const RenderedImage noisy = with_aovs.render();
+  EXPECT_TRUE(same_pixels(got.image, denoise_film_image(noisy.image, noisy.aovs)));
+  EXPECT_FALSE(same_pixels(got.image, noisy.image));
+  EXPECT_TRUE(same_pixels(got.aovs.depth, noisy.aovs.depth));
+  EXPECT_EQ(got.aovs.albedo.width(), 0);
+  EXPECT_EQ(got.aovs.variance.width(), 0);
+}
+
 }  // namespace
 }  // namespace tritrace

@@ -62,6 +62,19 @@ def test_a_time_limited_render_is_the_image_of_the_spp_it_reached(tmp_path):
         tritrace.render(tritrace.Scene.builtin("cornell"), time_limit=1)
 
 
+def test_a_denoised_render_is_the_clis(tmp_path):
+    scene = tritrace.Scene.builtin("cornell-area")
+    frame = tritrace.render(scene, width=40, height=32, spp=8, denoise=True)
+    assert_same_bits(frame.image, cli_image(tmp_path, "--scene", "cornell-area", "--width", 40,
+                                            "--height", 32, "--spp", 8, "--denoise"))
+    noisy = tritrace.render(scene, width=40, height=32, spp=8)
+    assert not np.array_equal(frame.image, noisy.image)
+    with pytest.raises(TypeError, match="denoise: must be a bool"):
+        tritrace.render(scene, denoise=1)
+    with pytest.raises(ValueError, match="denoise: applies to the path tracer"):
+        tritrace.render(tritrace.Scene.builtin("cornell"), denoise=True)
+
+
 def test_integrator_and_kernel_choices_are_the_clis(tmp_path, cornell):
     frame = tritrace.render(cornell, integrator="path", spp=2, width=32, height=24,
                             kernel="moller-trumbore", accel="bvh-single")

@@ -441,6 +441,11 @@ Image variance_from_halves(const Image& half_a, const Image& half_b, int radius)
   return radius == 0 ? raw : box_mean(raw, radius);
 }
 
+Image smooth_variance(const Image& variance, int radius) {
+  if (radius < 0) throw Error("denoise", "variance radius " + std::to_string(radius) + " < 0");
+  return radius == 0 ? variance : box_mean(variance, radius);
+}
+
 Image denoise_halves(const Image& half_a, const Image& half_b, const DenoiseFeatures& features,
                      const DenoiseOptions& options) {
   return denoise(average_halves(half_a, half_b), variance_from_halves(half_a, half_b), features,

@@ -77,6 +77,11 @@ struct DenoiseFeatures {
 // single degree of freedom; the average makes it usable as a weight.
 [[nodiscard]] Image variance_from_halves(const Image& half_a, const Image& half_b, int radius = 2);
 
+// A per-pixel variance of the mean (the renderer's variance AOV, one degree of freedom per pixel)
+// averaged over the (2 radius + 1)^2 pixels around each (clamped at the border), as
+// variance_from_halves averages its estimates.
+[[nodiscard]] Image smooth_variance(const Image& variance, int radius = 2);
+
 // For images without a variance layer: the variance of each pixel's value estimated from its
 // neighbourhood, (9/8) times the mean over 5 x 5 pixels of the squared residual from the 3 x 3
 // mean, computed on the albedo-demodulated colour (so texture does not count as noise). Larger

@@ -41,6 +41,7 @@ struct JobSettings {
   std::string max_depth;
   std::string filter = "box";
   std::string time_limit;  // seconds: whole passes of samples until the time is up
+  bool denoise = false;    // the feature-guided denoiser on the path tracer's image
   // What to write.
   std::string output;         // empty: the scene file's output, else <file stem>.png
   bool output_given = false;  // the caller named an output (its value may still be empty)

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <utility>
 
+#include "tritrace/denoise/denoiser.h"
 #include "tritrace/distributed/partial_film_codec.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
@@ -142,6 +143,13 @@ void write_render(const RenderedImage& rendered, const std::string& file, bool p
   }
 }
 
+Image denoise_film_image(const Image& colour, const AovImages& aovs) {
+  // The half-buffer variance of one pixel has one degree of freedom: averaged over 5 x 5 pixels
+  // it is steady enough to weigh neighbours by (docs/DENOISING.md).
+  const Image variance = smooth_variance(aovs.variance, 2);
+  return denoise(colour, variance, {aovs.albedo, aovs.normal, aovs.depth});
+}
+
 RenderJob::RenderJob(const JobSettings& settings, LoadedScene loaded)
     : settings_(settings), loaded_(std::move(loaded)) {
   scene_ = &loaded_->scene;
@@ -173,9 +181,26 @@ void RenderJob::set_up() {
     // --spp is the most samples a pixel takes; without it, passes go on until the time is up.
     if (settings_.spp.empty()) spec_.spp = kMaxSpp;
   }
+  if (settings_.denoise) {
+    if (!path()) {
+      throw Error("--denoise",
+                  "applies to the path tracer; the lab integrator's image has no noise",
+                  ExitCode::kUsage);
+    }
+    if (!settings_.spp_range.empty() || !settings_.tile.empty()) {
+      throw Error("--denoise",
+                  "denoises a whole image; render the parts with --aovs "
+                  "albedo,normal,depth,variance, merge them, then run `tritrace denoise`",
+                  ExitCode::kUsage);
+    }
+  }
   accel_kind_ = tritrace::accel_kind(settings_);
   kernel_ = kernel_choice(settings_);
   aovs_ = aov_set(settings_);
+  film_aovs_ = aovs_;
+  if (settings_.denoise) {
+    film_aovs_.albedo = film_aovs_.normal = film_aovs_.depth = film_aovs_.variance = true;
+  }
   partial_ = !settings_.spp_range.empty() || !settings_.tile.empty();
   part_ = part_range(settings_, path(), spec_.spp, width(), height());
   options_.threads = thread_count(settings_);
@@ -229,7 +254,23 @@ void RenderJob::remake_integrator() {
 }
 
 Film RenderJob::make_film() const {
-  return Film(width(), height(), aovs_);
+  return Film(width(), height(), film_aovs_);
+}
+
+RenderedImage RenderJob::resolve(const Film& film) const {
+  RenderedImage out{film.resolve(), film.resolve_aovs()};
+  if (settings_.denoise) {
+    const auto start = std::chrono::steady_clock::now();
+    out.image = denoise_film_image(out.image, out.aovs);
+    out.denoise_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
+  // Only the AOVs asked for are written.
+  if (!aovs_.albedo) out.aovs.albedo = Image();
+  if (!aovs_.normal) out.aovs.normal = Image();
+  if (!aovs_.depth) out.aovs.depth = Image();
+  if (!aovs_.variance) out.aovs.variance = Image();
+  return out;
 }
 
 void RenderJob::render_to_film(Film& film, RenderStats* stats) const {
@@ -245,11 +286,10 @@ RenderedImage RenderJob::render(RenderStats* stats) const {
     return render_for(*seconds, stats);
   }
   RenderedImage out;
-  if (aovs_.any()) {
+  if (film_aovs_.any()) {
     Film film = make_film();
     render_to_film(film, stats);
-    out.image = film.resolve();
-    out.aovs = film.resolve_aovs();
+    out = resolve(film);
   } else {
     // The same bits as a film's resolve, without the film's memory.
     out.image = tritrace::render(*scene_, *accel_, *integrator_, options_, stats);
@@ -265,14 +305,17 @@ RenderedImage RenderJob::render_for(double seconds, RenderStats* stats) const {
   RenderStats total;
   uint32_t taken = 0;
   const uint32_t cap = spec_.spp;
+  // With --denoise the limit covers the denoiser too: its time, measured on the first pass's
+  // image, is kept back from the passes.
+  double reserve = 0.0;
   while (taken < cap) {
     // Passes of whole sample blocks, each at most as many samples as the film holds (so the time
     // per sample is measured again before a long pass), as many as the time left fits at the
     // time per sample so far. The first pass is always rendered: an image needs samples.
     uint32_t n = std::min(cap - taken, kSampleBlock);
     if (taken > 0) {
-      const double per_sample = elapsed() / taken;
-      const double fit = (seconds - elapsed()) / per_sample;
+      const double per_sample = (elapsed() - reserve) / taken;
+      const double fit = (seconds - reserve - elapsed()) / per_sample;
       if (cap - taken < kSampleBlock) {
         n = fit >= static_cast<double>(cap - taken) ? cap - taken : 0;
       } else {
@@ -292,16 +335,16 @@ RenderedImage RenderJob::render_for(double seconds, RenderStats* stats) const {
     total.samples += pass.samples;
     total.threads = std::max(total.threads, pass.threads);
     taken += n;
+    if (settings_.denoise && reserve == 0.0) {
+      const double before = elapsed();
+      (void)resolve(film);
+      reserve = elapsed() - before;
+    }
   }
   total.spp = taken;
   total.milliseconds = elapsed() * 1e3;
   if (stats) *stats = total;
-  RenderedImage out;
-  out.image = film.resolve();
-  if (aovs_.any()) {
-    out.aovs = film.resolve_aovs();
-  }
-  return out;
+  return resolve(film);
 }
 
 void RenderJob::write(const RenderedImage& rendered, const std::string& file) const {
@@ -309,7 +352,7 @@ void RenderJob::write(const RenderedImage& rendered, const std::string& file) co
 }
 
 void RenderJob::write(const Film& film, const std::string& file) const {
-  write({film.resolve(), film.resolve_aovs()}, file);
+  write(resolve(film), file);
 }
 
 void RenderJob::write_part(const Film& film, const std::string& file) const {

@@ -27,7 +27,13 @@ namespace tritrace {
 struct RenderedImage {
   Image image;
   AovImages aovs;
+  double denoise_ms = 0.0;  // the denoiser's time, with --denoise
 };
+
+// The denoiser as a render runs it on its film's image: the variance AOV (from the halves of the
+// samples) averaged over 5 x 5 pixels, albedo, normal and depth as features. `tritrace denoise`
+// runs the same on an EXR with those layers, so a merged render denoises as one process would.
+Image denoise_film_image(const Image& colour, const AovImages& aovs);
 
 // --exposure scales the path tracer's 8-bit images; with the lab integrator it is refused
 // (Error("--exposure", ..., kUsage)), whichever front end asks.
@@ -61,6 +67,7 @@ class RenderJob {
   bool path() const { return spec_.kind == IntegratorSpec::Kind::kPath; }
   AccelKind accel_kind() const { return accel_kind_; }
   Kernel kernel() const { return kernel_; }
+  // The AOVs asked for (written with the image); the film also keeps the ones the denoiser needs.
   const AovSet& aovs() const { return aovs_; }
   int width() const { return scene_->camera.width(); }
   int height() const { return scene_->camera.height(); }
@@ -86,7 +93,7 @@ class RenderJob {
   const Accel& accel() const { return *accel_; }
   const Integrator& integrator() const { return *integrator_; }
 
-  // A film of the image's size with the job's AOVs.
+  // A film of the image's size with the job's AOVs (and the denoiser's features with --denoise).
   Film make_film() const;
   // Renders `options` (default: the job's) into `film`; prepare() first.
   void render_to_film(Film& film, RenderStats* stats = nullptr) const;
@@ -97,6 +104,7 @@ class RenderJob {
   RenderedImage render(RenderStats* stats = nullptr) const;
   // Writes a whole render to `file` (write_render).
   void write(const RenderedImage& rendered, const std::string& file) const;
+  // Writes the film's image, denoised with --denoise, and the AOVs asked for.
   void write(const Film& film, const std::string& file) const;
   // A part's film as a partial film for `tritrace merge`. Atomic.
   void write_part(const Film& film, const std::string& file) const;
@@ -104,6 +112,8 @@ class RenderJob {
  private:
   void set_up();
   RenderedImage render_for(double seconds, RenderStats* stats) const;
+  // The image of `film` (denoised with --denoise) and the AOVs asked for.
+  RenderedImage resolve(const Film& film) const;
 
   JobSettings settings_;
   std::optional<LoadedScene> loaded_;
@@ -112,6 +122,7 @@ class RenderJob {
   AccelKind accel_kind_ = AccelKind::kBvh;
   Kernel kernel_ = kDefaultKernel;
   AovSet aovs_;
+  AovSet film_aovs_;
   RenderOptions options_;
   PartRange part_;
   bool partial_ = false;
