@@ -54,8 +54,8 @@ ASAN_EXCLUDE = CliTest.ModelThatCrashesTheImporterIsAnError
 # force, the BVH's packet path and Embree's three modes; the threads it runs; whole images), the
 # parallel SAH and Morton builds (serial against parallel) and the Embree
 # backend, whose build runs on TBB threads; the wide BVH's build (BvhInvariants.*) and the path
-# tracer's multi-threaded renders (PathRender.*); and a race between two sibling tasks, which TSan
-# must report (ParallelTsan.*, tests/parallel/parallel_tsan_test.cpp).
+# tracer's multi-threaded renders (PathRender.*); and the task group's own hand-overs
+# (ParallelTsan.*, tests/parallel/parallel_tsan_test.cpp).
 TSAN_TESTS = ParallelTsan.*:Renderer.*:Placements/*:BinnedSahBuilder.ParallelBuildMakesTheSerialTree:MortonBuilder.ParallelBuildMakesTheSerialTree:Modes/EmbreeVsBrute.*:EmbreeAccel.*:BvhInvariants.*:PathRender.*
 # They live in eight test files, which tests/CMakeLists.txt builds alone as tritrace_tsan_tests.
 

@@ -3,10 +3,10 @@
 // thread, nor a waiting thread learn that the tasks finished, and reports races between a task and
 // the code before the hand-over or after the wait. Here, in a TSan build, each task's own address
 // is its synchronisation address: the thread that hands it over releases it and the task acquires
-// it first; each task releases its group's address when it ends, and wait() acquires that. These are
-// exactly the edges TBB guarantees, and no more: sibling tasks are not ordered with each other,
-// so TSan reports a race between two of them even when one ran after the other had finished
-// (tests/parallel/parallel_tsan_test.cpp). Otherwise these are plain TBB task groups.
+// it first; each task releases its group's address when it ends, and wait() acquires that. These
+// are edges TBB guarantees, and no more: a task releases only its group's address, which only
+// wait() acquires, so these annotations order no task after another's work (one global address
+// did: each task acquired every earlier task's release). Otherwise these are plain TBB task groups.
 //
 // Everything is built on tbb::task_group rather than parallel_for / parallel_reduce: TBB's loops
 // keep their completion count on the caller's stack and a worker still reads it after its last
