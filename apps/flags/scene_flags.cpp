@@ -101,6 +101,14 @@ void add_scene_flags(CLI::App& app, JobSettings& flags) {
                  "light only; default: the scene's, 1024, so that Russian roulette ends paths)")
       ->type_name("N")
       ->check(rule("--max-depth"));
+  app.add_option("--clamp", flags.clamp,
+                 "Clamp for path, as Cycles' \"clamp indirect\" (default: off): each sample's "
+                 "indirect light (all but emitters and the environment seen directly and the light "
+                 "reaching the first hit straight from them) is scaled, keeping its colour, so "
+                 "that no channel exceeds VALUE; fewer fireflies, but BIASED: the image loses the "
+                 "energy clamped away")
+      ->type_name("VALUE")
+      ->check(rule("--clamp"));
   app.add_option("--filter", flags.filter,
                  "Pixel filter for path: box (one pixel), gaussian or blackman-harris (radius 1.5 "
                  "pixels)")

@@ -7,6 +7,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -15,6 +16,7 @@
 #include "build_info.h"
 #include "flags/flag_values.h"
 #include "tritrace/accel/make_accel.h"
+#include "tritrace/denoise/denoiser.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/job/render_job.h"
@@ -51,6 +53,8 @@ struct Record {
   double mpaths_per_s = 0.0;                     // camera samples (paths) per second, in millions
   std::optional<double> ratio_to_embree;         // the fastest non-robust Embree mode
   std::optional<double> ratio_to_embree_robust;  // embree-robust
+  // --denoise: the denoiser's time on each frame (median); frame_ms is then the render with AOVs.
+  std::optional<double> denoise_ms_median;
   int threads = 0;
   int width = 0, height = 0;
 };
@@ -90,6 +94,7 @@ nlohmann::json to_json(const Record& r) {
   auto optional = [](std::optional<double> v) { return v ? nlohmann::json(*v) : nlohmann::json(); };
   j["ratio_to_embree"] = optional(r.ratio_to_embree);
   j["ratio_to_embree_robust"] = optional(r.ratio_to_embree_robust);
+  j["denoise_ms_median"] = optional(r.denoise_ms_median);
   return j;
 }
 
@@ -156,6 +161,10 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
                   "default sah")
       ->type_name("NAME")
       ->check(checked(check_bvh_build));
+  sub->add_flag("--denoise", args.denoise,
+                "path: render each frame with the denoiser's AOVs (albedo, normal, depth, "
+                "variance) and time the denoiser on it too (column 'denoise ms', JSON "
+                "denoise_ms_median); frame ms is then the render with AOVs");
   sub->add_option("--json", args.json, "Also write the records as a JSON array to PATH")
       ->type_name("PATH");
   sub->add_flag("-q,--quiet", args.quiet, "Print only the table");
@@ -166,6 +175,11 @@ int run_bench(const BenchArgs& args) {
   if (!args.json.empty()) check_writable_path(args.json);
   for (const std::string& file : args.files) check_input_file(file);  // before any output
   const bool path = args.integrator == "path";
+  if (args.denoise && !path) {
+    throw Error("--denoise",
+                "times the denoiser on the path tracer's frames; use --integrator path",
+                ExitCode::kUsage);
+  }
   IntegratorSpec spec;
   spec.kind = path ? IntegratorSpec::Kind::kPath : IntegratorSpec::Kind::kLab;
   spec.spp =
@@ -199,9 +213,10 @@ int run_bench(const BenchArgs& args) {
 
   // The lab's table keeps its columns; path adds spp and paths per second.
   if (path) {
-    std::printf("%-13s %10s %-13s %-15s %10s %8s %8s %26s %6s %9s %9s %8s %8s\n", "scene",
+    std::printf("%-13s %10s %-13s %-15s %10s %8s %8s %26s %6s %9s %9s %8s %8s%s\n", "scene",
                 "triangles", "accel", "kernel", "build ms", "B/tri", "+tri B",
-                "frame ms median (min-max)", "spp", "Mpaths/s", "Mrays/s", "/embree", "/robust");
+                "frame ms median (min-max)", "spp", "Mpaths/s", "Mrays/s", "/embree", "/robust",
+                args.denoise ? "  denoise ms" : "");
   } else {
     std::printf("%-13s %10s %-13s %-15s %10s %8s %8s %26s %9s %8s %8s\n", "scene", "triangles",
                 "accel", "kernel", "build ms", "B/tri", "+tri B", "frame ms median (min-max)",
@@ -228,6 +243,7 @@ int run_bench(const BenchArgs& args) {
     settings.threads = std::to_string(threads);
     settings.integrator = std::string(integrator_name(spec.kind));
     settings.spp = std::to_string(spec.spp);
+    if (args.denoise) settings.aovs = "albedo,normal,depth,variance";
     const LoadedScene loaded = load_job_scene(settings);
     const Scene& scene = loaded.scene;
     const size_t first = records.size();
@@ -293,11 +309,20 @@ int run_bench(const BenchArgs& args) {
               static_cast<double>(info.structure_bytes) / std::max<size_t>(1, r.triangles);
           r.copy_bytes_per_tri =
               static_cast<double>(info.triangle_copy_bytes) / std::max<size_t>(1, r.triangles);
-          std::vector<double> ms;
+          std::vector<double> ms, denoise_ms;
           uint64_t rays = 0, samples = 0;
           for (int i = 0; i <= reps; ++i) {  // frame 0 warms caches and threads up, untimed
             RenderStats stats;
-            job.render(&stats);
+            const RenderedImage frame = job.render(&stats);
+            if (args.denoise) {
+              const auto start = std::chrono::steady_clock::now();
+              const Image denoised =
+                  denoise(frame.image, frame.aovs.variance,
+                          {frame.aovs.albedo, frame.aovs.normal, frame.aovs.depth});
+              const std::chrono::duration<double, std::milli> took =
+                  std::chrono::steady_clock::now() - start;
+              if (i > 0) denoise_ms.push_back(took.count());
+            }
             if (i == 0) continue;
             ms.push_back(stats.milliseconds);
             rays += stats.rays;
@@ -309,6 +334,7 @@ int run_bench(const BenchArgs& args) {
           // Rays per frame are the same every frame; the rate uses the median frame.
           r.mrays_per_s = static_cast<double>(rays) / reps / (r.frame_ms_median * 1e3);
           r.mpaths_per_s = static_cast<double>(samples) / reps / (r.frame_ms_median * 1e3);
+          if (args.denoise) r.denoise_ms_median = median(denoise_ms);
           records.push_back(r);
         }
       }
@@ -334,11 +360,15 @@ int run_bench(const BenchArgs& args) {
       std::snprintf(frame, sizeof(frame), "%.1f (%.1f-%.1f)", r.frame_ms_median, r.frame_ms_min,
                     r.frame_ms_max);
       if (path) {
-        std::printf("%-13s %10zu %-13s %-15s %10.1f %8.1f %8.1f %26s %6u %9.3g %9.1f %8s %8s\n",
+        char denoise_column[32] = "";
+        if (r.denoise_ms_median) {
+          std::snprintf(denoise_column, sizeof denoise_column, " %11.1f", *r.denoise_ms_median);
+        }
+        std::printf("%-13s %10zu %-13s %-15s %10.1f %8.1f %8.1f %26s %6u %9.3g %9.1f %8s %8s%s\n",
                     r.scene.c_str(), r.triangles, r.accel.c_str(), r.kernel.c_str(), r.build_ms,
                     r.bytes_per_tri, r.copy_bytes_per_tri, frame, r.spp, r.mpaths_per_s,
                     r.mrays_per_s, ratio_text(r.ratio_to_embree).c_str(),
-                    ratio_text(r.ratio_to_embree_robust).c_str());
+                    ratio_text(r.ratio_to_embree_robust).c_str(), denoise_column);
       } else {
         std::printf("%-13s %10zu %-13s %-15s %10.1f %8.1f %8.1f %26s %9.1f %8s %8s\n",
                     r.scene.c_str(), r.triangles, r.accel.c_str(), r.kernel.c_str(), r.build_ms,

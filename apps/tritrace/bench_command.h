@@ -26,6 +26,7 @@ struct BenchArgs {
   std::vector<std::string> kernels;     // empty: each accel's default kernel
   std::vector<std::string> bvh_builds;  // empty: sah
   std::string json;                     // empty: no JSON file
+  bool denoise = false;  // path: each frame's film keeps the denoiser's AOVs and is denoised
   bool quiet = false;
 };
 

@@ -23,6 +23,13 @@ std::string window_title(double frame_ms, int width, int height, uint32_t spp,
   return text;
 }
 
+std::string window_title(double frame_ms, int width, int height, uint32_t spp, uint32_t target_spp,
+                         uint32_t denoised_spp) {
+  std::string title = window_title(frame_ms, width, height, spp, target_spp);
+  return title + (denoised_spp > 0 ? ", denoised at " + std::to_string(denoised_spp) + " spp"
+                                   : std::string(", denoise on"));
+}
+
 double RenderTimeReport::seconds_until_due(double now) const {
   if (!printed_) return 0.0;
   return std::max(0.0, last_print_ + 1.0 - now);

@@ -14,6 +14,10 @@ std::string window_title(double frame_ms, int width, int height);
 // "tritrace — 52.3 ms/frame, 37/64 spp, 500x500": the path tracer's, with the samples per pixel
 // the window shows the mean of and the scene's target, where accumulation stops.
 std::string window_title(double frame_ms, int width, int height, uint32_t spp, uint32_t target_spp);
+// The same with the denoiser on (N): "..., 500x500, denoised at 32 spp" when the window shows the
+// film denoised at 32 spp, "..., 500x500, denoise on" while it waits for the view to rest.
+std::string window_title(double frame_ms, int width, int height, uint32_t spp, uint32_t target_spp,
+                         uint32_t denoised_spp);
 
 // Collects frame times and says when the next "Render time: N ms" line is due: at once for the
 // first frame, then at most once a second, giving the mean of the frames since the last line.

@@ -93,6 +93,7 @@ std::string render_command_line(const JobSettings& flags, const ViewState& state
   line += " --seed " + std::to_string(rendered.seed);
   if (!flags.sampler.empty()) line += " --sampler " + flags.sampler;
   if (!flags.max_depth.empty()) line += " --max-depth " + std::to_string(rendered.max_depth);
+  if (rendered.clamp > 0.0f) line += " --clamp " + format_float(rendered.clamp);
   const FilterKind filter = filter_choice(flags);
   if (filter != FilterKind::kBox) line += " --filter " + std::string(filter_name(filter));
   return line;

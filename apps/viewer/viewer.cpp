@@ -32,6 +32,7 @@
 #include "sample_schedule.h"
 #include "screenshot.h"
 #include "tritrace/accel/make_accel.h"
+#include "tritrace/denoise/denoiser.h"
 #include "tritrace/error.h"
 #include "tritrace/image/image_io.h"
 #include "tritrace/job/render_job.h"
@@ -153,11 +154,12 @@ struct TextureDeleter {
 };
 
 // Per-frame costs in milliseconds: events (handling input and setting the view), render (the
-// Renderer), convert (float image to texture pixels), upload (locking the texture and handing the
-// pixels to SDL), present (copy to the window and flip).
+// Renderer), denoise (the denoiser, on frames that run it), convert (float image to texture
+// pixels), upload (locking the texture and handing the pixels to SDL), present (copy to the window
+// and flip).
 struct FrameTimes {
-  double events = 0, render = 0, convert = 0, upload = 0, present = 0;
-  double total() const { return events + render + convert + upload + present; }
+  double events = 0, render = 0, denoise = 0, convert = 0, upload = 0, present = 0;
+  double total() const { return events + render + denoise + convert + upload + present; }
 };
 
 HeldKeys held_keys() {
@@ -347,6 +349,15 @@ class Viewer {
             show_overlay_ = !show_overlay_;
             need_present = true;
             break;
+          case SDLK_n:
+            // The path tracer's film gains (or may drop) its AOVs when it next starts over, at
+            // once when they are missing.
+            if (path_) {
+              denoise_ = !denoise_;
+              denoised_spp_ = 0;
+              need_render = true;
+            }
+            break;
           default:
             break;
         }
@@ -354,8 +365,10 @@ class Viewer {
 
       FrameTimes times;
       times.events = ms_since(woke);
+      bool new_image = false;
       if (need_render) {
-        if (render_frame(times)) need_present = true;
+        new_image = render_frame(times);
+        if (new_image) need_present = true;
         // The path tracer goes on adding samples while the view rests, up to the scene's spp.
         need_render = path_ && !schedule_->done();
       }
@@ -363,7 +376,7 @@ class Viewer {
         present(times);
         need_present = false;
       }
-      if (times.render > 0.0) frame_done(times);
+      if (new_image) frame_done(times);
       if (screenshot) {
         save_screenshot();
         screenshot = false;
@@ -430,32 +443,50 @@ class Viewer {
       // next whole sample indices [taken, taken + k) of every pixel, so the film after N samples
       // holds exactly the sums `tritrace render --spp N` makes, added in the same order.
       const int w = scene.camera.width(), h = scene.camera.height();
-      const bool restart = film_.width() != w || film_.height() != h || film_view_ != view_;
+      const bool restart = film_.width() != w || film_.height() != h || film_view_ != view_ ||
+                           (denoise_ && !(film_.aovs() == kDenoiseAovs));
       const uint32_t spp = schedule_->next_frame(restart);
-      if (spp == 0) return false;
-      if (restart) {
-        film_ = Film(w, h);
-        film_view_ = view_;
+      if (spp == 0) {
+        // The film holds its samples; a denoised image may still be due (the key was pressed).
+        // Or the image shown is denoised but should no longer be (the key turned it off).
+        if (!denoise_due() && !(shown_denoised_ && !keep_denoised())) return false;
+      } else {
+        if (restart) {
+          film_ = Film(w, h, denoise_ ? kDenoiseAovs : AovSet{});
+          film_view_ = view_;
+          denoised_spp_ = 0;
+        }
+        RenderOptions options = render_options_;
+        options.first_sample = schedule_->samples_taken();
+        options.spp = spp;
+        job_->render_to_film(film_, options, &stats);
+        schedule_->frame_rendered(spp, stats.milliseconds);
+        image_spp_ = schedule_->samples_taken();
       }
-      RenderOptions options = render_options_;
-      options.first_sample = schedule_->samples_taken();
-      options.spp = spp;
-      job_->render_to_film(film_, options, &stats);
-      schedule_->frame_rendered(spp, stats.milliseconds);
-      image_spp_ = schedule_->samples_taken();
     } else {
       image_ = job_->render(&stats).image;
     }
     image_view_ = view_;
     times.render = stats.milliseconds;
-    threads_ = stats.threads;
-    mrays_ = stats.mrays_per_second();
+    if (stats.milliseconds > 0.0) {  // not a frame that only denoised the film
+      threads_ = stats.threads;
+      mrays_ = stats.mrays_per_second();
+    }
 
     const Clock::time_point upload = Clock::now();
     if (path_) {
       const Clock::time_point resolve = Clock::now();
-      image_ = film_.resolve();
-      times.convert = ms_since(resolve);
+      if (denoise_due()) {
+        image_ = denoised_frame();
+        denoised_spp_ = image_spp_;
+        shown_denoised_ = true;
+        times.denoise = ms_since(resolve);
+      } else if (!keep_denoised()) {
+        image_ = film_.resolve();
+        shown_denoised_ = false;
+        times.convert = ms_since(resolve);
+      }
+      // Otherwise the last denoised image of this view stays until the next is due.
     }
     if (!texture_ || texture_width_ != image_.width() || texture_height_ != image_.height()) {
       texture_.reset(SDL_CreateTexture(renderer_.get(), SDL_PIXELFORMAT_ARGB8888,
@@ -477,6 +508,28 @@ class Viewer {
     }
     times.upload = ms_since(upload) - times.convert;
     return true;
+  }
+
+  // The viewer denoises only a view at rest: the film not started over by this frame (so at 2 spp
+  // or more, with both halves for the variance), and then each time its samples have doubled
+  // since the last denoised image (2, 4, 8, ... spp) and once more when the film is complete.
+  // Denoising costs about as much as rendering 16 spp, so its share of the time falls as samples
+  // grow, while the image shown improves at least as fast as the noise the samples remove.
+  bool denoise_due() const {
+    if (!denoise_ || image_spp_ < 2 || film_.width() == 0 || !(film_.aovs() == kDenoiseAovs)) {
+      return false;
+    }
+    if (denoised_spp_ == 0) return true;
+    return image_spp_ >= 2 * denoised_spp_ || (schedule_->done() && image_spp_ > denoised_spp_);
+  }
+
+  // The denoised image shown is of this film and still wanted.
+  bool keep_denoised() const { return denoise_ && shown_denoised_ && denoised_spp_ > 0; }
+
+  // The film denoised with its own features and the variance of its sample halves.
+  Image denoised_frame() const {
+    const AovImages aovs = film_.resolve_aovs();
+    return denoise(film_.resolve(), aovs.variance, {aovs.albedo, aovs.normal, aovs.depth});
   }
 
   // How image_ becomes bytes, in the window as in files: as `tritrace render` writes it.
@@ -508,9 +561,11 @@ class Viewer {
 
   void frame_done(const FrameTimes& times) {
     last_times_ = times;
-    const std::string title =
-        path_ ? window_title(times.total(), image_.width(), image_.height(), image_spp_, spec_.spp)
-              : window_title(times.total(), image_.width(), image_.height());
+    const int w = image_.width(), h = image_.height();
+    const std::string title = !path_     ? window_title(times.total(), w, h)
+                              : denoise_ ? window_title(times.total(), w, h, image_spp_, spec_.spp,
+                                                        shown_denoised_ ? denoised_spp_ : 0)
+                                         : window_title(times.total(), w, h, image_spp_, spec_.spp);
     SDL_SetWindowTitle(window_.get(), title.c_str());
     if (!options_.quiet && !benchmarking()) report_.add_frame(times.total());
     if (benchmarking()) benchmark_.push_back(times);
@@ -532,7 +587,9 @@ class Viewer {
     const std::filesystem::path path = next_screenshot_path(ec ? "." : folder);
     try {
       write_image(image_, path.string(), encoding());
-      print_line("saved " + path.string() + ": " + command_for_image());
+      // A denoised screenshot is that command's image denoised in the viewer.
+      print_line("saved " + path.string() + ": " + command_for_image() +
+                 (shown_denoised_ ? "  (denoised)" : ""));
     } catch (const Error& e) {
       // A full disk or a read-only folder must not end the session: say so and go on.
       std::fprintf(stderr, "tritrace-view: %s\n", e.what());
@@ -542,10 +599,10 @@ class Viewer {
   std::vector<std::string> overlay_lines() const {
     char stats[256];
     std::snprintf(stats, sizeof stats,
-                  "%.1f ms/frame: render %.1f, convert %.2f, upload %.2f, present %.2f, "
-                  "events %.2f",
-                  last_times_.total(), last_times_.render, last_times_.convert, last_times_.upload,
-                  last_times_.present, last_times_.events);
+                  "%.1f ms/frame: render %.1f, denoise %.1f, convert %.2f, upload %.2f, "
+                  "present %.2f, events %.2f",
+                  last_times_.total(), last_times_.render, last_times_.denoise, last_times_.convert,
+                  last_times_.upload, last_times_.present, last_times_.events);
     char scene[256];
     std::snprintf(
         scene, sizeof scene, "%dx%d, %zu triangles, %s, %s, %d threads, %.3g Mrays/s",
@@ -571,6 +628,7 @@ class Viewer {
             "Left/Right    orbit the camera",
             "Up/Down       move the camera forward/back",
             "W/S A/D Q/E   move the light +z/-z, -x/+x, up/down",
+            "N denoise the resting image (path; on: " + std::string(denoise_ ? "yes" : "no") + ")",
             "R reset   P screenshot   H help   Esc quit"};
   }
 
@@ -610,6 +668,13 @@ class Viewer {
   ViewState film_view_;
   std::optional<SampleSchedule> schedule_;
   uint32_t image_spp_ = 0;  // the samples per pixel image_ is the mean of (path)
+  // N: denoise the path tracer's film while the view rests (denoise_due). The film then keeps the
+  // denoiser's features and the even half's sums for the variance.
+  static constexpr AovSet kDenoiseAovs{
+      .albedo = true, .normal = true, .depth = true, .variance = true};
+  bool denoise_ = false;
+  uint32_t denoised_spp_ = 0;    // the film's spp at the last denoised image; 0: none yet
+  bool shown_denoised_ = false;  // image_ is a denoised image
   ViewState start_, view_;
   ViewState image_view_;                   // the view image_ shows
   std::optional<ViewState> printed_view_;  // the last view --print-state printed

@@ -740,6 +740,28 @@ TEST_F(CliTest, BenchRepeatedBvhBuildGivesARowPerBuild) {
       << bad.err;
 }
 
+// --denoise: each path frame is rendered with the denoiser's AOVs and denoised, and the
+// denoiser's median time is a column and a record field; without it the field is null.
+TEST_F(CliTest, BenchDenoiseTimesTheDenoiserOnEachPathFrame) {
+  const RunResult r =
+      Run({"bench", "--integrator", "path", "--width", "32", "--height", "24", "--spp", "2",
+           "--reps", "2", "--accel", "bvh", "--denoise", "--json", "d.json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.substr(0, r.out.find('\n')).find("denoise ms"), std::string::npos) << r.out;
+  const nlohmann::json records = nlohmann::json::parse(ReadFile(work_ / "d.json"));
+  ASSERT_EQ(records.size(), 1u);
+  ASSERT_TRUE(records[0]["denoise_ms_median"].is_number()) << records[0];
+  EXPECT_GT(records[0]["denoise_ms_median"].get<double>(), 0.0);
+  const RunResult plain = Run({"bench", "--integrator", "path", "--width", "16", "--height", "16",
+                               "--spp", "1", "--reps", "1", "--accel", "bvh", "--json", "e.json"});
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_EQ(plain.out.find("denoise"), std::string::npos) << plain.out;
+  EXPECT_TRUE(nlohmann::json::parse(ReadFile(work_ / "e.json"))[0]["denoise_ms_median"].is_null());
+  const RunResult lab = Run({"bench", "--denoise"});
+  EXPECT_EQ(lab.exit_code, 2);
+  EXPECT_NE(lab.err.find("--denoise"), std::string::npos) << lab.err;
+}
+
 TEST_F(CliTest, BenchWithThePathTracerReportsPathsPerSecond) {
   const RunResult r = Run({"bench", "--integrator", "path", "--width", "32", "--height", "24",
                            "--spp", "2", "--reps", "2", "--json", "p.json"});

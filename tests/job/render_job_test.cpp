@@ -60,6 +60,8 @@ TEST(JobSettings, EveryRuleRefusesWhatItShould) {
       {"--threads", "0"},       {"--integrator", "bdpt2"}, {"--spp", "0"},
       {"--seed", "-1"},         {"--sampler", "halton"},   {"--max-depth", "-1"},
       {"--filter", "mitchell"}, {"--aovs", "albedo,,"},    {"--exposure", "nan"},
+      {"--clamp", "0"},         {"--clamp", "-1"},         {"--clamp", "inf"},
+      {"--clamp", "1e39"},
   };
   for (const auto& [flag, text] : bad) {
     JobSettings s;

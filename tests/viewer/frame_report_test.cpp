@@ -27,6 +27,13 @@ TEST(WindowTitle, ThePathTracersSamplesSoFarAndTarget) {
   EXPECT_EQ(window_title(8.0, 64, 48, 1, 1), "tritrace \u2014 8.0 ms/frame, 1/1 spp, 64x48");
 }
 
+TEST(WindowTitle, SaysWhenTheImageIsDenoised) {
+  EXPECT_EQ(window_title(52.34, 500, 500, 37, 64, 32),
+            "tritrace \u2014 52.3 ms/frame, 37/64 spp, 500x500, denoised at 32 spp");
+  EXPECT_EQ(window_title(8.0, 64, 48, 1, 64, 0),
+            "tritrace \u2014 8.0 ms/frame, 1/64 spp, 64x48, denoise on");
+}
+
 TEST(RenderTimeReport, FirstFrameAtOnceThenAtMostOncePerSecond) {
   RenderTimeReport r;
   EXPECT_FALSE(r.pending());

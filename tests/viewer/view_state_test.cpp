@@ -160,6 +160,11 @@ TEST(CommandLine, ThePathTracersSamplesSeedAndChoicesGiven) {
   EXPECT_EQ(render_command_line(flags, s, 64, 48, path),
             "tritrace render --scene cornell-area --yaw 0 --distance 3 --width 64 --height 48 "
             "--integrator path --spp 37 --seed 5 --max-depth 9 --filter gaussian");
+  // A clamp changes the pixels: the command carries it.
+  path.clamp = 2.5f;
+  EXPECT_EQ(render_command_line(flags, s, 64, 48, path),
+            "tritrace render --scene cornell-area --yaw 0 --distance 3 --width 64 --height 48 "
+            "--integrator path --spp 37 --seed 5 --max-depth 9 --clamp 2.5 --filter gaussian");
 }
 
 TEST(CommandLine, TheLabIntegratorOnlyWhenAskedFor) {

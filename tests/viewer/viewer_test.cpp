@@ -558,6 +558,36 @@ TEST_F(ViewerTest, PathTracerAccumulatesWhileRestingAndAKeyRestarts) {
   EXPECT_TRUE(WaitForSpp([&](int spp) { return spp > least; }).has_value());
 }
 
+// N turns the denoiser on: once the view rests the title says which samples the denoised image
+// holds; N again turns it off and the title no longer mentions it.
+TEST_F(ViewerTest, NDenoisesTheRestingPathImageAndSaysSoInTheTitle) {
+  ASSERT_NO_FATAL_FAILURE(StartViewer(
+      {"--scene", "cornell-area", "--width", "96", "--height", "72", "--spp", "64", "-q"}));
+  ASSERT_TRUE(WaitForSpp([](int spp) { return spp >= 1; }).has_value());
+  EXPECT_EQ(Title().find("denoise"), std::string::npos) << Title();
+  Key("n");
+  const auto wait_title = [&](auto ok) {
+    for (const Clock::time_point end = Clock::now() + 30s; Clock::now() < end;) {
+      if (ok(Title())) return true;
+      std::this_thread::sleep_for(20ms);
+    }
+    return false;
+  };
+  EXPECT_TRUE(wait_title([](const std::string& t) {
+    return t.find(", denoised at ") != std::string::npos;
+  })) << Title()
+      << "; stderr: " << Err();
+  // At rest it ends with the whole film denoised.
+  EXPECT_TRUE(wait_title([](const std::string& t) {
+    return t.find("64/64 spp") != std::string::npos &&
+           t.find("denoised at 64 spp") != std::string::npos;
+  })) << Title();
+  Key("n");
+  EXPECT_TRUE(wait_title([](const std::string& t) {
+    return t.find("64/64 spp") != std::string::npos && t.find("denoise") == std::string::npos;
+  })) << Title();
+}
+
 // Screenshots of the path tracer are the running mean through the sRGB curve, and the printed
 // command renders the same file byte for byte at the samples it names: the film of samples
 // [0, N) added frame by frame is the film `tritrace render --spp N` makes. Seed and filter given

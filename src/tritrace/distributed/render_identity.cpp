@@ -3,6 +3,7 @@
 // materials, textures, lights, environment, camera).
 #include "tritrace/distributed/render_identity.h"
 
+#include <charconv>
 #include <cstdio>
 #include <cstring>
 #include <vector>
@@ -87,6 +88,13 @@ std::string words_not_in(std::string_view a, std::string_view b) {
   return out.empty() ? std::string(a) : out;
 }
 
+// The shortest text that reads back as exactly `v`.
+std::string shortest(float v) {
+  char text[32];
+  const auto [end, ec] = std::to_chars(text, text + sizeof text, v);
+  return ec == std::errc() ? std::string(text, end) : std::string("?");
+}
+
 }  // namespace
 
 std::string hit_rule(std::string_view accel, std::string_view kernel) {
@@ -126,6 +134,8 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
                    " seed=" + std::to_string(id.seed) +
                    " sampler=" + std::string(sampler_name(options.sampler)) +
                    " filter=" + std::string(filter_name(options.filter));
+    // Only when on, so that the settings text (and the hash) of unclamped renders is as before.
+    if (spec.clamp > 0.0f) id.settings += " clamp=" + shortest(spec.clamp);
   }
   id.settings += " kernel=" + hit_rule(accel, kernel) + " size=" + std::to_string(id.width) + "x" +
                  std::to_string(id.height);

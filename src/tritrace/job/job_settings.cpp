@@ -61,6 +61,11 @@ std::string check_time_limit(const std::string& s) {
          format_double(kMaxTimeLimitSeconds) + ", got '" + s + "'";
 }
 
+std::string check_clamp(const std::string& s) {
+  const std::optional<float> v = parse_float(s);
+  return v && *v > 0.0f ? std::string() : "must be a finite number greater than 0, got '" + s + "'";
+}
+
 constexpr SettingRule kRules[] = {
     {"--scene", &JobSettings::scene, check_builtin_scene},
     {"--width", &JobSettings::width, check_side},
@@ -77,6 +82,7 @@ constexpr SettingRule kRules[] = {
     {"--seed", &JobSettings::seed, check_seed},
     {"--sampler", &JobSettings::sampler, check_sampler},
     {"--max-depth", &JobSettings::max_depth, check_max_depth},
+    {"--clamp", &JobSettings::clamp, check_clamp},
     {"--filter", &JobSettings::filter, check_filter},
     {"--time-limit", &JobSettings::time_limit, check_time_limit},
     {"--aovs", &JobSettings::aovs, check_aovs},
@@ -177,6 +183,7 @@ IntegratorSpec integrator_spec(const JobSettings& settings, const IntegratorSpec
   if (!settings.max_depth.empty()) {
     spec.max_depth = static_cast<int>(*parse_integer(settings.max_depth));
   }
+  if (!settings.clamp.empty()) spec.clamp = *parse_float(settings.clamp);
   return spec;
 }
 

@@ -39,6 +39,7 @@ struct JobSettings {
   std::string seed;
   std::string sampler;
   std::string max_depth;
+  std::string clamp;  // the path tracer's clamp on each sample's indirect light; empty: off
   std::string filter = "box";
   std::string time_limit;  // seconds: whole passes of samples until the time is up
   bool denoise = false;    // the feature-guided denoiser on the path tracer's image

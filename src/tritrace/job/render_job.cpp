@@ -166,6 +166,10 @@ RenderJob::RenderJob(const JobSettings& settings, const Scene& scene,
 
 void RenderJob::set_up() {
   check_exposure(settings_, path());
+  if (!path() && !settings_.clamp.empty()) {
+    throw Error("--clamp", "applies to the path tracer; the lab integrator has no indirect samples",
+                ExitCode::kUsage);
+  }
   if (!settings_.time_limit.empty()) {
     if (!path()) {
       throw Error("--time-limit",

@@ -14,6 +14,7 @@ std::unique_ptr<Integrator> make_integrator(const IntegratorSpec& spec, const Sc
   if (spec.kind == IntegratorSpec::Kind::kLab) return std::make_unique<LabIntegrator>();
   PathSettings settings;
   settings.max_depth = spec.max_depth;
+  settings.clamp_indirect = spec.clamp;
   return std::make_unique<PathIntegrator>(scene, settings);
 }
 

@@ -182,6 +182,17 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
   const bool surface_aovs = !out.albedo.empty() || !out.normal.empty();
   std::array<glm::vec3, kMaxBatch> aov_tint;
   std::array<uint8_t, kMaxBatch> aov_open;
+  // With clamp_indirect, each path's indirect light is summed apart and clamped once at the end;
+  // without it every term goes straight to out.radiance, in the same order as ever (the same
+  // images bit for bit). Light found at loop depth d (emission, the environment) left vertex d - 1
+  // (the camera when d = 0); light sampled at vertex d (its shadow rays) reaches vertex d. So it is
+  // indirect from depth 2 for the first kind and from depth 1 for the second.
+  const float clamp_indirect = settings_.clamp_indirect;
+  const bool clamp = clamp_indirect > 0.0f;
+  std::array<glm::vec3, kMaxBatch> indirect;
+  const auto sink = [&](uint16_t i, bool is_indirect) -> glm::vec3& {
+    return clamp && is_indirect ? indirect[i] : out.radiance[i];
+  };
 
   for (size_t i = 0; i < n; ++i) {
     out.radiance[i] = glm::vec3(0.0f);
@@ -189,6 +200,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
     path[i] = static_cast<uint16_t>(i);
     scratch.rays[i] = batch.rays[i];
   }
+  if (clamp) std::fill_n(indirect.begin(), n, glm::vec3(0.0f));
   if (surface_aovs) {
     for (size_t i = 0; i < n; ++i) {
       aov_tint[i] = glm::vec3(1.0f);
@@ -225,7 +237,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
                      : mis ? power_heuristic(1.0f, bsdf_pdf[i], 1.0f, lights_.pdf_environment(dir))
                            : 1.0f;
           }
-          if (weight > 0.0f) out.radiance[i] += throughput[i] * env->radiance(dir) * weight;
+          if (weight > 0.0f) sink(i, depth >= 2) += throughput[i] * env->radiance(dir) * weight;
         } else if (uniform_environment) {
           // Light sampling finds it too, with the uniform density over the sphere.
           float weight = 1.0f;
@@ -234,7 +246,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
                      : mis ? power_heuristic(1.0f, bsdf_pdf[i], 1.0f, environment_pdf[i])
                            : 1.0f;
           }
-          if (weight > 0.0f) out.radiance[i] += throughput[i] * scene.environment * weight;
+          if (weight > 0.0f) sink(i, depth >= 2) += throughput[i] * scene.environment * weight;
         }
         continue;
       }
@@ -290,13 +302,13 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
         // Emission reached by the camera or through a delta lobe is found by no other strategy:
         // weight 1 under every strategy (light sampling alone included).
         if (depth == 0 || std::isinf(bsdf_pdf[i])) {
-          out.radiance[i] += throughput[i] * le;
+          sink(i, depth >= 2) += throughput[i] * le;
         } else if (bsdf_finds_lights) {
           const float weight =
               mis ? power_heuristic(1.0f, bsdf_pdf[i], 1.0f,
                                     lights_.pdf_triangle(scene, prim, origin_point[i], x))
                   : 1.0f;
-          out.radiance[i] += throughput[i] * le * weight;
+          sink(i, depth >= 2) += throughput[i] * le * weight;
         }
       }
       if (depth == settings_.max_depth) continue;
@@ -333,7 +345,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
               light_contribution(ls, throughput[i] * f, std::abs(wi_local.z), dist2, mis,
                                  [&] { return bsdf.pdf(wo_local, wi_local); });
           shadows.add(ls, wi, from, triangle_extent(tri.e1, tri.e2), contribution, i,
-                      out.radiance[i], offset_);
+                      sink(i, depth >= 1), offset_);
         };
         if (!lights_.empty() && !bsdf.all_delta()) {
           LightSample ls = lights_.sample(scene, x, u_light, u_light_point);
@@ -408,7 +420,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
               light_contribution(ls, throughput[i] * f, cos_theta, dist2, mis,
                                  [&] { return cosine_hemisphere_pdf(cos_theta); });
           shadows.add(ls, wi, start, triangle_extent(tri.e1, tri.e2), contribution, i,
-                      out.radiance[i], offset_);
+                      sink(i, depth >= 1), offset_);
         }
       }
       const Frame frame = Frame::from_normal(ns);
@@ -421,7 +433,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
               light_contribution(ls, throughput[i] * f, cos_theta, 1.0f, mis,
                                  [&] { return cosine_hemisphere_pdf(cos_theta); });
           shadows.add(ls, ls.wi, start, triangle_extent(tri.e1, tri.e2), contribution, i,
-                      out.radiance[i], offset_);
+                      sink(i, depth >= 1), offset_);
         }
       }
 
@@ -458,7 +470,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
                                 std::span(scratch.blocked).first(shadows.count));
       traced += shadows.count;
       for (size_t s = 0; s < shadows.count; ++s) {
-        if (!scratch.blocked[s]) out.radiance[shadows.owner[s]] += shadows.contribution[s];
+        if (!scratch.blocked[s]) sink(shadows.owner[s], depth >= 1) += shadows.contribution[s];
       }
     }
     active = next;
@@ -466,6 +478,13 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
     accel.intersect_incoherent(std::span<const Ray>(scratch.rays.data(), active),
                                std::span(scratch.hits).first(active));
     traced += active;
+  }
+  if (clamp) {
+    for (size_t i = 0; i < n; ++i) {
+      const float largest = max_component(indirect[i]);
+      if (largest > clamp_indirect) indirect[i] *= clamp_indirect / largest;
+      out.radiance[i] += indirect[i];
+    }
   }
   return traced;
 }

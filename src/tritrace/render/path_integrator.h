@@ -3,8 +3,9 @@
 // estimation (one light chosen by power, one shadow ray) and a bounce sampled from the surface's
 // BSDF (cosine-sampled for diffuse), the two combined by multiple importance sampling with the
 // power heuristic (Veach 1997) where both can find the light; Russian roulette after a few bounces.
-// No clamping. The paths of a batch advance together, one bounce at a time, so each bounce is one
-// batch query to the accel (traced ray by ray: bounce rays are incoherent).
+// Unbiased unless PathSettings::clamp_indirect is set. The paths of a batch advance together, one
+// bounce at a time, so each bounce is one batch query to the accel (traced ray by ray: bounce rays
+// are incoherent).
 #pragma once
 
 #include <cstdint>
@@ -28,6 +29,14 @@ struct PathSettings {
   // (for tests: each alone is unbiased too).
   enum class Strategy { kMis, kLightOnly, kBsdfOnly };
   Strategy strategy = Strategy::kMis;
+  // Cycles' "clamp indirect" (0: off). Light is direct when its path scattered at most once, at
+  // the first hit: emitters and the environment the camera sees, and light reaching the first hit
+  // straight from an emitter (its shadow ray, or its bounce meeting an emitter or escaping to the
+  // environment). All else is indirect, through any number of further vertices, specular ones
+  // included (so caustics seen on a diffuse surface are indirect). Each sample's indirect sum is
+  // scaled down, colour kept, so that its largest channel is at most clamp_indirect. Biased: it
+  // removes energy, most of it where fireflies were.
+  float clamp_indirect = 0.0f;
 };
 
 class PathIntegrator final : public Integrator {

@@ -21,6 +21,8 @@ struct IntegratorSpec {
   int max_depth = kDefaultMaxDepth;
   uint64_t seed = 0;
   SamplerKind sampler = SamplerKind::kSobol;
+  // The path tracer's clamp on each sample's indirect light (PathSettings::clamp_indirect); 0: off.
+  float clamp = 0.0f;
 };
 
 }  // namespace tritrace
