@@ -519,7 +519,8 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
                    const py::object& look_at, const py::object& up, const py::object& vertical_fov,
                    const py::object& focal_length, const py::object& yaw,
                    const py::object& distance, const py::object& light,
-                   const py::object& time_limit, const py::object& denoise) {
+                   const py::object& time_limit, const py::object& denoise,
+                   const py::object& clamp) {
   // The CLI's flags, parsed and checked by the CLI's own code.
   FlagTexts texts;
   texts.add_string("--integrator", integrator);
@@ -535,6 +536,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   texts.add_number("--distance", distance);
   texts.add_vec3("--light", light);
   texts.add_number("--time-limit", time_limit);
+  texts.add_number("--clamp", clamp);
   std::shared_ptr<PyAccel> prebuilt;
   if (!accel.is_none() && !py::isinstance<py::str>(accel)) {
     if (!py::isinstance<PyAccel>(accel)) {
@@ -800,6 +802,7 @@ the halves of its samples split by sample index parity), or None; integrator, sp
         "kernel"_a = none, "threads"_a = none, "position"_a = none, "look_at"_a = none,
         "up"_a = none, "vertical_fov"_a = none, "focal_length"_a = none, "yaw"_a = none,
         "distance"_a = none, "light"_a = none, "time_limit"_a = none, "denoise"_a = none,
+        "clamp"_a = none,
         R"(Renders the scene as `tritrace render` does, returning a tritrace.Frame.
 
 The image is bit for bit the one `tritrace render ... -o out.pfm` writes with the same
@@ -810,7 +813,9 @@ over this scene, to reuse it across renders), kernel, threads (default all cores
 (radians, orbiting look_at), distance (to look_at), light (the first point light's position),
 time_limit (seconds: the path tracer's samples in passes until the time is up, spp the most;
 Frame.spp says how many were reached, and the image is the one that spp gives), denoise (True:
-the path tracer's image through the built-in denoiser, as `tritrace render --denoise`).
+the path tracer's image through the built-in denoiser, as `tritrace render --denoise`), clamp
+(the most one sample's indirect light adds to a pixel, per channel: biased, as
+`tritrace render --clamp`).
 aovs: any of "albedo", "normal", "depth", "variance". Camera settings beyond the CLI's flags, as a
 scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
 focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a

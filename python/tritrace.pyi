@@ -235,6 +235,7 @@ def render(
     light: Optional[_Vec3] = None,
     time_limit: Optional[float] = None,
     denoise: Optional[bool] = None,
+    clamp: Optional[float] = None,
 ) -> Frame:
     """Renders the scene as `tritrace render` does: the image is bit for bit the one
     `tritrace render ... -o out.pfm` writes with the same settings.
@@ -245,6 +246,7 @@ def render(
     focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a
     look-at camera. time_limit (seconds): the path tracer's samples in passes until the time is
     up (spp the most); Frame.spp says how many it reached. denoise=True: the image through the
-    built-in denoiser, as `tritrace render --denoise`. Bad values raise ValueError with the CLI's
-    message, wrong types TypeError.
+    built-in denoiser, as `tritrace render --denoise`. clamp: the most one sample's indirect light
+    adds to a pixel (biased, as `tritrace render --clamp`). Bad values raise ValueError with the
+    CLI's message, wrong types TypeError.
     """

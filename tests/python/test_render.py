@@ -75,6 +75,15 @@ def test_a_denoised_render_is_the_clis(tmp_path):
         tritrace.render(tritrace.Scene.builtin("cornell"), denoise=True)
 
 
+def test_a_clamped_render_is_the_clis(tmp_path):
+    scene = tritrace.load(REPO / "scenes" / "glass.json")
+    frame = tritrace.render(scene, width=32, height=24, spp=8, clamp=1.0)
+    assert_same_bits(frame.image, cli_image(tmp_path, REPO / "scenes" / "glass.json", "--width",
+                                            32, "--height", 24, "--spp", 8, "--clamp", 1))
+    with pytest.raises(ValueError, match="clamp: "):
+        tritrace.render(scene, clamp=-1)
+
+
 def test_integrator_and_kernel_choices_are_the_clis(tmp_path, cornell):
     frame = tritrace.render(cornell, integrator="path", spp=2, width=32, height=24,
                             kernel="moller-trumbore", accel="bvh-single")
