@@ -204,6 +204,10 @@ class Frame:
     @property
     def spp(self) -> int: ...
     @property
+    def mean_spp(self) -> float: ...
+    @property
+    def spp_map(self) -> Optional[npt.NDArray[np.float32]]: ...
+    @property
     def milliseconds(self) -> float: ...
     @property
     def rays(self) -> int: ...
@@ -221,7 +225,7 @@ def render(
     sampler: Optional[Literal["sobol", "independent"]] = None,
     max_depth: Optional[int] = None,
     filter: Optional[Literal["box", "gaussian", "blackman-harris"]] = None,
-    aovs: Sequence[Literal["albedo", "normal", "depth", "variance"]] = (),
+    aovs: Sequence[Literal["albedo", "normal", "depth", "variance", "spp"]] = (),
     accel: Union[str, Accel, None] = None,
     kernel: Optional[str] = None,
     threads: Optional[int] = None,
@@ -234,6 +238,7 @@ def render(
     distance: Optional[float] = None,
     light: Optional[_Vec3] = None,
     time_limit: Optional[float] = None,
+    noise_threshold: Optional[float] = None,
 ) -> Frame:
     """Renders the scene as `tritrace render` does: the image is bit for bit the one
     `tritrace render ... -o out.pfm` writes with the same settings.
@@ -243,6 +248,9 @@ def render(
     as a scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
     focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a
     look-at camera. time_limit (seconds): the path tracer's samples in passes until the time is
-    up (spp the most); Frame.spp says how many it reached. Bad values raise ValueError with the
+    up (spp the most); Frame.spp says how many it reached. noise_threshold: adaptive sampling, each
+    pixel stops once the relative error of its mean is below it (checked at 32, 64, 128, ...
+    samples, spp the most); Frame.mean_spp says how many a pixel took on average, aovs "spp" gives
+    Frame.spp_map. Bad values raise ValueError with the
     CLI's message, wrong types TypeError.
     """

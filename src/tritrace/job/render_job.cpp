@@ -170,8 +170,27 @@ void RenderJob::set_up() {
                   "advance; it does not take --spp-range or --tile",
                   ExitCode::kUsage);
     }
+    if (!settings_.noise_threshold.empty()) {
+      throw Error("--time-limit",
+                  "does not take --noise-threshold yet (adaptive sampling renders each pixel's "
+                  "samples in one pass); give one or the other",
+                  ExitCode::kUsage);
+    }
     // --spp is the most samples a pixel takes; without it, passes go on until the time is up.
     if (settings_.spp.empty()) spec_.spp = kMaxSpp;
+  }
+  if (!settings_.noise_threshold.empty()) {
+    if (!path()) {
+      throw Error("--noise-threshold",
+                  "applies to the path tracer; the lab integrator takes one sample per pixel",
+                  ExitCode::kUsage);
+    }
+    if (!settings_.spp_range.empty()) {
+      throw Error("--noise-threshold",
+                  "decides per pixel from all its samples [0, spp), so a sample range cannot be "
+                  "rendered apart; split the image with --tile instead of --spp-range",
+                  ExitCode::kUsage);
+    }
   }
   accel_kind_ = tritrace::accel_kind(settings_);
   kernel_ = kernel_choice(settings_);
@@ -186,6 +205,7 @@ void RenderJob::set_up() {
   options_.spp = partial_ ? part_.end - part_.first : spec_.spp;
   options_.tile_part = part_.tile;
   options_.tile_parts = part_.tiles;
+  options_.noise_threshold = tritrace::noise_threshold(settings_);
   if (settings_.output_given) {
     output_ = settings_.output;
   } else if (loaded_ && !loaded_->output.empty()) {
@@ -290,6 +310,7 @@ RenderedImage RenderJob::render_for(double seconds, RenderStats* stats) const {
     render_to_film(film, options, &pass);
     total.rays += pass.rays;
     total.samples += pass.samples;
+    total.pixels = pass.pixels;
     total.threads = std::max(total.threads, pass.threads);
     taken += n;
   }
