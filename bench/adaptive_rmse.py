@@ -43,6 +43,12 @@ def rmse(a, b):
     return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)) / len(a))
 
 
+def relmse(a, ref):
+    """Relative MSE, mean of (x - r)^2 / (r^2 + 0.01): the error relative to each pixel's value
+    (the denoiser tables' measure), which weights dark pixels as the noise threshold does."""
+    return sum((x - r) ** 2 / (r * r + 0.01) for x, r in zip(a, ref)) / len(a)
+
+
 def render(tritrace, scene, size, extra, out):
     cmd = [tritrace, "render", *SCENES[scene], "--width", str(size), "--height", str(size),
            "-o", out, *extra]
@@ -76,13 +82,18 @@ def main():
             out = os.path.join(tmp, "x.pfm")
             ta, mean, cmd_a = render(a.tritrace, scene, a.size,
                                      ["--spp", most, "--noise-threshold", t, "--seed", seed], out)
-            ea = rmse(read_pfm(out), ref)
+            img = read_pfm(out)
+            ea, ra = rmse(img, ref), relmse(img, ref)
             tu, _, cmd_u = render(a.tritrace, scene, a.size, ["--spp", uni, "--seed", seed], out)
-            eu = rmse(read_pfm(out), ref)
-            eu_eq = eu * math.sqrt(tu / ta)
-            print("%s round %d: adaptive T=%s max %s spp: %.0f ms, mean %.1f spp, RMSE %.5f | "
-                  "uniform %s spp: %.0f ms, RMSE %.5f, at adaptive's time %.5f | ratio %.2f"
-                  % (scene, r, t, most, ta, mean, ea, uni, tu, eu, eu_eq, ea / eu_eq))
+            img = read_pfm(out)
+            eu, ru = rmse(img, ref), relmse(img, ref)
+            # At equal time: RMSE scales as 1 / sqrt(time), relMSE (a squared error) as 1 / time.
+            eu_eq, ru_eq = eu * math.sqrt(tu / ta), ru * tu / ta
+            print("%s round %d: adaptive T=%s max %s spp: %.0f ms, mean %.1f spp, RMSE %.5f, "
+                  "relMSE %.3g | uniform %s spp: %.0f ms, RMSE %.5f (%.5f at adaptive's time), "
+                  "relMSE %.3g (%.3g) | RMSE ratio %.2f, relMSE ratio %.2f"
+                  % (scene, r, t, most, ta, mean, ea, ra, uni, tu, eu, eu_eq, ru, ru_eq,
+                     ea / eu_eq, ra / ru_eq))
             if r == 0:
                 print("  " + cmd_a + "\n  " + cmd_u)
     return 0

@@ -131,7 +131,8 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
     // identities of uniform renders stay what they were.
     if (options.noise_threshold > 0.0f) {
       char threshold[32];
-      std::snprintf(threshold, sizeof threshold, "%.7g", static_cast<double>(options.noise_threshold));
+      std::snprintf(threshold, sizeof threshold, "%.7g",
+                    static_cast<double>(options.noise_threshold));
       id.settings += " noise_threshold=" + std::string(threshold);
     }
   }
