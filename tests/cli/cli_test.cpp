@@ -509,7 +509,7 @@ INSTANTIATE_TEST_SUITE_P(
                   2,
                   "--aovs",
                   "unknown AOV 'colour' in 'albedo,colour' (use a comma-separated list of albedo, "
-                  "normal, depth, variance)"},
+                  "normal, depth, variance, spp)"},
         ErrorCase{"AovsEmptyName",
                   {"--aovs", "albedo,,depth", "-o", "x.exr"},
                   2,
