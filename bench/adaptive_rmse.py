@@ -43,6 +43,17 @@ def rmse(a, b):
     return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)) / len(a))
 
 
+def srgb(v):
+    v = min(max(v, 0.0), 1.0)
+    return 12.92 * v if v <= 0.0031308 else 1.055 * v ** (1 / 2.4) - 0.055
+
+
+def display_rmse(a, b):
+    """RMSE of the 8-bit PNG's values (clamped to [0, 1], sRGB curve), on a 0..1 scale: the
+    error a viewer of the PNG sees (a light's pixels at 9.4 or 9.7 both show white)."""
+    return math.sqrt(sum((srgb(x) - srgb(y)) ** 2 for x, y in zip(a, b)) / len(a))
+
+
 def relmse(a, ref):
     """Relative MSE, mean of (x - r)^2 / (r^2 + 0.01): the error relative to each pixel's value
     (the denoiser tables' measure), which weights dark pixels as the noise threshold does."""
@@ -83,17 +94,18 @@ def main():
             ta, mean, cmd_a = render(a.tritrace, scene, a.size,
                                      ["--spp", most, "--noise-threshold", t, "--seed", seed], out)
             img = read_pfm(out)
-            ea, ra = rmse(img, ref), relmse(img, ref)
+            ea, ra, da = rmse(img, ref), relmse(img, ref), display_rmse(img, ref)
             tu, _, cmd_u = render(a.tritrace, scene, a.size, ["--spp", uni, "--seed", seed], out)
             img = read_pfm(out)
-            eu, ru = rmse(img, ref), relmse(img, ref)
+            eu, ru, du = rmse(img, ref), relmse(img, ref), display_rmse(img, ref)
             # At equal time: RMSE scales as 1 / sqrt(time), relMSE (a squared error) as 1 / time.
-            eu_eq, ru_eq = eu * math.sqrt(tu / ta), ru * tu / ta
+            eu_eq, ru_eq, du_eq = eu * math.sqrt(tu / ta), ru * tu / ta, du * math.sqrt(tu / ta)
             print("%s round %d: adaptive T=%s max %s spp: %.0f ms, mean %.1f spp, RMSE %.5f, "
                   "relMSE %.3g | uniform %s spp: %.0f ms, RMSE %.5f (%.5f at adaptive's time), "
-                  "relMSE %.3g (%.3g) | RMSE ratio %.2f, relMSE ratio %.2f"
+                  "relMSE %.3g (%.3g) | RMSE ratio %.2f, relMSE ratio %.2f, display RMSE "
+                  "%.5f vs %.5f, ratio %.2f"
                   % (scene, r, t, most, ta, mean, ea, ra, uni, tu, eu, eu_eq, ru, ru_eq,
-                     ea / eu_eq, ra / ru_eq))
+                     ea / eu_eq, ra / ru_eq, da, du_eq, da / du_eq))
             if r == 0:
                 print("  " + cmd_a + "\n  " + cmd_u)
     return 0

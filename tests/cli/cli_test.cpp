@@ -1712,14 +1712,14 @@ TEST_F(DistributedCliTest, TilePartsAndRangesOfTilesMergeBitForBit) {
 TEST_F(DistributedCliTest, AdaptiveTilePartsMergeBitForBit) {
   const auto adaptive = [](std::vector<std::string> extra) {
     std::vector<std::string> args = {
-        "render", "--scene", "cornell-area",      "--spp", "64", "--width", "40", "--height", "40",
+        "render", "--scene", "cornell-area",      "--spp", "128", "--width", "40", "--height", "40",
         "--aovs", "spp",     "--noise-threshold", "0.05"};
     args.insert(args.end(), extra.begin(), extra.end());
     return args;
   };
   const RunResult whole = Run(adaptive({"-o", "whole.exr", "--threads", "1"}));
   ASSERT_EQ(whole.exit_code, 0) << whole.err;
-  EXPECT_NE(whole.out.find("64 spp at most (mean "), std::string::npos) << whole.out;
+  EXPECT_NE(whole.out.find("128 spp at most (mean "), std::string::npos) << whole.out;
   EXPECT_NE(whole.out.find("noise threshold 0.05)"), std::string::npos) << whole.out;
   std::vector<std::string> tiles;
   for (const char* i : {"0", "1", "2"}) {
@@ -1732,7 +1732,7 @@ TEST_F(DistributedCliTest, AdaptiveTilePartsMergeBitForBit) {
   ASSERT_EQ(merged.exit_code, 0) << merged.err;
   EXPECT_TRUE(ReadFile(work_ / "merged.exr") == ReadFile(work_ / "whole.exr"));
   // Uniform sampling makes another file.
-  ASSERT_EQ(Run({"render", "--scene", "cornell-area", "--spp", "64", "--width", "40", "--height",
+  ASSERT_EQ(Run({"render", "--scene", "cornell-area", "--spp", "128", "--width", "40", "--height",
                  "40", "--aovs", "spp", "-o", "uniform.exr"})
                 .exit_code,
             0);

@@ -23,7 +23,7 @@ done
 "${run_mpi[@]}" -np 3 "$cli" render "${scene[@]}" --aovs albedo,depth,variance --mpi -o "$dir/mpi.exr"
 cmp "$dir/one.exr" "$dir/mpi.exr" || fail "3 ranks with AOVs: the EXR differs from one process's"
 # Adaptive sampling: units are whole tile parts [0, spp), so the image and the spp AOV match.
-adaptive=(--scene cornell-area --spp 64 --width 48 --height 40 --threads 1 -q --noise-threshold 0.05
+adaptive=(--scene cornell-area --spp 128 --width 48 --height 40 --threads 1 -q --noise-threshold 0.05
   --aovs spp,variance)
 "$cli" render "${adaptive[@]}" -o "$dir/adaptive.exr"
 "${run_mpi[@]}" -np 3 "$cli" render "${adaptive[@]}" --mpi -o "$dir/adaptive_mpi.exr"

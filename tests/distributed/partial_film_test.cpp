@@ -137,7 +137,7 @@ TEST_F(PartialFilmTest, MergerGivesTheOneProcessFilmInAnyArrivalOrder) {
 // Adaptive sampling decides per pixel, so tile parts of [0, spp) (through the codec) merge into the
 // one-process film, spp AOV included.
 TEST_F(PartialFilmTest, AdaptiveTilePartsMergeIntoTheOneProcessFilm) {
-  constexpr uint32_t kMost = 64;
+  constexpr uint32_t kMost = 128;
   const Film whole = render_range(0, kMost, 0, 1, 0.05f);
   RenderIdentity identity = identity_;
   identity.spp = kMost;
@@ -156,7 +156,7 @@ TEST_F(PartialFilmTest, AdaptiveTilePartsMergeIntoTheOneProcessFilm) {
   const Image spp = merged.resolve_spp();
   float lo = kMost, hi = 0.0f;
   for (const glm::vec3& p : spp.pixels()) lo = std::min(lo, p.x), hi = std::max(hi, p.x);
-  EXPECT_EQ(lo, 32.0f);
+  EXPECT_EQ(lo, 64.0f);
   EXPECT_EQ(hi, static_cast<float>(kMost));
 }
 

@@ -315,7 +315,7 @@ TEST(RenderJob, NoiseThresholdIsPartOfTheIdentity) {
 
 // The job renders what the renderer renders with the threshold, and the spp AOV is the count.
 TEST(RenderJob, NoiseThresholdRendersTheAdaptiveImageWithTheSppAov) {
-  JobSettings s = small("cornell-area", "64");
+  JobSettings s = small("cornell-area", "128");
   s.noise_threshold = "0.05";
   s.aovs = "spp";
   RenderJob job(s, load_job_scene(s));
@@ -326,13 +326,13 @@ TEST(RenderJob, NoiseThresholdRendersTheAdaptiveImageWithTheSppAov) {
   double total = 0.0;
   for (const glm::vec3& p : got.aovs.spp.pixels()) total += p.x;
   EXPECT_EQ(total / (24 * 16), stats.mean_spp());
-  EXPECT_LT(stats.mean_spp(), 64.0);
+  EXPECT_LT(stats.mean_spp(), 128.0);
   const auto scene = load_job_scene(s);
   const auto accel = make_accel(AccelKind::kBvh, scene.scene, kDefaultKernel);
   const auto integrator = make_integrator(job.spec(), scene.scene);
   RenderOptions options;
   options.threads = 1;
-  options.spp = 64;
+  options.spp = 128;
   options.noise_threshold = 0.05f;
   EXPECT_TRUE(same_pixels(got.image, render(scene.scene, *accel, *integrator, options)));
 }

@@ -121,6 +121,7 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
     // Adaptive sampling: which of the tile's pixels (by slot) still take samples, their running
     // sums, and the slot of each ray of the batch.
     thread_local std::array<uint8_t, kMaxBatch> active;
+    thread_local std::array<uint8_t, kMaxBatch> near;  // below sqrt(2) T at the last check
     thread_local std::array<PixelMoments, kMaxBatch> moments;
     thread_local std::array<uint16_t, kMaxBatch> slot_of;
     uint64_t traced = 0, taken = 0;
@@ -134,6 +135,7 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
       BlockCounter counter = nodes_before;
       target.load(x0, y0, x1, y1, slots);
       std::fill_n(active.begin(), pixels, uint8_t{1});
+      std::fill_n(near.begin(), pixels, uint8_t{0});
       if (adaptive) std::fill_n(moments.begin(), pixels, PixelMoments{});
       if (first % kSampleBlock == 0) {
         std::fill_n(slots.slot(counter.size()), pixels, glm::vec4(0.0f));
@@ -240,9 +242,10 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
         if (adaptive && taken_so_far >= kAdaptiveMinSpp && taken_so_far < end &&
             (taken_so_far & (taken_so_far - 1)) == 0) {
           for (size_t i = 0; i < pixels; ++i) {
-            if (active[i] && adaptive_error(moments[i], taken_so_far) < options.noise_threshold) {
-              active[i] = 0;
-            }
+            if (!active[i]) continue;
+            const double error = adaptive_error(moments[i], taken_so_far);
+            if (near[i] && error < options.noise_threshold) active[i] = 0;
+            near[i] = error < kAdaptiveConfirm * options.noise_threshold;
           }
         }
       }

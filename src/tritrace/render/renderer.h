@@ -55,6 +55,11 @@ inline constexpr int kPartTileSize = 16;
 // variance is a usable estimate (its standard deviation within about 13% for Gaussian samples)
 // and at which the Sobol points of every 2-D dimension are a whole, well-stratified power of two.
 inline constexpr uint32_t kAdaptiveMinSpp = 32;
+// A pixel stops at a check only when its error is below T there and was below kAdaptiveConfirm x T
+// at the check before (where, with half the samples, it should be sqrt(2) times larger): two
+// estimates must agree, since one from few samples of a skewed distribution often errs low. So the
+// first stop is at 2 kAdaptiveMinSpp.
+inline constexpr double kAdaptiveConfirm = 1.4142135623730951;
 // Below this mean luminance, a pixel's error is taken relative to this instead (Cycles and
 // pbrt-style guards of the denominator): dark pixels are judged by absolute error, so that a nearly
 // black pixel's few bright samples do not keep it sampling to the end.
