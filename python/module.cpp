@@ -814,7 +814,8 @@ over this scene, to reuse it across renders), kernel, threads (default all cores
 time_limit (seconds: the path tracer's samples in passes until the time is up, spp the most;
 Frame.spp says how many were reached, and the image is the one that spp gives),
 noise_threshold (adaptive sampling: a pixel stops once the relative error of its mean is below
-it, checked at 32, 64, 128, ... samples, spp the most; Frame.mean_spp says how many it took).
+it at a check and below sqrt(2) times it at the check before, checks at 32, 64, 128, ...
+samples, spp the most; Frame.mean_spp says how many it took).
 aovs: any of "albedo", "normal", "depth", "variance", "spp". Camera settings beyond the CLI's flags, as a
 scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
 focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a

@@ -250,7 +250,7 @@ def render(
     look-at camera. time_limit (seconds): the path tracer's samples in passes until the time is
     up (spp the most); Frame.spp says how many it reached. noise_threshold: adaptive sampling, each
     pixel stops once the relative error of its mean is below it (checked at 32, 64, 128, ...
-    samples, spp the most); Frame.mean_spp says how many a pixel took on average, aovs "spp" gives
+    samples, and confirmed by the check before; spp the most); Frame.mean_spp says how many a pixel took on average, aovs "spp" gives
     Frame.spp_map. Bad values raise ValueError with the
     CLI's message, wrong types TypeError.
     """

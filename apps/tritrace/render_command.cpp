@@ -65,8 +65,9 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
   sub->add_option("--noise-threshold", args.job.noise_threshold,
                   "Adaptive sampling for the path tracer: each pixel stops taking samples once the "
                   "estimated relative standard error of its mean luminance (from the running "
-                  "second moment of its own samples; below a luminance of 0.01 relative to 0.01) "
-                  "is below T, checked at 32, 64, 128, ... samples; --spp is the most a pixel "
+                  "second moment of its own samples; below a luminance of 0.1 relative to 0.1) "
+                  "is below T at a check and was below 1.41 T at the one before (checks at 32, 64, "
+                  "128, ... samples, so the first stop is at 64); --spp is the most a pixel "
                   "takes. The image is the same for any thread count and tile size, and --tile "
                   "parts and --mpi still merge exactly; not with --spp-range or --time-limit. "
                   "--aovs spp writes how many samples each pixel took")

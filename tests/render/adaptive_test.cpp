@@ -114,7 +114,7 @@ TEST(AdaptiveSampling, FlatPixelsStopAtTheFirstChanceAndNoisyOnesGoOn) {
     render_to_film(scene, *accel, integrator, f, options);
     return f;
   };
-  const float threshold = 0.05f;
+  const float threshold = 0.02f;
   const Film first = film({.threads = 2, .spp = 32}, {.variance = true});
   const Image mean = first.resolve(), variance = first.resolve_variance();
   const Image taken =
@@ -132,7 +132,7 @@ TEST(AdaptiveSampling, FlatPixelsStopAtTheFirstChanceAndNoisyOnesGoOn) {
       }
       const float luminance = 0.2126f * m.x + 0.7152f * m.y + 0.0722f * m.z;
       const float var = 0.2126f * v.x + 0.7152f * v.y + 0.0722f * v.z;
-      if (std::sqrt(var) > 4.0f * threshold * std::max(luminance, 0.01f)) {
+      if (std::sqrt(var) > 8.0f * threshold * std::max(luminance, float(kAdaptiveDarkFloor))) {
         ++noisy;
         noisy_on += n > 64.0f;
       }

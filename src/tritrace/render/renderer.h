@@ -41,10 +41,11 @@ struct RenderOptions {
   int tile_parts = 1;
   // Adaptive sampling (--noise-threshold; 0: off): a pixel stops taking samples once the relative
   // standard error of its mean (adaptive_error) is below this, checked only when it has taken
-  // kAdaptiveMinSpp, 2 kAdaptiveMinSpp, 4 kAdaptiveMinSpp, ... samples (fewer than spp); spp is
-  // the most it takes. The decision reads only the pixel's own samples, so the image is the same
-  // for any thread count, tile size and tile part. Needs first_sample 0 (throws Error otherwise);
-  // ignored by an integrator that takes one sample through the pixel corner (the lab's).
+  // kAdaptiveMinSpp, 2 kAdaptiveMinSpp, 4 kAdaptiveMinSpp, ... samples (fewer than spp) and
+  // confirmed by the check before (kAdaptiveConfirm); spp is the most it takes. The decision reads
+  // only the pixel's own samples, so the image is the same for any thread count, tile size and tile
+  // part. Needs first_sample 0 (throws Error otherwise); ignored by an integrator that takes one
+  // sample through the pixel corner (the lab's).
   float noise_threshold = 0.0f;
 };
 
@@ -60,10 +61,12 @@ inline constexpr uint32_t kAdaptiveMinSpp = 32;
 // estimates must agree, since one from few samples of a skewed distribution often errs low. So the
 // first stop is at 2 kAdaptiveMinSpp.
 inline constexpr double kAdaptiveConfirm = 1.4142135623730951;
-// Below this mean luminance, a pixel's error is taken relative to this instead (Cycles and
-// pbrt-style guards of the denominator): dark pixels are judged by absolute error, so that a nearly
-// black pixel's few bright samples do not keep it sampling to the end.
-inline constexpr double kAdaptiveDarkFloor = 0.01;
+// Below this mean luminance, a pixel's error is taken relative to this instead (as Cycles guards
+// its denominator): dark pixels are judged by absolute error, so that a nearly black pixel's few
+// bright samples do not keep it sampling to the end. 0.1 rather than 0.01: with 0.01 the dark
+// corners took most of the samples and RMSE at equal time was worse on both benchmark scenes
+// (docs/PERFORMANCE.md).
+inline constexpr double kAdaptiveDarkFloor = 0.1;
 
 // A pixel's running sums for adaptive sampling, over its samples' luminance x_i = w_i Y(L_i) and
 // filter weights w_i, in double.
