@@ -469,8 +469,10 @@ py::array_t<bool> occluded(const PyAccel& self, const py::object& origins,
 struct Frame {
   py::array_t<float> image;
   py::object albedo = py::none(), normal = py::none(), depth = py::none(), variance = py::none();
+  py::object spp_map = py::none();  // the spp AOV: samples per pixel, (height, width)
   std::string integrator;
   uint32_t spp = 0;
+  double mean_spp = 0.0;
   double milliseconds = 0.0;
   uint64_t rays = 0;
   int threads = 0;
@@ -480,14 +482,15 @@ AovSet aov_set(const py::object& aovs) {
   AovSet set;
   if (aovs.is_none()) return set;
   if (py::isinstance<py::str>(aovs) || !py::isinstance<py::sequence>(aovs)) {
-    raise_type_error("aovs: must be a sequence of names (albedo, normal, depth, variance), got " +
-                     std::string(Py_TYPE(aovs.ptr())->tp_name));
+    raise_type_error(
+        "aovs: must be a sequence of names (albedo, normal, depth, variance, spp), got " +
+        std::string(Py_TYPE(aovs.ptr())->tp_name));
   }
   for (const py::handle item : aovs) {
     const std::string name = string_arg("aovs", py::reinterpret_borrow<py::object>(item));
     if (!add_aov(name, &set)) {
       throw py::value_error("aovs: unknown AOV '" + name +
-                            "' (use albedo, normal, depth, variance)");
+                            "' (use albedo, normal, depth, variance, spp)");
     }
   }
   return set;
@@ -519,8 +522,8 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
                    const py::object& look_at, const py::object& up, const py::object& vertical_fov,
                    const py::object& focal_length, const py::object& yaw,
                    const py::object& distance, const py::object& light,
-                   const py::object& time_limit, const py::object& denoise,
-                   const py::object& clamp) {
+                   const py::object& time_limit, const py::object& denoise, const py::object& clamp,
+                   const py::object& noise_threshold) {
   // The CLI's flags, parsed and checked by the CLI's own code.
   FlagTexts texts;
   texts.add_string("--integrator", integrator);
@@ -537,6 +540,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   texts.add_vec3("--light", light);
   texts.add_number("--time-limit", time_limit);
   texts.add_number("--clamp", clamp);
+  texts.add_number("--noise-threshold", noise_threshold);
   std::shared_ptr<PyAccel> prebuilt;
   if (!accel.is_none() && !py::isinstance<py::str>(accel)) {
     if (!py::isinstance<PyAccel>(accel)) {
@@ -592,8 +596,10 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   if (aov.normal) frame.normal = image_array(normal_image, 3);
   if (aov.depth) frame.depth = image_array(depth_image, 1);
   if (aov.variance) frame.variance = image_array(rendered.aovs.variance, 3);
+  if (aov.spp) frame.spp_map = image_array(rendered.aovs.spp, 1);
   frame.integrator = std::string(integrator_name(spec.kind));
   frame.spp = stats.spp;
+  frame.mean_spp = stats.mean_spp();
   frame.milliseconds = stats.milliseconds;
   frame.rays = stats.rays;
   frame.threads = stats.threads;
@@ -779,7 +785,9 @@ bit for bit.)")
 image: float32 (height, width, 3), linear radiance (row 0 at the top: a PFM file stores rows
 bottom-up); albedo, normal: (height, width, 3) and depth: (height, width), or None when not
 asked for; variance: (height, width, 3), the estimated variance of each pixel's mean (from
-the halves of its samples split by sample index parity), or None; integrator, spp, milliseconds, rays, threads: what was rendered and how.)")
+the halves of its samples split by sample index parity), or None; spp_map: (height, width), the
+samples each pixel took (aovs "spp"), or None; integrator, spp (the most a pixel took), mean_spp,
+milliseconds, rays, threads: what was rendered and how.)")
       .def_readonly("image", &Frame::image)
       .def_readonly("albedo", &Frame::albedo)
       .def_readonly("normal", &Frame::normal)
@@ -787,6 +795,8 @@ the halves of its samples split by sample index parity), or None; integrator, sp
       .def_readonly("variance", &Frame::variance)
       .def_readonly("integrator", &Frame::integrator)
       .def_readonly("spp", &Frame::spp)
+      .def_readonly("mean_spp", &Frame::mean_spp)
+      .def_readonly("spp_map", &Frame::spp_map)
       .def_readonly("milliseconds", &Frame::milliseconds)
       .def_readonly("rays", &Frame::rays)
       .def_readonly("threads", &Frame::threads)
@@ -802,7 +812,7 @@ the halves of its samples split by sample index parity), or None; integrator, sp
         "kernel"_a = none, "threads"_a = none, "position"_a = none, "look_at"_a = none,
         "up"_a = none, "vertical_fov"_a = none, "focal_length"_a = none, "yaw"_a = none,
         "distance"_a = none, "light"_a = none, "time_limit"_a = none, "denoise"_a = none,
-        "clamp"_a = none,
+        "clamp"_a = none, "noise_threshold"_a = none,
         R"(Renders the scene as `tritrace render` does, returning a tritrace.Frame.
 
 The image is bit for bit the one `tritrace render ... -o out.pfm` writes with the same
@@ -815,9 +825,11 @@ time_limit (seconds: the path tracer's samples in passes until the time is up, s
 Frame.spp says how many were reached, and the image is the one that spp gives), denoise (True:
 the path tracer's image through the built-in denoiser, as `tritrace render --denoise`), clamp
 (the most one sample's indirect light adds to a pixel, per channel: biased, as
-`tritrace render --clamp`).
-aovs: any of "albedo", "normal", "depth", "variance". Camera settings beyond the CLI's flags, as a
-scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
+`tritrace render --clamp`), noise_threshold (adaptive sampling: a pixel stops once the relative
+error of its mean is below it at a check and below sqrt(2) times it at the check before, checks
+at 32, 64, 128, ... samples, spp the most; Frame.mean_spp says how many it took).
+aovs: any of "albedo", "normal", "depth", "variance", "spp". Camera settings beyond the CLI's
+flags, as a scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
 focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a
 look-at camera. Bad values raise ValueError with the CLI's message.)");
 }

@@ -204,6 +204,10 @@ class Frame:
     @property
     def spp(self) -> int: ...
     @property
+    def mean_spp(self) -> float: ...
+    @property
+    def spp_map(self) -> Optional[npt.NDArray[np.float32]]: ...
+    @property
     def milliseconds(self) -> float: ...
     @property
     def rays(self) -> int: ...
@@ -221,7 +225,7 @@ def render(
     sampler: Optional[Literal["sobol", "independent"]] = None,
     max_depth: Optional[int] = None,
     filter: Optional[Literal["box", "gaussian", "blackman-harris"]] = None,
-    aovs: Sequence[Literal["albedo", "normal", "depth", "variance"]] = (),
+    aovs: Sequence[Literal["albedo", "normal", "depth", "variance", "spp"]] = (),
     accel: Union[str, Accel, None] = None,
     kernel: Optional[str] = None,
     threads: Optional[int] = None,
@@ -236,6 +240,7 @@ def render(
     time_limit: Optional[float] = None,
     denoise: Optional[bool] = None,
     clamp: Optional[float] = None,
+    noise_threshold: Optional[float] = None,
 ) -> Frame:
     """Renders the scene as `tritrace render` does: the image is bit for bit the one
     `tritrace render ... -o out.pfm` writes with the same settings.
@@ -247,6 +252,9 @@ def render(
     look-at camera. time_limit (seconds): the path tracer's samples in passes until the time is
     up (spp the most); Frame.spp says how many it reached. denoise=True: the image through the
     built-in denoiser, as `tritrace render --denoise`. clamp: the most one sample's indirect light
-    adds to a pixel (biased, as `tritrace render --clamp`). Bad values raise ValueError with the
+    adds to a pixel (biased, as `tritrace render --clamp`). noise_threshold: adaptive sampling,
+    each pixel stops once the relative error of its mean is below it (checked at 32, 64, 128, ...
+    samples, and confirmed by the check before; spp the most); Frame.mean_spp says how many a
+    pixel took on average, aovs "spp" gives Frame.spp_map. Bad values raise ValueError with the
     CLI's message, wrong types TypeError.
     """

@@ -80,7 +80,7 @@ int run_denoise(const DenoiseArgs& args) {
   DenoiseOptions options;
   options.search_radius = args.search_radius;
   RenderedImage rendered{denoise(colour, variance, {images[1], images[2], images[3]}, options),
-                         {images[1], images[2], images[3], images[4]}};
+                         {images[1], images[2], images[3], images[4], Image()}};
   write_render(rendered, args.output, true, settings);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

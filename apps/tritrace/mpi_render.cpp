@@ -43,14 +43,17 @@ namespace {
 enum Tag : int { kReady = 1, kWork = 2, kStop = 3, kResult = 4, kPiece = 5 };
 
 // Units: tile part t of `tiles` x sample range [first, end). Ranges are whole blocks of 8 (the
-// last may end at the spp), so the merge is exact.
-std::vector<PartRange> make_units(int ranks, uint32_t spp, int width, int height, bool path) {
+// last may end at the spp), so the merge is exact. With adaptive sampling (`whole`) a pixel decides
+// from all its samples, so every unit is a tile part's whole range [0, spp).
+std::vector<PartRange> make_units(int ranks, uint32_t spp, int width, int height, bool path,
+                                  bool whole) {
   const int tile_count = ((width + kPartTileSize - 1) / kPartTileSize) *
                          ((height + kPartTileSize - 1) / kPartTileSize);
   // About four units per worker and at most four sample ranges: small enough to balance, large
   // enough that a unit's start-up (the tile's pixels, the message) stays small.
   const int workers = std::max(1, ranks - 1);
-  const uint32_t chunks = path ? std::min<uint32_t>(4, (spp + kSampleBlock - 1) / kSampleBlock) : 1;
+  const uint32_t chunks =
+      path && !whole ? std::min<uint32_t>(4, (spp + kSampleBlock - 1) / kSampleBlock) : 1;
   const int tiles = std::clamp(4 * workers / static_cast<int>(chunks), 1, tile_count);
   uint32_t chunk = (spp + chunks - 1) / chunks;
   chunk = (chunk + kSampleBlock - 1) / kSampleBlock * kSampleBlock;
@@ -63,7 +66,7 @@ std::vector<PartRange> make_units(int ranks, uint32_t spp, int width, int height
 }
 
 size_t floats_per_pixel(const AovSet& aovs) {
-  return 4 + (aovs.any() ? 7 : 0) + (aovs.variance ? 4 : 0);
+  return 4 + (aovs.any() ? 7 : 0) + (aovs.variance ? 4 : 0) + (aovs.spp ? 1 : 0);
 }
 
 // A unit's packed film (pack_part) as floats: per layer the unit's pixels' (R, G, B, W), then
@@ -85,6 +88,7 @@ std::vector<float> pack(const Film& packed, size_t pixels) {
         if (packed.aovs().variance) {
           out.insert(out.end(), {a[p].even.x, a[p].even.y, a[p].even.z, a[p].even.w});
         }
+        if (packed.aovs().spp) out.push_back(a[p].samples);
       }
     }
   }
@@ -120,6 +124,10 @@ Film unpack(const std::vector<float>& data, const RenderIdentity& r, const PartR
         if (r.aovs.variance) {
           a[p].even = glm::vec4(data[i + 7], data[i + 8], data[i + 9], data[i + 10]);
           i += 4;
+        }
+        if (r.aovs.spp) {
+          a[p].samples = data[i + 7];
+          i += 1;
         }
       }
     }
@@ -303,7 +311,8 @@ int run_render_mpi(const RenderArgs& args) {
   check_identities(rank, ranks, s.identity);
   const bool path = s.job->path();
   const std::vector<PartRange> units =
-      make_units(ranks, path ? s.job->spec().spp : 1, s.identity.width, s.identity.height, path);
+      make_units(ranks, path ? s.job->spec().spp : 1, s.identity.width, s.identity.height, path,
+                 s.job->options().noise_threshold > 0.0f);
 
   // Every rank's start-up time, for the summary (rank 0 prints the slowest).
   double slowest_startup = 0.0;

@@ -33,8 +33,8 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
                   "non-specular hit (path: through perfect mirrors and smooth glass, albedo times "
                   "their tint), depth (Z, distance along the camera ray to the first hit; 0 where "
                   "nothing is hit), variance (variance.R/G/B, the estimated variance of each "
-                  "pixel's mean, from the halves of its samples split by sample index parity); "
-                  "needs an .exr output")
+                  "pixel's mean, from the halves of its samples split by sample index parity), "
+                  "spp (the samples each pixel took, one channel spp); needs an .exr output")
       ->type_name("LIST")
       ->check(checked(setting_check("--aovs")));
   sub->add_flag("--exr-half", args.job.exr_half,
@@ -67,12 +67,37 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
                 "(docs/DENOISING.md): the film also keeps albedo, normal, depth and the variance "
                 "of each pixel from its two halves of samples; --aovs still chooses which of "
                 "them are written");
+  sub->add_option("--noise-threshold", args.job.noise_threshold,
+                  "Adaptive sampling for the path tracer: each pixel stops taking samples once the "
+                  "estimated relative standard error of its mean luminance (from the running "
+                  "second moment of its own samples; below a luminance of 0.1 relative to 0.1) "
+                  "is below T at a check and was below 1.41 T at the one before (checks at 32, 64, "
+                  "128, ... samples, so the first stop is at 64); --spp is the most a pixel "
+                  "takes. The image is the same for any thread count and tile size, and --tile "
+                  "parts and --mpi still merge exactly; not with --spp-range or --time-limit. "
+                  "--aovs spp writes how many samples each pixel took")
+      ->type_name("T")
+      ->check(checked(setting_check("--noise-threshold")));
   sub->add_flag("--mpi", args.mpi,
                 "Render across the ranks of an MPI job (mpirun -np N tritrace render --mpi ...): "
                 "rank 0 hands out tiles x sample blocks, gathers and writes the image once");
   sub->add_flag("-q,--quiet", args.quiet, "Print nothing on success: no summary, no progress bar");
   return sub;
 }
+
+namespace {
+
+// The summary's words on adaptive sampling: " at most (mean 37.2 spp, noise threshold 0.01)", or
+// nothing when it is off.
+std::string adaptive_text(const JobSettings& settings, const RenderStats& stats) {
+  if (settings.noise_threshold.empty()) return "";
+  char text[128];
+  std::snprintf(text, sizeof text, " at most (mean %.1f spp, noise threshold %s)", stats.mean_spp(),
+                settings.noise_threshold.c_str());
+  return text;
+}
+
+}  // namespace
 
 int run_render(const RenderArgs& args) {
   const JobSettings& settings = args.job;
@@ -141,8 +166,9 @@ int run_render(const RenderArgs& args) {
     bar.finish();
     job.write_part(film, output);
     if (!args.quiet) {
-      std::printf("rendered %s of %dx%d, %u spp in %.1f ms (%.3g Mrays/s, %d thread%s) to %s\n",
-                  job.part().describe().c_str(), job.width(), job.height(), spp, stats.milliseconds,
+      std::printf("rendered %s of %dx%d, %u spp%s in %.1f ms (%.3g Mrays/s, %d thread%s) to %s\n",
+                  job.part().describe().c_str(), job.width(), job.height(), spp,
+                  adaptive_text(settings, stats).c_str(), stats.milliseconds,
                   stats.mrays_per_second(), stats.threads, stats.threads == 1 ? "" : "s",
                   output.c_str());
     }
@@ -158,10 +184,11 @@ int run_render(const RenderArgs& args) {
       const std::string limit =
           timed ? " (time limit " + settings.time_limit + " s)" : std::string();
       std::printf(
-          "rendered %dx%d, %u spp in %.1f ms%s (%.3g Mpaths/s, %.3g Mrays/s, %d thread%s) to %s\n",
-          image.width(), image.height(), stats.spp, stats.milliseconds, limit.c_str(),
-          stats.samples_per_second() * 1e-6, stats.mrays_per_second(), stats.threads,
-          stats.threads == 1 ? "" : "s", output.c_str());
+          "rendered %dx%d, %u spp%s in %.1f ms%s (%.3g Mpaths/s, %.3g Mrays/s, %d thread%s) to "
+          "%s\n",
+          image.width(), image.height(), stats.spp, adaptive_text(settings, stats).c_str(),
+          stats.milliseconds, limit.c_str(), stats.samples_per_second() * 1e-6,
+          stats.mrays_per_second(), stats.threads, stats.threads == 1 ? "" : "s", output.c_str());
       if (settings.denoise) std::printf("denoised in %.1f ms\n", rendered.denoise_ms);
     } else {
       std::printf("rendered %dx%d in %.1f ms (%.3g Mrays/s, %d thread%s) to %s\n", image.width(),

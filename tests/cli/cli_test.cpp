@@ -509,7 +509,7 @@ INSTANTIATE_TEST_SUITE_P(
                   2,
                   "--aovs",
                   "unknown AOV 'colour' in 'albedo,colour' (use a comma-separated list of albedo, "
-                  "normal, depth, variance)"},
+                  "normal, depth, variance, spp)"},
         ErrorCase{"AovsEmptyName",
                   {"--aovs", "albedo,,depth", "-o", "x.exr"},
                   2,
@@ -1726,6 +1726,45 @@ TEST_F(DistributedCliTest, TilePartsAndRangesOfTilesMergeBitForBit) {
   const RunResult r = Merge(mixed, "mixed.pfm");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(ReadFile(work_ / "mixed.pfm") == whole);
+}
+
+// Adaptive sampling decides per pixel from its own samples: tile parts (the spp AOV included)
+// merge into the one-process file byte for byte, and the summary names the threshold and the
+// mean spp. A sample range is a usage error.
+TEST_F(DistributedCliTest, AdaptiveTilePartsMergeBitForBit) {
+  const auto adaptive = [](std::vector<std::string> extra) {
+    std::vector<std::string> args = {
+        "render", "--scene", "cornell-area",      "--spp", "128", "--width", "40", "--height", "40",
+        "--aovs", "spp",     "--noise-threshold", "0.05"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  };
+  const RunResult whole = Run(adaptive({"-o", "whole.exr", "--threads", "1"}));
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  EXPECT_NE(whole.out.find("128 spp at most (mean "), std::string::npos) << whole.out;
+  EXPECT_NE(whole.out.find("noise threshold 0.05)"), std::string::npos) << whole.out;
+  std::vector<std::string> tiles;
+  for (const char* i : {"0", "1", "2"}) {
+    const std::string name = std::string("t") + i + ".exr";
+    const RunResult r = Run(adaptive({"--tile", std::string(i) + "/3", "-o", name, "-q"}));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    tiles.push_back(name);
+  }
+  const RunResult merged = Merge(tiles, "merged.exr");
+  ASSERT_EQ(merged.exit_code, 0) << merged.err;
+  EXPECT_TRUE(ReadFile(work_ / "merged.exr") == ReadFile(work_ / "whole.exr"));
+  // Uniform sampling makes another file.
+  ASSERT_EQ(Run({"render", "--scene", "cornell-area", "--spp", "128", "--width", "40", "--height",
+                 "40", "--aovs", "spp", "-o", "uniform.exr"})
+                .exit_code,
+            0);
+  EXPECT_FALSE(ReadFile(work_ / "uniform.exr") == ReadFile(work_ / "whole.exr"));
+
+  const RunResult range = Run(adaptive({"--spp-range", "0:32", "-o", "r.exr"}));
+  EXPECT_EQ(range.exit_code, 2);
+  EXPECT_NE(range.err.find("--noise-threshold"), std::string::npos) << range.err;
+  const RunResult bad = Run(adaptive({"--noise-threshold", "2", "-o", "b.exr"}));
+  EXPECT_EQ(bad.exit_code, 2);
 }
 
 TEST_F(DistributedCliTest, AovsAndTheLabImageMergeBitForBit) {

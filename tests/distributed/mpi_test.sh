@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # `tritrace render --mpi` under a real mpirun (Open MPI): 1, 2 and 3 ranks (oversubscribed on this
-# machine) give the one-process image byte for byte, with AOVs too, also when results travel in
+# machine) give the one-process image byte for byte, with AOVs and adaptive sampling too, also when results travel in
 # pieces of 1001 bytes; a rank that dies, or one that loaded another scene file, ends the job with
 # a message naming it and no output file. Usage: mpi_test.sh TRITRACE
 set -euo pipefail
@@ -22,6 +22,12 @@ for np in 1 2 3; do
 done
 "${run_mpi[@]}" -np 3 "$cli" render "${scene[@]}" --aovs albedo,depth,variance --mpi -o "$dir/mpi.exr"
 cmp "$dir/one.exr" "$dir/mpi.exr" || fail "3 ranks with AOVs: the EXR differs from one process's"
+# Adaptive sampling: units are whole tile parts [0, spp), so the image and the spp AOV match.
+adaptive=(--scene cornell-area --spp 128 --width 48 --height 40 --threads 1 -q --noise-threshold 0.05
+  --aovs spp,variance)
+"$cli" render "${adaptive[@]}" -o "$dir/adaptive.exr"
+"${run_mpi[@]}" -np 3 "$cli" render "${adaptive[@]}" --mpi -o "$dir/adaptive_mpi.exr"
+cmp "$dir/adaptive.exr" "$dir/adaptive_mpi.exr" || fail "adaptive sampling: the EXR differs"
 # The lab image too (one sample per pixel, tile parts only).
 "$cli" render --width 48 --height 40 -q -o "$dir/lab.png"
 "${run_mpi[@]}" -np 3 "$cli" render --width 48 --height 40 -q --mpi -o "$dir/lab_mpi.png"

@@ -21,7 +21,7 @@ namespace tritrace {
 namespace {
 
 constexpr uint32_t kSpp = 20;  // two whole blocks of 8 and a partial one
-const AovSet kAllAovs{true, true, true, true};
+const AovSet kAllAovs{true, true, true, true, true};
 
 class PartialFilmTest : public ::testing::Test {
  protected:
@@ -38,8 +38,10 @@ class PartialFilmTest : public ::testing::Test {
   }
 
   // The image-sized film of samples [first, end) of tile part tile / tiles.
-  Film render_range(uint32_t first, uint32_t end, int tile = 0, int tiles = 1) const {
+  Film render_range(uint32_t first, uint32_t end, int tile = 0, int tiles = 1,
+                    float noise_threshold = 0.0f) const {
     RenderOptions options;
+    options.noise_threshold = noise_threshold;
     options.threads = 1;
     options.first_sample = first;
     options.spp = end - first;
@@ -130,6 +132,32 @@ TEST_F(PartialFilmTest, MergerGivesTheOneProcessFilmInAnyArrivalOrder) {
     const Film merged = std::move(merger).finish();
     EXPECT_TRUE(same_sums(whole, merged, 40 * 30)) << "order " << o;
   }
+}
+
+// Adaptive sampling decides per pixel, so tile parts of [0, spp) (through the codec) merge into the
+// one-process film, spp AOV included.
+TEST_F(PartialFilmTest, AdaptiveTilePartsMergeIntoTheOneProcessFilm) {
+  constexpr uint32_t kMost = 128;
+  const Film whole = render_range(0, kMost, 0, 1, 0.05f);
+  RenderIdentity identity = identity_;
+  identity.spp = kMost;
+  FilmMerger merger(identity, 3);
+  for (int tile : {2, 0, 1}) {
+    const PartRange range{0, kMost, tile, 3};
+    const Film packed = pack_part(render_range(0, kMost, tile, 3, 0.05f), tile, 3);
+    const PartialFilm back =
+        decode_partial_film(encode_partial_film(packed, {identity, range}), "part.exr");
+    merger.add(range, back.film);
+  }
+  ASSERT_TRUE(merger.complete());
+  const Film merged = std::move(merger).finish();
+  EXPECT_TRUE(same_sums(whole, merged, 40 * 30));
+  // Some pixels stopped early, so the counts are not all the same.
+  const Image spp = merged.resolve_spp();
+  float lo = kMost, hi = 0.0f;
+  for (const glm::vec3& p : spp.pixels()) lo = std::min(lo, p.x), hi = std::max(hi, p.x);
+  EXPECT_EQ(lo, 64.0f);
+  EXPECT_EQ(hi, static_cast<float>(kMost));
 }
 
 TEST_F(PartialFilmTest, MergerNamesMissingAndOverlappingRanges) {

@@ -316,7 +316,7 @@ Image layer_image(int width, int height, float base) {
 TEST_F(TempDir, ExrAovLayersHaveTheirNamesAndValues) {
   const Image radiance = layer_image(5, 3, 1.0f);
   AovImages aovs{layer_image(5, 3, 10.0f), layer_image(5, 3, 20.0f), layer_image(5, 3, 30.0f),
-                 layer_image(5, 3, 40.0f)};
+                 layer_image(5, 3, 40.0f), Image()};
   write_exr(radiance, path("aov.exr"), aovs);
   const ExrContents back = read_exr_channels(path("aov.exr"));
   EXPECT_EQ(channel_names(back),
@@ -345,7 +345,7 @@ TEST_F(TempDir, ExrHalfKeepsDepthAndVarianceInFloat) {
   Image depth(2, 2), variance(2, 2);
   depth.at(1, 1) = glm::vec3(4097.3f);   // half would store 4096
   variance.at(1, 0) = glm::vec3(1e-7f);  // half's subnormals step by 6e-8
-  write_exr(radiance, path("d.exr"), {Image(), layer_image(2, 2, 0.5f), depth, variance},
+  write_exr(radiance, path("d.exr"), {Image(), layer_image(2, 2, 0.5f), depth, variance, Image()},
             ExrPixelType::kHalf);
   const ExrContents back = read_exr_channels(path("d.exr"));
   EXPECT_EQ(channel_names(back),
@@ -363,7 +363,7 @@ TEST_F(TempDir, ExrHalfKeepsDepthAndVarianceInFloat) {
 TEST_F(TempDir, ExrWithOnlyDepthHasRgbAndZ) {
   Image depth(2, 1);
   depth.at(0, 0) = glm::vec3(2.5f);
-  write_exr(layer_image(2, 1, 0.0f), path("z.exr"), {Image(), Image(), depth, Image()});
+  write_exr(layer_image(2, 1, 0.0f), path("z.exr"), {Image(), Image(), depth, Image(), Image()});
   const ExrContents back = read_exr_channels(path("z.exr"));
   EXPECT_EQ(channel_names(back), (std::set<std::string>{"R", "G", "B", "Z"}));
   EXPECT_EQ(channel_at(back, "Z", 0, 0), 2.5f);
@@ -372,7 +372,8 @@ TEST_F(TempDir, ExrWithOnlyDepthHasRgbAndZ) {
 TEST_F(TempDir, ExrAovOfAnotherSizeThrowsAndWritesNothing) {
   const std::string p = path("bad.exr");
   try {
-    write_exr(layer_image(4, 4, 0.0f), p, {layer_image(4, 3, 0.0f), Image(), Image(), Image()});
+    write_exr(layer_image(4, 4, 0.0f), p,
+              {layer_image(4, 3, 0.0f), Image(), Image(), Image(), Image()});
     FAIL() << "expected an Error";
   } catch (const Error& e) {
     EXPECT_EQ(e.subject(), p);

@@ -61,7 +61,7 @@ TEST(JobSettings, EveryRuleRefusesWhatItShould) {
       {"--seed", "-1"},         {"--sampler", "halton"},   {"--max-depth", "-1"},
       {"--filter", "mitchell"}, {"--aovs", "albedo,,"},    {"--exposure", "nan"},
       {"--clamp", "0"},         {"--clamp", "-1"},         {"--clamp", "inf"},
-      {"--clamp", "1e39"},
+      {"--clamp", "1e39"},      {"--time-limit", "0"},     {"--noise-threshold", "0"},
   };
   for (const auto& [flag, text] : bad) {
     JobSettings s;
@@ -301,6 +301,73 @@ TEST(RenderJob, DenoisedRenderIsTheDenoiserOnTheFilmsFeatures) {
   EXPECT_TRUE(same_pixels(got.aovs.depth, noisy.aovs.depth));
   EXPECT_EQ(got.aovs.albedo.width(), 0);
   EXPECT_EQ(got.aovs.variance.width(), 0);
+}
+
+TEST(RenderJob, NoiseThresholdIsForWholePathRendersOrTileParts) {
+  JobSettings s = small("cornell");
+  s.noise_threshold = "0.01";
+  EXPECT_EQ(error_of([&] { RenderJob(s, load_job_scene(s)); }).subject(), "--noise-threshold");
+  s = small("cornell-area", "16");
+  s.noise_threshold = "0.01";
+  s.output = "part.exr";
+  s.output_given = true;
+  s.spp_range = "0:8";
+  const Error range = error_of([&] { RenderJob(s, load_job_scene(s)); });
+  EXPECT_EQ(range.subject(), "--noise-threshold");
+  EXPECT_EQ(range.exit_code(), ExitCode::kUsage);
+  EXPECT_NE(std::string(range.what()).find("--spp-range"), std::string::npos) << range.what();
+  s.spp_range.clear();
+  s.time_limit = "1";
+  EXPECT_EQ(error_of([&] { RenderJob(s, load_job_scene(s)); }).subject(), "--time-limit");
+  s.time_limit.clear();
+  s.tile = "1/2";
+  const RenderJob part(s, load_job_scene(s));
+  EXPECT_EQ(part.options().noise_threshold, 0.01f);
+  for (const char* bad : {"0", "-0.1", "1", "2", "nan", "inf", "1e-50", "low"}) {
+    JobSettings t;
+    t.noise_threshold = bad;
+    EXPECT_EQ(error_of([&] { check_settings(t); }).subject(), "--noise-threshold") << bad;
+  }
+  JobSettings fine;
+  fine.noise_threshold = "0.01";
+  EXPECT_NO_THROW(check_settings(fine));
+}
+
+TEST(RenderJob, NoiseThresholdIsPartOfTheIdentity) {
+  JobSettings s = small("cornell-area", "64");
+  const RenderJob uniform(s, load_job_scene(s));
+  s.noise_threshold = "0.02";
+  const RenderJob a(s, load_job_scene(s));
+  s.noise_threshold = "0.03";
+  const RenderJob b(s, load_job_scene(s));
+  EXPECT_FALSE(uniform.identity() == a.identity());
+  EXPECT_FALSE(a.identity() == b.identity());
+  EXPECT_NE(a.identity().settings.find("noise_threshold=0.02"), std::string::npos)
+      << a.identity().settings;
+}
+
+// The job renders what the renderer renders with the threshold, and the spp AOV is the count.
+TEST(RenderJob, NoiseThresholdRendersTheAdaptiveImageWithTheSppAov) {
+  JobSettings s = small("cornell-area", "128");
+  s.noise_threshold = "0.05";
+  s.aovs = "spp";
+  RenderJob job(s, load_job_scene(s));
+  job.prepare();
+  RenderStats stats;
+  const RenderedImage got = job.render(&stats);
+  ASSERT_EQ(got.aovs.spp.width(), 24);
+  double total = 0.0;
+  for (const glm::vec3& p : got.aovs.spp.pixels()) total += p.x;
+  EXPECT_EQ(total / (24 * 16), stats.mean_spp());
+  EXPECT_LT(stats.mean_spp(), 128.0);
+  const auto scene = load_job_scene(s);
+  const auto accel = make_accel(AccelKind::kBvh, scene.scene, kDefaultKernel);
+  const auto integrator = make_integrator(job.spec(), scene.scene);
+  RenderOptions options;
+  options.threads = 1;
+  options.spp = 128;
+  options.noise_threshold = 0.05f;
+  EXPECT_TRUE(same_pixels(got.image, render(scene.scene, *accel, *integrator, options)));
 }
 
 }  // namespace

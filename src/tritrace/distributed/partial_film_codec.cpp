@@ -73,6 +73,7 @@ constexpr LayerChannel kLayerChannels[] = {
     {"even.G", offsetof(AovSums, even) + 4, true, [](const AovSet& a) { return a.variance; }},
     {"even.B", offsetof(AovSums, even) + 8, true, [](const AovSet& a) { return a.variance; }},
     {"even.W", offsetof(AovSums, even) + 12, true, [](const AovSet& a) { return a.variance; }},
+    {"samples", offsetof(AovSums, samples), true, [](const AovSet& a) { return a.spp; }},
 };
 
 size_t channels_per_layer(const AovSet& aovs) {
@@ -277,6 +278,7 @@ PartInfo check_header(const HeaderFacts& f, const std::string& name, uint64_t fi
   r.aovs.normal = aovs.find("normal") != std::string::npos;
   r.aovs.depth = aovs.find("depth") != std::string::npos;
   r.aovs.variance = aovs.find("variance") != std::string::npos;
+  r.aovs.spp = aovs.find("spp") != std::string::npos;
   if (aov_list(r.aovs) != aovs) throw bad("tritrace.aovs");
   if (!parse_pair(std::string_view(need("tritrace.size")), 'x', r.width, r.height)) {
     throw bad("tritrace.size");

@@ -106,8 +106,9 @@ std::string hit_rule(std::string_view accel, std::string_view kernel) {
 
 std::string aov_list(const AovSet& a) {
   std::string s;
-  for (auto [on, name] : {std::pair{a.albedo, "albedo"}, std::pair{a.normal, "normal"},
-                          std::pair{a.depth, "depth"}, std::pair{a.variance, "variance"}}) {
+  for (auto [on, name] :
+       {std::pair{a.albedo, "albedo"}, std::pair{a.normal, "normal"}, std::pair{a.depth, "depth"},
+        std::pair{a.variance, "variance"}, std::pair{a.spp, "spp"}}) {
     if (!on) continue;
     if (!s.empty()) s += ",";
     s += name;
@@ -136,6 +137,14 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
                    " filter=" + std::string(filter_name(options.filter));
     // Only when on, so that the settings text (and the hash) of unclamped renders is as before.
     if (spec.clamp > 0.0f) id.settings += " clamp=" + shortest(spec.clamp);
+    // Adaptive sampling changes which samples each pixel takes; absent when off, so that the
+    // identities of uniform renders stay what they were.
+    if (options.noise_threshold > 0.0f) {
+      char threshold[32];
+      std::snprintf(threshold, sizeof threshold, "%.7g",
+                    static_cast<double>(options.noise_threshold));
+      id.settings += " noise_threshold=" + std::string(threshold);
+    }
   }
   id.settings += " kernel=" + hit_rule(accel, kernel) + " size=" + std::to_string(id.width) + "x" +
                  std::to_string(id.height);

@@ -55,6 +55,12 @@ std::vector<Channel> channels_of(const Image& image, const AovImages& aovs, ExrP
     channels.push_back({"Z", &aovs.depth, 0, Imf::FLOAT});
   }
   add_layer(aovs.variance, "variance", "RGB", Imf::FLOAT);
+  if (aovs.spp.width() != 0 || aovs.spp.height() != 0) {
+    if (aovs.spp.width() != image.width() || aovs.spp.height() != image.height()) {
+      throw Error("exr", "the spp AOV's size differs from the image's");
+    }
+    channels.push_back({"spp", &aovs.spp, 0, Imf::FLOAT});
+  }
   return channels;
 }
 

@@ -28,6 +28,7 @@ struct AovImages {
   Image normal;
   Image depth;
   Image variance;
+  Image spp;  // samples per pixel, in all three channels; written as the one channel "spp"
 };
 
 // The file's bytes: scanlines top row first, ZIP compression (lossless), values stored as they

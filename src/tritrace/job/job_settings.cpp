@@ -66,6 +66,15 @@ std::string check_clamp(const std::string& s) {
   return v && *v > 0.0f ? std::string() : "must be a finite number greater than 0, got '" + s + "'";
 }
 
+// A relative error: above 0, and below 1 (an error of 100% or more stops every pixel at the
+// first check, which is not what anyone means).
+std::string check_noise_threshold(const std::string& s) {
+  const std::optional<double> t = parse_finite(s);
+  if (t && *t > 0.0 && *t < 1.0 && static_cast<float>(*t) > 0.0f) return "";
+  return "must be a relative error greater than 0 and less than 1 (for example 0.01), got '" + s +
+         "'";
+}
+
 constexpr SettingRule kRules[] = {
     {"--scene", &JobSettings::scene, check_builtin_scene},
     {"--width", &JobSettings::width, check_side},
@@ -85,6 +94,7 @@ constexpr SettingRule kRules[] = {
     {"--clamp", &JobSettings::clamp, check_clamp},
     {"--filter", &JobSettings::filter, check_filter},
     {"--time-limit", &JobSettings::time_limit, check_time_limit},
+    {"--noise-threshold", &JobSettings::noise_threshold, check_noise_threshold},
     {"--aovs", &JobSettings::aovs, check_aovs},
     {"--exposure", &JobSettings::exposure, check_exposure},
 };
@@ -120,6 +130,8 @@ bool add_aov(std::string_view name, AovSet* set) {
     set->depth = true;
   } else if (name == "variance") {
     set->variance = true;
+  } else if (name == "spp") {
+    set->spp = true;
   } else {
     return false;
   }
@@ -135,7 +147,8 @@ std::optional<AovSet> parse_aovs(const std::string& text, std::string* why) {
         text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     if (!add_aov(name, &set)) {
       *why = (name.empty() ? std::string("empty AOV name") : "unknown AOV '" + name + "'") +
-             " in '" + text + "' (use a comma-separated list of albedo, normal, depth, variance)";
+             " in '" + text +
+             "' (use a comma-separated list of albedo, normal, depth, variance, spp)";
       return std::nullopt;
     }
     if (comma == std::string::npos) return set;
@@ -205,6 +218,11 @@ std::optional<float> exposure_stops(const JobSettings& settings) {
 std::optional<double> time_limit_seconds(const JobSettings& settings) {
   if (settings.time_limit.empty()) return std::nullopt;
   return parse_finite(settings.time_limit);
+}
+
+float noise_threshold(const JobSettings& settings) {
+  if (settings.noise_threshold.empty()) return 0.0f;
+  return static_cast<float>(parse_finite(settings.noise_threshold).value_or(0.0));
 }
 
 std::string loading_phase(const JobSettings& settings) {

@@ -43,10 +43,12 @@ struct JobSettings {
   std::string filter = "box";
   std::string time_limit;  // seconds: whole passes of samples until the time is up
   bool denoise = false;    // the feature-guided denoiser on the path tracer's image
+  // Adaptive sampling: a pixel stops when the relative error of its mean is below this (0 < T < 1)
+  std::string noise_threshold;
   // What to write.
   std::string output;         // empty: the scene file's output, else <file stem>.png
   bool output_given = false;  // the caller named an output (its value may still be empty)
-  std::string aovs;           // "albedo,normal,depth,variance" or a subset
+  std::string aovs;           // "albedo,normal,depth,variance,spp" or a subset
   bool exr_half = false;
   std::string exposure;   // stops, for the path tracer's 8-bit outputs
   std::string spp_range;  // "A:B": samples [A, B) of every pixel, as a partial film
@@ -81,10 +83,12 @@ FilterKind filter_choice(const JobSettings& settings);
 AovSet aov_set(const JobSettings& settings);
 std::optional<float> exposure_stops(const JobSettings& settings);
 std::optional<double> time_limit_seconds(const JobSettings& settings);
+// --noise-threshold's value; 0 when not given (adaptive sampling off).
+float noise_threshold(const JobSettings& settings);
 
-// Adds the AOV `name` (albedo, normal, depth or variance) to `set`; false for any other name.
+// Adds the AOV `name` (albedo, normal, depth, variance or spp) to `set`; false for any other name.
 bool add_aov(std::string_view name, AovSet* set);
-// "albedo,normal,depth,variance" or any subset, in any order; a name given twice counts once.
+// "albedo,normal,depth,variance,spp" or any subset, in any order; a name given twice counts once.
 // nullopt with the reason in `why` for an empty list, an empty name or an unknown one.
 std::optional<AovSet> parse_aovs(const std::string& text, std::string* why);
 

@@ -182,6 +182,12 @@ void RenderJob::set_up() {
                   "advance; it does not take --spp-range or --tile",
                   ExitCode::kUsage);
     }
+    if (!settings_.noise_threshold.empty()) {
+      throw Error("--time-limit",
+                  "does not take --noise-threshold yet (adaptive sampling renders each pixel's "
+                  "samples in one pass); give one or the other",
+                  ExitCode::kUsage);
+    }
     // --spp is the most samples a pixel takes; without it, passes go on until the time is up.
     if (settings_.spp.empty()) spec_.spp = kMaxSpp;
   }
@@ -195,6 +201,19 @@ void RenderJob::set_up() {
       throw Error("--denoise",
                   "denoises a whole image; render the parts with --aovs "
                   "albedo,normal,depth,variance, merge them, then run `tritrace denoise`",
+                  ExitCode::kUsage);
+    }
+  }
+  if (!settings_.noise_threshold.empty()) {
+    if (!path()) {
+      throw Error("--noise-threshold",
+                  "applies to the path tracer; the lab integrator takes one sample per pixel",
+                  ExitCode::kUsage);
+    }
+    if (!settings_.spp_range.empty()) {
+      throw Error("--noise-threshold",
+                  "decides per pixel from all its samples [0, spp), so a sample range cannot be "
+                  "rendered apart; split the image with --tile instead of --spp-range",
                   ExitCode::kUsage);
     }
   }
@@ -215,6 +234,7 @@ void RenderJob::set_up() {
   options_.spp = partial_ ? part_.end - part_.first : spec_.spp;
   options_.tile_part = part_.tile;
   options_.tile_parts = part_.tiles;
+  options_.noise_threshold = tritrace::noise_threshold(settings_);
   if (settings_.output_given) {
     output_ = settings_.output;
   } else if (loaded_ && !loaded_->output.empty()) {
@@ -337,6 +357,7 @@ RenderedImage RenderJob::render_for(double seconds, RenderStats* stats) const {
     render_to_film(film, options, &pass);
     total.rays += pass.rays;
     total.samples += pass.samples;
+    total.pixels = pass.pixels;
     total.threads = std::max(total.threads, pass.threads);
     taken += n;
     if (settings_.denoise && reserve == 0.0) {

@@ -101,8 +101,17 @@ Image Film::resolve_variance() const {
   return image;
 }
 
+Image Film::resolve_spp() const {
+  if (!aovs_.spp) return {};
+  Image image(width_, height_);
+  for (int y = 0; y < height_; ++y) {
+    for (int x = 0; x < width_; ++x) image.at(x, y) = glm::vec3(pixel_aov_sums(x, y).samples);
+  }
+  return image;
+}
+
 AovImages Film::resolve_aovs() const {
-  return {resolve_albedo(), resolve_normal(), resolve_depth(), resolve_variance()};
+  return {resolve_albedo(), resolve_normal(), resolve_depth(), resolve_variance(), resolve_spp()};
 }
 
 glm::vec3 half_buffer_variance(glm::vec4 total, glm::vec4 even) {

@@ -27,7 +27,9 @@ struct AovSet {
   // The estimated variance of each pixel's mean, from the halves of its samples split by the
   // parity of their global sample index (AovSums::even).
   bool variance = false;
-  bool any() const { return albedo || normal || depth || variance; }
+  // How many samples each pixel took (AovSums::samples): where adaptive sampling spent them.
+  bool spp = false;
+  bool any() const { return albedo || normal || depth || variance || spp; }
   bool operator==(const AovSet&) const = default;
 };
 
@@ -96,7 +98,9 @@ class Film {
   // estimators (Rousselle et al. 2012; Bitterli et al. 2016, NFOR). Zero where a half is empty.
   // Empty when the film does not keep it.
   Image resolve_variance() const;
-  // All four, each empty where not kept.
+  // The samples each pixel took, in all three channels; empty when the film does not keep them.
+  Image resolve_spp() const;
+  // All five, each empty where not kept.
   AovImages resolve_aovs() const;
 
  private:

@@ -10,6 +10,8 @@
 #include <atomic>
 #include <cassert>
 #include <chrono>
+#include <cmath>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,6 +39,14 @@ void for_each_block(int x0, int y0, int x1, int y1, Fn&& fn) {
 
 int default_thread_count() {
   return std::max(1, tbb::info::default_concurrency());
+}
+
+double adaptive_error(const PixelMoments& m, uint32_t n) {
+  if (n < 2 || !(m.w > 0.0)) return std::numeric_limits<double>::infinity();
+  const double mean = m.x / m.w;
+  const double spread = std::max(0.0, m.xx - 2.0 * mean * m.xw + mean * mean * m.ww);
+  const double variance = spread / (m.w * m.w) * static_cast<double>(n) / (n - 1.0);
+  return std::sqrt(variance) / std::max(mean, kAdaptiveDarkFloor);
 }
 
 namespace {
@@ -80,11 +90,14 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
   const bool corner = integrator.pixel_corner_only();
   const uint32_t end = first + spp;
   const PixelFilter filter(options.filter);
+  const bool adaptive = options.noise_threshold > 0.0f && !corner;
+  assert(!adaptive || first == 0);
   // A part renders tiles part, part + parts, ...: neighbouring tiles cost about the same, so
   // interleaving them balances the parts' work whatever the scene.
   const int part = tile_part ? options.tile_part : 0;
   const int stride = tile_part ? options.tile_parts : 1;
   std::atomic<uint64_t> rays{0};
+  std::atomic<uint64_t> samples_taken{0};
   std::atomic<int> tiles_done{0};
   const int tiles_all = tiles_x * tiles_y;
   const int tiles_total = tiles_all > part ? (tiles_all - part + stride - 1) / stride : 0;
@@ -105,7 +118,13 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
     slots.reserve(aovs.any());
     std::array<glm::vec3, kMaxBatch> radiance, albedo, normal;
     std::array<float, kMaxBatch> depth, weight;
-    uint64_t traced = 0;
+    // Adaptive sampling: which of the tile's pixels (by slot) still take samples, their running
+    // sums, and the slot of each ray of the batch.
+    thread_local std::array<uint8_t, kMaxBatch> active;
+    thread_local std::array<uint8_t, kMaxBatch> near;  // below sqrt(2) T at the last check
+    thread_local std::array<PixelMoments, kMaxBatch> moments;
+    thread_local std::array<uint16_t, kMaxBatch> slot_of;
+    uint64_t traced = 0, taken = 0;
     bool rendered = false;
     for (int k = next_tile.fetch_add(1, std::memory_order_relaxed); k < tiles_total;
          k = next_tile.fetch_add(1, std::memory_order_relaxed)) {
@@ -115,6 +134,9 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
       const size_t pixels = static_cast<size_t>((x1 - x0) * (y1 - y0));
       BlockCounter counter = nodes_before;
       target.load(x0, y0, x1, y1, slots);
+      std::fill_n(active.begin(), pixels, uint8_t{1});
+      std::fill_n(near.begin(), pixels, uint8_t{0});
+      if (adaptive) std::fill_n(moments.begin(), pixels, PixelMoments{});
       if (first % kSampleBlock == 0) {
         std::fill_n(slots.slot(counter.size()), pixels, glm::vec4(0.0f));
         if (aovs.any()) std::fill_n(slots.aov_slot(counter.size()), pixels, AovSums{});
@@ -127,9 +149,12 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
             n += static_cast<size_t>((ex - bx) * (ey - by));
           });
         } else {
+          size_t slot = 0;
           for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
             for (int y = by; y < ey; ++y) {
-              for (int x = bx; x < ex; ++x) {
+              for (int x = bx; x < ex; ++x, ++slot) {
+                if (!active[slot]) continue;
+                slot_of[n] = static_cast<uint16_t>(slot);
                 Sampler& sampler = samplers[n];
                 if (sampler.seed() != options.seed || sampler.kind() != options.sampler) {
                   sampler = Sampler(options.seed, options.sampler);
@@ -146,6 +171,10 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
           });
         }
         const size_t count = n;
+        taken += count;
+        // The slot of ray i: i itself unless adaptive sampling has stopped pixels of the tile.
+        const bool all = count == pixels;
+        const auto slot_at = [&](size_t i) -> size_t { return all ? i : slot_of[i]; };
         const SampleBatch in{std::span<const Ray>(batch.data(), count),
                              corner ? std::span<Sampler>() : std::span(samplers).first(count)};
         const SampleOutput out{
@@ -153,7 +182,7 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
             aovs.albedo ? std::span(albedo).first(count) : std::span<glm::vec3>(),
             aovs.normal ? std::span(normal).first(count) : std::span<glm::vec3>(),
             aovs.depth ? std::span(depth).first(count) : std::span<float>()};
-        traced += integrator.radiance(in, out, scene, accel);
+        if (count > 0) traced += integrator.radiance(in, out, scene, accel);
         // The same block order as the rays: sample i of the batch is slot i.
         glm::vec4* open = slots.slot(counter.size());
         if (corner) {
@@ -161,7 +190,13 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
           for (size_t i = 0; i < count; ++i) open[i] = glm::vec4(radiance[i], 1.0f);
         } else {
           for (size_t i = 0; i < count; ++i) {
-            open[i] += glm::vec4(weight[i] * radiance[i], weight[i]);
+            open[slot_at(i)] += glm::vec4(weight[i] * radiance[i], weight[i]);
+          }
+          if (adaptive) {
+            for (size_t i = 0; i < count; ++i) {
+              const glm::vec3 l = radiance[i];
+              moments[slot_at(i)].add(weight[i], 0.2126 * l.x + 0.7152 * l.y + 0.0722 * l.z);
+            }
           }
         }
         if (aovs.any()) {
@@ -169,16 +204,18 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
           const float* w = corner ? nullptr : weight.data();
           for (size_t i = 0; i < count; ++i) {
             const float wi = w ? w[i] : 1.0f;
-            if (aovs.albedo) open_aovs[i].albedo += wi * albedo[i];
-            if (aovs.normal) open_aovs[i].normal += wi * normal[i];
-            if (aovs.depth) open_aovs[i].depth += wi * depth[i];
+            AovSums& a = open_aovs[slot_at(i)];
+            if (aovs.albedo) a.albedo += wi * albedo[i];
+            if (aovs.normal) a.normal += wi * normal[i];
+            if (aovs.depth) a.depth += wi * depth[i];
+            if (aovs.spp) a.samples += 1.0f;
           }
           // The even half buffer, by the parity of the global sample index (a part starting at
           // sample 8 continues the same split), summed exactly as the total is above.
           if (aovs.variance && s % 2 == 0) {
             for (size_t i = 0; i < count; ++i) {
               const float wi = w ? w[i] : 1.0f;
-              open_aovs[i].even += glm::vec4(wi * radiance[i], wi);
+              open_aovs[slot_at(i)].even += glm::vec4(wi * radiance[i], wi);
             }
           }
         }
@@ -189,15 +226,27 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
           for (int m = 0; m < merges; ++m, --n) {
             glm::vec4* left = slots.slot(n - 2);
             const glm::vec4* right = slots.slot(n - 1);
-            for (size_t i = 0; i < count; ++i) left[i] = left[i] + right[i];
+            for (size_t i = 0; i < pixels; ++i) left[i] = left[i] + right[i];
             if (aovs.any()) {
               AovSums* left_aovs = slots.aov_slot(n - 2);
               const AovSums* right_aovs = slots.aov_slot(n - 1);
-              for (size_t i = 0; i < count; ++i) left_aovs[i] = left_aovs[i] + right_aovs[i];
+              for (size_t i = 0; i < pixels; ++i) left_aovs[i] = left_aovs[i] + right_aovs[i];
             }
           }
           std::fill_n(slots.slot(counter.size()), pixels, glm::vec4(0.0f));
           if (aovs.any()) std::fill_n(slots.aov_slot(counter.size()), pixels, AovSums{});
+        }
+        // Adaptive sampling's checks, at kAdaptiveMinSpp x 2^k samples (before the last): each
+        // pixel from its own samples [0, s + 1) only.
+        const uint32_t taken_so_far = s + 1;
+        if (adaptive && taken_so_far >= kAdaptiveMinSpp && taken_so_far < end &&
+            (taken_so_far & (taken_so_far - 1)) == 0) {
+          for (size_t i = 0; i < pixels; ++i) {
+            if (!active[i]) continue;
+            const double error = adaptive_error(moments[i], taken_so_far);
+            if (near[i] && error < options.noise_threshold) active[i] = 0;
+            near[i] = error < kAdaptiveConfirm * options.noise_threshold;
+          }
         }
       }
       const size_t layers = counter.size() + (end % kSampleBlock != 0 ? 1 : 0);
@@ -209,6 +258,7 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
       }
     }
     rays.fetch_add(traced, std::memory_order_relaxed);
+    samples_taken.fetch_add(taken, std::memory_order_relaxed);
     const int slot = tbb::this_task_arena::current_thread_index();
     if (rendered && slot >= 0 && slot < threads) {
       slot_rendered[static_cast<size_t>(slot)].store(1, std::memory_order_relaxed);
@@ -243,7 +293,8 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
       pixels += static_cast<uint64_t>(std::min(tile, width - x0)) *
                 static_cast<uint64_t>(std::min(tile, height - y0));
     }
-    stats->samples = pixels * spp;
+    stats->samples = samples_taken.load();
+    stats->pixels = pixels;
     stats->spp = spp;
     stats->threads = static_cast<int>(std::count_if(
         slot_rendered.begin(), slot_rendered.end(),
@@ -333,6 +384,10 @@ void render_to_film(const Scene& scene, const Accel& accel, const Integrator& in
                             : "the film holds samples up to " + std::to_string(film.end_sample()) +
                                   ", not " + std::to_string(first));
   }
+  if (options.noise_threshold > 0.0f && !corner && (first != 0 || !empty)) {
+    throw Error("film", "adaptive sampling renders a pixel's samples from 0 in one go, not from " +
+                            std::to_string(first));
+  }
   if (empty) film.set_layout(first, first, {});
   const BlockCounter start(film.nodes());
   BlockCounter after = start;
@@ -352,6 +407,10 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
   if (first % kSampleBlock != 0) {
     throw Error("render", "samples must start at a multiple of " + std::to_string(kSampleBlock) +
                               ", got " + std::to_string(first));
+  }
+  if (options.noise_threshold > 0.0f && !corner && first != 0) {
+    throw Error("render", "adaptive sampling renders a pixel's samples from 0, not from " +
+                              std::to_string(first));
   }
   Image image(scene.camera.width(), scene.camera.height());
   ImageTarget target{image};

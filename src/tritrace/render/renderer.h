@@ -39,22 +39,69 @@ struct RenderOptions {
   // same.
   int tile_part = 0;
   int tile_parts = 1;
+  // Adaptive sampling (--noise-threshold; 0: off): a pixel stops taking samples once the relative
+  // standard error of its mean (adaptive_error) is below this, checked only when it has taken
+  // kAdaptiveMinSpp, 2 kAdaptiveMinSpp, 4 kAdaptiveMinSpp, ... samples (fewer than spp) and
+  // confirmed by the check before (kAdaptiveConfirm); spp is the most it takes. The decision reads
+  // only the pixel's own samples, so the image is the same for any thread count, tile size and tile
+  // part. Needs first_sample 0 (throws Error otherwise); ignored by an integrator that takes one
+  // sample through the pixel corner (the lab's).
+  float noise_threshold = 0.0f;
 };
 
 // The tile size of --tile parts.
 inline constexpr int kPartTileSize = 16;
 
+// Adaptive sampling's first check: 32 samples, the first count at which a pixel's sample
+// variance is a usable estimate (its standard deviation within about 13% for Gaussian samples)
+// and at which the Sobol points of every 2-D dimension are a whole, well-stratified power of two.
+inline constexpr uint32_t kAdaptiveMinSpp = 32;
+// A pixel stops at a check only when its error is below T there and was below kAdaptiveConfirm x T
+// at the check before (where, with half the samples, it should be sqrt(2) times larger): two
+// estimates must agree, since one from few samples of a skewed distribution often errs low. So the
+// first stop is at 2 kAdaptiveMinSpp.
+inline constexpr double kAdaptiveConfirm = 1.4142135623730951;
+// Below this mean luminance, a pixel's error is taken relative to this instead (as Cycles guards
+// its denominator): dark pixels are judged by absolute error, so that a nearly black pixel's few
+// bright samples do not keep it sampling to the end. 0.1 rather than 0.01: with 0.01 the dark
+// corners took most of the samples and RMSE at equal time was worse on both benchmark scenes
+// (docs/PERFORMANCE.md).
+inline constexpr double kAdaptiveDarkFloor = 0.1;
+
+// A pixel's running sums for adaptive sampling, over its samples' luminance x_i = w_i Y(L_i) and
+// filter weights w_i, in double.
+struct PixelMoments {
+  double w = 0.0, x = 0.0, xx = 0.0, xw = 0.0, ww = 0.0;
+  void add(double weight, double luminance) {
+    const double xi = weight * luminance;
+    w += weight;
+    x += xi;
+    xx += xi * xi;
+    xw += xi * weight;
+    ww += weight * weight;
+  }
+};
+// The estimated relative standard error of the pixel's mean m = x / w after n samples: the ratio
+// estimator's variance sum_i (x_i - m w_i)^2 / w^2 times n / (n - 1), its square root divided by
+// max(m, kAdaptiveDarkFloor). Infinity when it cannot say (n < 2, no weight).
+double adaptive_error(const PixelMoments& m, uint32_t n);
+
 struct RenderStats {
   double milliseconds = 0.0;
   uint64_t rays = 0;     // primary and secondary rays traced
-  uint64_t samples = 0;  // camera samples (paths): pixels x spp
-  uint32_t spp = 0;      // samples per pixel rendered
+  uint64_t samples = 0;  // camera samples (paths) taken: pixels x spp, fewer when adaptive
+  uint64_t pixels = 0;   // pixels rendered
+  uint32_t spp = 0;      // samples per pixel rendered (adaptive: the most a pixel took)
   // Threads that rendered at least one tile: RenderOptions::threads for an image with enough
   // tiles, fewer for a tiny one (or, rarely, when a thread started after the last tile was taken).
   int threads = 0;
 
   double mrays_per_second() const {
     return milliseconds > 0.0 ? static_cast<double>(rays) / (milliseconds * 1e3) : 0.0;
+  }
+  // The samples a pixel took on average (spp unless adaptive sampling stopped some early).
+  double mean_spp() const {
+    return pixels > 0 ? static_cast<double>(samples) / static_cast<double>(pixels) : 0.0;
   }
   double samples_per_second() const {
     return milliseconds > 0.0 ? static_cast<double>(samples) / (milliseconds * 1e-3) : 0.0;

@@ -96,15 +96,19 @@ class BlockCounter {
 // buffer of the variance AOV: (sum of weight x radiance, sum of weights) over the samples whose
 // global index is even. Only the even half is kept: the odd half is the pixel's total minus it,
 // which saves 16 bytes per pixel and layer (the AOVs' cost is memory traffic) and, being formed
-// in the same order as the total, merges as exactly.
+// in the same order as the total, merges as exactly. `samples` counts the samples the pixel took
+// (the spp AOV; exact in a float up to 2^24, above kMaxSpp), summed like the rest, so that parts
+// of an adaptive render merge into the one-process counts.
 struct AovSums {
   glm::vec3 albedo{0.0f};
   glm::vec3 normal{0.0f};
   float depth = 0.0f;
   glm::vec4 even{0.0f};
+  float samples = 0.0f;
 };
 inline AovSums operator+(const AovSums& a, const AovSums& b) {
-  return {a.albedo + b.albedo, a.normal + b.normal, a.depth + b.depth, a.even + b.even};
+  return {a.albedo + b.albedo, a.normal + b.normal, a.depth + b.depth, a.even + b.even,
+          a.samples + b.samples};
 }
 
 // Replays `merges` merges on the values of a counter's nodes, values[0, count): the last two

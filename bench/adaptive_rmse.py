@@ -1,0 +1,115 @@
+#!/usr/bin/env python3
+"""Adaptive sampling (--noise-threshold) against uniform sampling at equal wall time.
+
+For each scene: a long uniform reference render, then adaptive renders (threshold T, --spp the
+most) and uniform renders, alternating, each timed by the render's own summary line (render time
+only, no load or accel build). RMSE is over all pixels and channels of the linear radiance
+against the reference; uniform's RMSE is also scaled to the adaptive render's time as
+RMSE x sqrt(t_uniform / t_adaptive) (Monte Carlo error falls as 1 / sqrt(time)).
+
+Usage: bench/adaptive_rmse.py TRITRACE [--size 128] [--ref-spp 8192] [--rounds 2]
+No NumPy: PFM files are read with the standard library.
+"""
+import argparse
+import array
+import math
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SCENES = {
+    "glass": ["%s/../scenes/glass.json" % HERE],
+    "cornell-area": ["--scene", "cornell-area", "--integrator", "path"],
+}
+
+
+def read_pfm(path):
+    with open(path, "rb") as f:
+        kind = f.readline().strip()
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        data = array.array("f")
+        data.frombytes(f.read())
+    if scale > 0:
+        data.byteswap()
+    assert kind == b"PF" and len(data) == w * h * 3
+    return data
+
+
+def rmse(a, b):
+    return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)) / len(a))
+
+
+def srgb(v):
+    v = min(max(v, 0.0), 1.0)
+    return 12.92 * v if v <= 0.0031308 else 1.055 * v ** (1 / 2.4) - 0.055
+
+
+def display_rmse(a, b):
+    """RMSE of the 8-bit PNG's values (clamped to [0, 1], sRGB curve), on a 0..1 scale: the
+    error a viewer of the PNG sees (a light's pixels at 9.4 or 9.7 both show white)."""
+    return math.sqrt(sum((srgb(x) - srgb(y)) ** 2 for x, y in zip(a, b)) / len(a))
+
+
+def relmse(a, ref):
+    """Relative MSE, mean of (x - r)^2 / (r^2 + 0.01): the error relative to each pixel's value
+    (the denoiser tables' measure), which weights dark pixels as the noise threshold does."""
+    return sum((x - r) ** 2 / (r * r + 0.01) for x, r in zip(a, ref)) / len(a)
+
+
+def render(tritrace, scene, size, extra, out):
+    cmd = [tritrace, "render", *SCENES[scene], "--width", str(size), "--height", str(size),
+           "-o", out, *extra]
+    text = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+    ms = float(re.search(r" in ([0-9.]+) ms", text).group(1))
+    mean = re.search(r"mean ([0-9.]+) spp", text)
+    return ms, (float(mean.group(1)) if mean else None), " ".join(cmd)
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("tritrace")
+    p.add_argument("--size", type=int, default=128)
+    p.add_argument("--ref-spp", type=int, default=8192)
+    p.add_argument("--rounds", type=int, default=2)
+    p.add_argument("--ref-dir", default=None, help="reuse <scene>_ref.pfm from here")
+    p.add_argument("--configs", default="glass:0.05:1024:128,cornell-area:0.05:1024:128",
+                   help="scene:threshold:max_spp:uniform_spp,...")
+    a = p.parse_args()
+    tmp = tempfile.mkdtemp()
+    for config in a.configs.split(","):
+        scene, t, most, uni = config.split(":")
+        ref_path = os.path.join(a.ref_dir or tmp, scene + "_ref.pfm")
+        if not os.path.exists(ref_path):
+            ms, _, cmd = render(a.tritrace, scene, a.size,
+                                ["--spp", str(a.ref_spp), "--seed", "99"], ref_path)
+            print("reference: %s (%.0f ms)" % (cmd, ms))
+        ref = read_pfm(ref_path)
+        for r in range(a.rounds):
+            seed = str(r + 1)
+            out = os.path.join(tmp, "x.pfm")
+            ta, mean, cmd_a = render(a.tritrace, scene, a.size,
+                                     ["--spp", most, "--noise-threshold", t, "--seed", seed], out)
+            img = read_pfm(out)
+            ea, ra, da = rmse(img, ref), relmse(img, ref), display_rmse(img, ref)
+            tu, _, cmd_u = render(a.tritrace, scene, a.size, ["--spp", uni, "--seed", seed], out)
+            img = read_pfm(out)
+            eu, ru, du = rmse(img, ref), relmse(img, ref), display_rmse(img, ref)
+            # At equal time: RMSE scales as 1 / sqrt(time), relMSE (a squared error) as 1 / time.
+            eu_eq, ru_eq, du_eq = eu * math.sqrt(tu / ta), ru * tu / ta, du * math.sqrt(tu / ta)
+            print("%s round %d: adaptive T=%s max %s spp: %.0f ms, mean %.1f spp, RMSE %.5f, "
+                  "relMSE %.3g | uniform %s spp: %.0f ms, RMSE %.5f (%.5f at adaptive's time), "
+                  "relMSE %.3g (%.3g) | RMSE ratio %.2f, relMSE ratio %.2f, display RMSE "
+                  "%.5f vs %.5f, ratio %.2f"
+                  % (scene, r, t, most, ta, mean, ea, ra, uni, tu, eu, eu_eq, ru, ru_eq,
+                     ea / eu_eq, ra / ru_eq, da, du_eq, da / du_eq))
+            if r == 0:
+                print("  " + cmd_a + "\n  " + cmd_u)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
