@@ -36,8 +36,10 @@ constexpr Target kTargets[] = {
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: %s scene_json|mesh_memory|hdr_image|exr_image|partial_film FILE_OR_FOLDER...\n",
-                 argv[0]);
+    std::fprintf(
+        stderr,
+        "usage: %s scene_json|mesh_memory|hdr_image|exr_image|partial_film FILE_OR_FOLDER...\n",
+        argv[0]);
     return 2;
   }
   const Target* target = nullptr;
