@@ -11,7 +11,6 @@
 #include "flags/flag_values.h"
 #include "tritrace/denoise/denoiser.h"
 #include "tritrace/error.h"
-#include "tritrace/image/atomic_file.h"
 #include "tritrace/image/image_io.h"
 #include "tritrace/job/render_job.h"
 
@@ -46,13 +45,8 @@ CLI::App* add_denoise_command(CLI::App& app, DenoiseArgs& args) {
 }
 
 int run_denoise(const DenoiseArgs& args) {
-  JobSettings settings;
-  settings.output = args.output;
-  settings.output_given = true;
-  settings.exposure = args.exposure;
-  RenderJob::check_output(settings, args.output);
+  const JobSettings settings = image_output_settings(args.output, args.exposure);
   check_exposure(settings, true);
-  check_writable_path(args.output);
   const auto start = std::chrono::steady_clock::now();
 
   const std::array<std::array<std::string, 3>, 5> layers = {{

@@ -9,7 +9,6 @@
 #include "tritrace/distributed/film_merger.h"
 #include "tritrace/distributed/partial_film_codec.h"
 #include "tritrace/error.h"
-#include "tritrace/image/atomic_file.h"
 #include "tritrace/image/image_io.h"
 #include "tritrace/job/render_job.h"
 
@@ -38,12 +37,7 @@ CLI::App* add_merge_command(CLI::App& app, MergeArgs& args) {
 int run_merge(const MergeArgs& args) {
   // The output's checks and its writing are the render job's, so a merged image is written as
   // the one-process render would be.
-  JobSettings settings;
-  settings.output = args.output;
-  settings.output_given = true;
-  settings.exposure = args.exposure;
-  RenderJob::check_output(settings, args.output);
-  check_writable_path(args.output);
+  const JobSettings settings = image_output_settings(args.output, args.exposure);
   const auto start = std::chrono::steady_clock::now();
   const PartInfo info = read_part_info(args.parts.front());
   const bool path = info.render.integrator == "path";

@@ -123,6 +123,16 @@ void RenderJob::check_output(const JobSettings& settings, const std::string& out
   }
 }
 
+JobSettings image_output_settings(const std::string& output, const std::string& exposure) {
+  JobSettings settings;
+  settings.output = output;
+  settings.output_given = true;
+  settings.exposure = exposure;
+  RenderJob::check_output(settings, output);
+  check_writable_path(output);
+  return settings;
+}
+
 void check_exposure(const JobSettings& settings, bool path) {
   if (!path && !settings.exposure.empty()) {
     throw Error("--exposure",
@@ -166,16 +176,29 @@ RenderJob::RenderJob(const JobSettings& settings, const Scene& scene,
 
 void RenderJob::set_up() {
   check_exposure(settings_, path());
-  if (!path() && !settings_.clamp.empty()) {
-    throw Error("--clamp", "applies to the path tracer; the lab integrator has no indirect samples",
-                ExitCode::kUsage);
+  if (!path()) {
+    // Settings that only the path tracer has, each refused with the reason it means nothing to
+    // the lab integrator.
+    const struct {
+      const char* flag;
+      bool given;
+      const char* why;
+    } path_only[] = {
+        {"--clamp", !settings_.clamp.empty(), "the lab integrator has no indirect samples"},
+        {"--time-limit", !settings_.time_limit.empty(),
+         "the lab integrator takes one sample per pixel"},
+        {"--denoise", settings_.denoise, "the lab integrator's image has no noise"},
+        {"--noise-threshold", !settings_.noise_threshold.empty(),
+         "the lab integrator takes one sample per pixel"},
+    };
+    for (const auto& setting : path_only) {
+      if (setting.given) {
+        throw Error(setting.flag, std::string("applies to the path tracer; ") + setting.why,
+                    ExitCode::kUsage);
+      }
+    }
   }
   if (!settings_.time_limit.empty()) {
-    if (!path()) {
-      throw Error("--time-limit",
-                  "applies to the path tracer; the lab integrator takes one sample per pixel",
-                  ExitCode::kUsage);
-    }
     if (!settings_.spp_range.empty() || !settings_.tile.empty()) {
       throw Error("--time-limit",
                   "renders passes until the time is up, so a part's samples are not known in "
@@ -191,31 +214,17 @@ void RenderJob::set_up() {
     // --spp is the most samples a pixel takes; without it, passes go on until the time is up.
     if (settings_.spp.empty()) spec_.spp = kMaxSpp;
   }
-  if (settings_.denoise) {
-    if (!path()) {
-      throw Error("--denoise",
-                  "applies to the path tracer; the lab integrator's image has no noise",
-                  ExitCode::kUsage);
-    }
-    if (!settings_.spp_range.empty() || !settings_.tile.empty()) {
-      throw Error("--denoise",
-                  "denoises a whole image; render the parts with --aovs "
-                  "albedo,normal,depth,variance, merge them, then run `tritrace denoise`",
-                  ExitCode::kUsage);
-    }
+  if (settings_.denoise && (!settings_.spp_range.empty() || !settings_.tile.empty())) {
+    throw Error("--denoise",
+                "denoises a whole image; render the parts with --aovs "
+                "albedo,normal,depth,variance, merge them, then run `tritrace denoise`",
+                ExitCode::kUsage);
   }
-  if (!settings_.noise_threshold.empty()) {
-    if (!path()) {
-      throw Error("--noise-threshold",
-                  "applies to the path tracer; the lab integrator takes one sample per pixel",
-                  ExitCode::kUsage);
-    }
-    if (!settings_.spp_range.empty()) {
-      throw Error("--noise-threshold",
-                  "decides per pixel from all its samples [0, spp), so a sample range cannot be "
-                  "rendered apart; split the image with --tile instead of --spp-range",
-                  ExitCode::kUsage);
-    }
+  if (!settings_.noise_threshold.empty() && !settings_.spp_range.empty()) {
+    throw Error("--noise-threshold",
+                "decides per pixel from all its samples [0, spp), so a sample range cannot be "
+                "rendered apart; split the image with --tile instead of --spp-range",
+                ExitCode::kUsage);
   }
   accel_kind_ = tritrace::accel_kind(settings_);
   kernel_ = kernel_choice(settings_);

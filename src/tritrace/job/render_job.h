@@ -35,6 +35,11 @@ struct RenderedImage {
 // runs the same on an EXR with those layers, so a merged render denoises as one process would.
 Image denoise_film_image(const Image& colour, const AovImages& aovs);
 
+// The settings of a command that writes an image it did not render (merge, denoise): its output
+// and exposure, with the output checked as render checks its own (check_output) and its folder
+// writable, before any work.
+JobSettings image_output_settings(const std::string& output, const std::string& exposure);
+
 // --exposure scales the path tracer's 8-bit images; with the lab integrator it is refused
 // (Error("--exposure", ..., kUsage)), whichever front end asks.
 void check_exposure(const JobSettings& settings, bool path);
