@@ -26,8 +26,8 @@ struct PathTitle {
   float noise_threshold = 0.0f;  // adaptive sampling's threshold; 0: off
   bool denoise = false;          // N is on
   uint32_t denoised_spp = 0;     // the spp of the denoised image shown; 0: none shown yet
-  std::string stopped;           // why refinement at rest stopped ("time limit"); empty: it goes on
-  std::string refining;  // what is being rendered meanwhile ("refining to 256 spp, part 3/8")
+  std::string stopped{};         // why refinement at rest stopped ("time limit"); empty: it goes on
+  std::string refining{};  // what is being rendered meanwhile ("refining to 256 spp, part 3/8")
 };
 // "tritrace — 52.3 ms/frame, 128/1024 spp, 500x500, noise threshold 0.05, denoised at 128 spp,
 // stopped: converged": the overloads above, with the threshold when adaptive sampling is on, the

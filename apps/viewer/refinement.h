@@ -25,9 +25,9 @@ enum class StopReason { kNone, kSpp, kConverged, kTimeLimit };
 std::string_view stop_reason_text(StopReason reason);
 
 struct RefinementLimits {
-  uint32_t max_spp = 1;                      // --spp: the most samples a pixel takes at rest
-  float noise_threshold = 0.0f;              // --noise-threshold; 0: uniform sampling
-  std::optional<double> time_limit_seconds;  // --time-limit, from the moment the view rests
+  uint32_t max_spp = 1;                        // --spp: the most samples a pixel takes at rest
+  float noise_threshold = 0.0f;                // --noise-threshold; 0: uniform sampling
+  std::optional<double> time_limit_seconds{};  // --time-limit, from the moment the view rests
   bool adaptive() const { return noise_threshold > 0.0f; }
 };
 

@@ -5,14 +5,29 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
 #include <vector>
 
 #include "film_parts.h"
+#include "tritrace/error.h"
 #include "tritrace/job/render_job.h"
 #include "tritrace/render/renderer.h"
 
 namespace tritrace::view {
 namespace {
+
+// cornell-area (the path tracer) at width x height, on two threads, with adaptive sampling.
+JobSettings adaptive_job(const std::string& width, const std::string& height,
+                         const std::string& spp, const std::string& threshold) {
+  JobSettings s;
+  s.scene = "cornell-area";
+  s.width = width;
+  s.height = height;
+  s.spp = spp;
+  s.threads = "2";
+  s.noise_threshold = threshold;
+  return s;
+}
 
 TEST(Refinement, UniformAccumulationEndsWhereAPixelCanFirstStop) {
   // The renderer's first possible stop is at its second check, 2 x 32 samples.
@@ -70,13 +85,7 @@ TEST(FilmParts, TilesInterleaveAsTheRendererDealsThem) {
 // An adaptive render split into tile parts and assembled is the one-go adaptive render's film:
 // image, variance, albedo, normal, depth and spp, bit for bit.
 TEST(FilmParts, AssembledAdaptivePartsAreTheOneGoRender) {
-  JobSettings s;
-  s.scene = "cornell-area";
-  s.width = "40";
-  s.height = "36";
-  s.spp = "256";
-  s.threads = "2";
-  s.noise_threshold = "0.1";
+  const JobSettings s = adaptive_job("40", "36", "256", "0.1");
   RenderJob job(s, load_job_scene(s));
   job.prepare();
   const AovSet aovs{.albedo = true, .normal = true, .depth = true, .variance = true, .spp = true};
@@ -112,13 +121,8 @@ TEST(FilmParts, AssembledAdaptivePartsAreTheOneGoRender) {
 // Below the first possible stop an adaptive render takes every sample: the uniform film the
 // viewer accumulates frame by frame is the adaptive render's.
 TEST(FilmParts, UniformFramesUpToTheFirstStopAreTheAdaptiveRender) {
-  JobSettings s;
-  s.scene = "cornell-area";
-  s.width = "24";
-  s.height = "16";
-  s.spp = "64";
-  s.threads = "2";
-  s.noise_threshold = "0.5";  // large: most pixels would stop at the first chance
+  // A large threshold: most pixels would stop at the first chance.
+  const JobSettings s = adaptive_job("24", "16", "64", "0.5");
   RenderJob job(s, load_job_scene(s));
   job.prepare();
   const Image adaptive = job.render().image;
