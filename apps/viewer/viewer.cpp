@@ -482,6 +482,7 @@ class Viewer {
         film_view_ = view_;
         denoised_spp_ = 0;
         level_.reset();
+        level_ms_per_sample_ = 0.0;
         converged_ = false;
         stopped_ = StopReason::kNone;
         rest_start_ = start;
@@ -566,9 +567,13 @@ class Viewer {
       if (spp == 0) return false;
       const int tiles =
           ((w + kPartTileSize - 1) / kPartTileSize) * ((h + kPartTileSize - 1) / kPartTileSize);
+      // The last level's cost per sample where there is one (pixels that stopped make an
+      // adaptive sample cheaper than a uniform frame's), else the uniform frames'.
+      const double ms_per_sample =
+          level_ms_per_sample_ > 0.0 ? level_ms_per_sample_ : schedule_->ms_per_sample();
       level_.emplace();
       level_->spp = spp;
-      level_->parts = level_parts(schedule_->ms_per_sample(), spp, kFrameBudgetMs, tiles);
+      level_->parts = level_parts(ms_per_sample, spp, kFrameBudgetMs, tiles);
     }
     Level& level = *level_;
     // The spp AOV says whether every pixel stopped before the level's end (converged).
@@ -582,8 +587,10 @@ class Viewer {
     options.tile_part = level.next_part;
     options.tile_parts = level.parts;
     job_->render_to_film(part, options, &stats);
+    level.milliseconds += stats.milliseconds;
     copy_tile_part(part, level.next_part, level.parts, level.film);
     if (++level.next_part < level.parts) return false;
+    level_ms_per_sample_ = level.milliseconds / level.spp;
     float most = 0.0f;
     const Image taken = level.film.resolve_spp();
     for (const glm::vec3& p : taken.pixels()) most = std::max(most, p.x);
@@ -736,8 +743,9 @@ class Viewer {
     std::string limits;
     if (path_) {
       limits = "refinement at rest: up to " + std::to_string(limits_.max_spp) + " spp";
-      if (limits_.adaptive())
+      if (limits_.adaptive()) {
         limits += ", noise threshold " + format_float(limits_.noise_threshold);
+      }
       if (limits_.time_limit_seconds) {
         limits += ", time limit " + format_double(*limits_.time_limit_seconds) + " s";
       }
@@ -802,9 +810,11 @@ class Viewer {
     uint32_t spp = 0;
     int parts = 1;
     int next_part = 0;
+    double milliseconds = 0.0;  // the render time of its parts so far
     Film film;
   };
   std::optional<Level> level_;
+  double level_ms_per_sample_ = 0.0;  // the last whole level's; 0: none since the restart
   // N: denoise the path tracer's film while the view rests (denoise_due). The film then keeps the
   // denoiser's features and the even half's sums for the variance.
   static constexpr AovSet kDenoiseAovs{

@@ -657,7 +657,8 @@ TEST_F(ViewerTest, PathScreenshotsAreTheCliImageAtTheirSamples) {
 // spp, each a few tiles a frame, until a level stops every pixel before its end: the title says
 // "stopped: converged", and the screenshot's command (with --noise-threshold and the level's spp)
 // renders the same file byte for byte. (At 64 x 48 with T 0.3 no pixel takes more than 512
-// samples, measured with `tritrace render --aovs spp`; so the level of 1024 is the last.)
+// samples, measured with `tritrace render --aovs spp`; so the level of 1024 is the last.) The
+// same with the denoiser on: each level's film denoised as `render --denoise` denoises it.
 TEST_F(ViewerTest, NoiseThresholdRefinesInAdaptiveLevelsUntilConverged) {
   ASSERT_NO_FATAL_FAILURE(StartViewer({"--scene", "cornell-area", "--width", "64", "--height", "48",
                                        "--spp", "4096", "--noise-threshold", "0.3", "-q"}));
@@ -680,6 +681,20 @@ TEST_F(ViewerTest, NoiseThresholdRefinesInAdaptiveLevelsUntilConverged) {
   std::this_thread::sleep_for(1s);
   EXPECT_LT(CpuSeconds() - cpu_before, 0.1);
   EXPECT_EQ(TitleSpp()->first, 1024);
+  EXPECT_FALSE(HasFlag(shot, "--denoise"));
+
+  // N: the film starts over with the denoiser's features and is refined to the same level.
+  Key("n");
+  EXPECT_TRUE(WaitForTitle([](const std::string& t) {
+    return t.find("denoised at 1024 spp, stopped: converged") != std::string::npos;
+  })) << Title();
+  const Shot denoised = Screenshot(2);
+  ASSERT_FALSE(denoised.command.empty());
+  EXPECT_TRUE(HasFlag(denoised, "--denoise"));
+  EXPECT_EQ(Value(denoised, "--spp"), "1024");
+  RenderWithCli(denoised.command, "cli_denoised.png");
+  EXPECT_EQ(ReadFile(denoised.path), ReadFile(work_.path() / "cli_denoised.png"));
+  EXPECT_NE(ReadFile(denoised.path), ReadFile(shot.path));
 }
 
 // --time-limit stops refinement that long after the view comes to rest, also in the middle of an
