@@ -750,18 +750,17 @@ class Viewer {
         limits += ", time limit " + format_double(*limits_.time_limit_seconds) + " s";
       }
     }
-    return {"tritrace-view (H hides this)",
-            stats,
-            scene,
-            view,
-            shading,
-            limits,
-            "",
-            "Left/Right    orbit the camera",
-            "Up/Down       move the camera forward/back",
-            "W/S A/D Q/E   move the light +z/-z, -x/+x, up/down",
-            "N denoise the resting image (path; on: " + std::string(denoise_ ? "yes" : "no") + ")",
-            "R reset   P screenshot   H help   Esc quit"};
+    std::vector<std::string> lines{"tritrace-view (H hides this)", stats, scene, view, shading};
+    if (path_) lines.push_back(limits);
+    const std::vector<std::string> keys{
+        "",
+        "Left/Right    orbit the camera",
+        "Up/Down       move the camera forward/back",
+        "W/S A/D Q/E   move the light +z/-z, -x/+x, up/down",
+        "N denoise the resting image (path; on: " + std::string(denoise_ ? "yes" : "no") + ")",
+        "R reset   P screenshot   H help   Esc quit"};
+    lines.insert(lines.end(), keys.begin(), keys.end());
+    return lines;
   }
 
   void print_benchmark() const {
