@@ -733,7 +733,11 @@ TEST_F(ViewerTest, TimeLimitStopsRefinementAndAKeyRestartsIt) {
 // the screenshot's command says --denoise.
 TEST_F(ViewerTest, DenoisedScreenshotIsTheCliDenoisedImage) {
   ASSERT_NO_FATAL_FAILURE(StartViewer({"--scene", "cornell-area", "--width", "48", "--height", "40",
-                                       "--spp", "32", "--denoise", "-q"}));
+                                       "--spp", "32", "--denoise", "-q", "--print-state"}));
+  // The view's command: the image it converges to is denoised.
+  const std::vector<std::string> view = WaitForLines("view: ", 1);
+  ASSERT_FALSE(view.empty());
+  EXPECT_NE(view[0].find(" --spp 32 --seed 0 --denoise"), std::string::npos) << view[0];
   EXPECT_TRUE(WaitForTitle([](const std::string& t) {
     return t.find("32/32 spp") != std::string::npos &&
            t.find("denoised at 32 spp") != std::string::npos &&
