@@ -389,14 +389,15 @@ int run_render_mpi(const RenderArgs& args) {
   }
 
   const size_t most_held = merger.most_held();
+  // The whole job's time (start-up, rendering and gathering on every rank), as the EXR records it.
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   try {
     const Film film = std::move(merger).finish();
-    s.job->write(film, args.job.output);
+    s.job->write(film, args.job.output, ms * 1e-3);
   } catch (const Error& e) {
     abort_job(0, e.what());
   }
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (!args.quiet) {
     std::printf(
         "rendered %dx%d, %u spp on %d rank%s (%zu units, at most %zu held for merging, start-up "
