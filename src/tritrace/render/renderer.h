@@ -97,7 +97,7 @@ struct PixelMoments {
 // subject to sum n fixed), so it stops at a standard error proportional to sqrt(s), which is
 // sqrt(m) where noise is proportional to brightness. Dividing by m instead stopped bright pixels
 // (a light's edge) too early and kept dark ones too long: cornell-area's RMSE at equal time went
-// from 0.90-1.25 of uniform's to 0.74-0.96 (docs/PERFORMANCE.md). Infinity when it cannot say
+// from 0.83-1.29 of uniform's to 0.67-0.94 (docs/PERFORMANCE.md). Infinity when it cannot say
 // (n < 2, no weight).
 double adaptive_error(const PixelMoments& m, uint32_t n);
 
