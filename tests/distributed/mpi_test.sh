@@ -39,11 +39,19 @@ done
 "${run_mpi[@]}" -np 3 "$cli" render "${scene[@]}" --aovs albedo,depth,variance --mpi -o "$dir/mpi.exr"
 same_exr "$dir/one.exr" "$dir/mpi.exr" || fail "3 ranks with AOVs: the EXR differs from one process's"
 # Adaptive sampling: units are whole tile parts [0, spp), so the image and the spp AOV match.
-adaptive=(--scene cornell-area --spp 128 --width 48 --height 40 --threads 1 -q --noise-threshold 0.05
-  --aovs spp,variance)
+adaptive_plain=(--scene cornell-area --spp 128 --width 48 --height 40 --threads 1 -q
+  --noise-threshold 0.05)
+adaptive=("${adaptive_plain[@]}" --aovs spp,variance)
 "$cli" render "${adaptive[@]}" -o "$dir/adaptive.exr"
 "${run_mpi[@]}" -np 3 "$cli" render "${adaptive[@]}" --mpi -o "$dir/adaptive_mpi.exr"
 same_exr "$dir/adaptive.exr" "$dir/adaptive_mpi.exr" || fail "adaptive sampling: the EXR differs"
+# Without the spp layer, rank 0 adds up the samples the units took: the header's mean spp is still
+# the one process's.
+"$cli" render "${adaptive_plain[@]}" -o "$dir/adaptive_plain.exr"
+"${run_mpi[@]}" -np 2 "$cli" render "${adaptive_plain[@]}" --mpi -o "$dir/adaptive_plain_mpi.exr"
+grep -q "tritrace.meanSpp" "$dir/adaptive_plain_mpi.exr" || fail "adaptive sampling: no mean spp"
+same_exr "$dir/adaptive_plain.exr" "$dir/adaptive_plain_mpi.exr" ||
+  fail "adaptive sampling without the spp layer: the EXR differs"
 # The lab image too (one sample per pixel, tile parts only).
 "$cli" render --width 48 --height 40 -q -o "$dir/lab.png"
 "${run_mpi[@]}" -np 3 "$cli" render --width 48 --height 40 -q --mpi -o "$dir/lab_mpi.png"

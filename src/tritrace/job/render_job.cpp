@@ -463,12 +463,9 @@ void RenderJob::write(const RenderedImage& rendered, const std::string& file) co
   write_render(rendered, file, path(), settings_);
 }
 
-void RenderJob::write(const Film& film, const std::string& file, double seconds) const {
+void RenderJob::write(const Film& film, const std::string& file, const RenderStats& stats) const {
   RenderedImage rendered = resolve(film);
-  RenderStats stats;
-  stats.spp = spec_.spp;
-  rendered.record = record(stats, seconds);
-  rendered.record.mean_spp = adaptive() && path() ? film_mean_spp(film) : 0.0;
+  rendered.record = record(stats, stats.milliseconds * 1e-3);
   rendered.record.denoise_seconds = rendered.denoise_ms * 1e-3;
   write(rendered, file);
 }

@@ -148,9 +148,9 @@ class RenderJob {
   // Writes a whole render to `file` (write_render).
   void write(const RenderedImage& rendered, const std::string& file) const;
   // Writes the film's image, denoised with --denoise, and the AOVs asked for, with this job's
-  // settings and `seconds` of rendering in the record (the mean spp from the film's spp AOV, when
-  // it keeps one): how render --mpi writes the image it gathered.
-  void write(const Film& film, const std::string& file, double seconds) const;
+  // settings and `stats` (spp, samples and pixels for the mean spp, milliseconds) in the record:
+  // how render --mpi writes the image it gathered.
+  void write(const Film& film, const std::string& file, const RenderStats& stats) const;
   // The record of this job's settings for a render of `seconds` (stats: spp and mean spp).
   RenderRecord record(const RenderStats& stats, double seconds) const;
   // A part's film as a partial film for `tritrace merge`. Atomic.
