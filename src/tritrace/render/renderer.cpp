@@ -410,8 +410,10 @@ void render_to_film(const Scene& scene, const Accel& accel, const Integrator& in
       options.noise_threshold > 0.0f && !corner ? options.adaptive_state : nullptr;
   if (options.noise_threshold > 0.0f && !corner) {
     // A film continues only with the state its earlier passes left (its sums and decisions).
+    const size_t pixels = static_cast<size_t>(film.width()) * static_cast<size_t>(film.height());
     const bool continues = state && !empty && first == film.end_sample() &&
-                           state->end_sample == first && film.first_sample() == 0;
+                           state->end_sample == first && film.first_sample() == 0 &&
+                           state->active.size() == pixels;
     if (!continues && (first != 0 || !empty)) {
       throw Error("film",
                   "adaptive sampling renders a pixel's samples from 0, continued only with the "
@@ -419,7 +421,6 @@ void render_to_film(const Scene& scene, const Accel& accel, const Integrator& in
                       std::to_string(first));
     }
     if (state && first == 0) {
-      const size_t pixels = static_cast<size_t>(film.width()) * static_cast<size_t>(film.height());
       *state = AdaptiveState{0, std::vector<PixelMoments>(pixels), std::vector<uint8_t>(pixels, 1),
                              std::vector<uint8_t>(pixels, 0)};
     }
