@@ -101,7 +101,8 @@ def main():
                                    ["--spp", str(a.ref_spp), "--seed", "99"], ref_path)
             print("reference: %s (%.0f ms)" % (cmd, ms))
         ref = read_pfm(ref_path)
-        ratios, cpu_ratios = [], []
+        ratios, cpu_ratios, mean_diffs, uniform_diffs = [], [], [], []
+        ref_mean = sum(ref) / len(ref)
         for r in range(a.rounds):
             seed = str(r + 1 + a.first_seed)
             out = os.path.join(tmp, "x.pfm")
@@ -110,10 +111,12 @@ def main():
                                          out)
             img = read_pfm(out)
             ea, ra, da = rmse(img, ref), relmse(img, ref), display_rmse(img, ref)
+            mean_diffs.append(sum(img) / len(img) - ref_mean)
             tu, cu, _, cmd_u = render(a.tritrace, scene, a.size, ["--spp", uni, "--seed", seed],
                                       out)
             img = read_pfm(out)
             eu, ru, du = rmse(img, ref), relmse(img, ref), display_rmse(img, ref)
+            uniform_diffs.append(sum(img) / len(img) - ref_mean)
             # At equal time: RMSE scales as 1 / sqrt(time), relMSE (a squared error) as 1 / time.
             eu_eq, ru_eq, du_eq = eu * math.sqrt(tu / ta), ru * tu / ta, du * math.sqrt(tu / ta)
             cpu_ratio = ea / (eu * math.sqrt(cu / ca))
@@ -129,6 +132,17 @@ def main():
                 print("  " + cmd_a + "\n  " + cmd_u)
         print("%s T=%s: median RMSE ratio %.2f (render time), %.2f (CPU time) over %d rounds"
               % (scene, t, statistics.median(ratios), statistics.median(cpu_ratios), a.rounds))
+        if a.rounds > 1:
+            # Bias check: the images' mean minus the reference's, against the standard error of
+            # that mean over the rounds (seeds), for adaptive and, as a control, uniform sampling
+            # (a heavy-tailed scene's low-spp images fall short of the mean most of the time, and
+            # a few seeds then understate the standard error, for both).
+            for name, diffs in (("adaptive", mean_diffs), ("uniform", uniform_diffs)):
+                d = statistics.mean(diffs)
+                se = statistics.stdev(diffs) / math.sqrt(len(diffs))
+                print("%s T=%s: %s image mean - reference mean = %.3g (reference %.5g), "
+                      "standard error over seeds %.2g, %.1f standard errors"
+                      % (scene, t, name, d, ref_mean, se, abs(d) / se if se > 0 else 0.0))
     return 0
 
 
