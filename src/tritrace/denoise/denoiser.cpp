@@ -137,6 +137,21 @@ struct Planes {
   std::vector<glm::vec3> modulation;  // what the filtered colour is multiplied by (unpadded)
 };
 
+// What the colour distance compares: the noisy colour and its variance in the first pass, the
+// first pass's result and its variance in the second.
+struct Guide {
+  const std::array<Plane, 3>& colour;
+  const std::array<Plane, 3>& variance;
+  float strength;  // k of the colour distance
+};
+
+// A pass's result, demodulated and unpadded: the filtered colour per channel, and per pixel the
+// factor sum(w^2) / (sum w)^2 by which averaging reduced the variance of independent neighbours.
+struct PassResult {
+  std::array<std::vector<float>, 3> colour;
+  std::vector<float> variance_factor;
+};
+
 Planes make_planes(const Image& colour, const Image& variance, const DenoiseFeatures& features,
                    const DenoiseOptions& options, int margin) {
   const int w = colour.width(), h = colour.height();
@@ -190,14 +205,14 @@ Planes make_planes(const Image& colour, const Image& variance, const DenoiseFeat
 
 // Filters the pixels [x0, x1) x [y0, y1) into `out` (the demodulated colour's weighted means,
 // multiplied back by the modulation).
-void filter_tile(const Planes& p, const DenoiseOptions& options, int width, int height, int x0,
-                 int x1, int y0, int y1, Image& out) {
+void filter_tile(const Planes& p, const Guide& guide, const DenoiseOptions& options, int width,
+                 int height, int x0, int x1, int y0, int y1, PassResult& out) {
   const int r = options.search_radius;
   const int f = options.patch_radius;
   const int tw = x1 - x0, th = y1 - y0;
   const int ew = tw + 2 * f, eh = th + 2 * f;  // the patch-distance region
-  const bool use_colour = options.colour_strength > 0.0f;
-  const float k2 = options.colour_strength * options.colour_strength;
+  const bool use_colour = guide.strength > 0.0f;
+  const float k2 = guide.strength * guide.strength;
   const float patch_norm = 1.0f / (3.0f * static_cast<float>((2 * f + 1) * (2 * f + 1)));
   const bool use_albedo = options.albedo_scale > 0.0f;
   const bool use_normal = options.normal_scale > 0.0f;
@@ -216,6 +231,7 @@ void filter_tile(const Planes& p, const DenoiseOptions& options, int width, int 
   std::array<std::vector<float>, 3> acc;
   for (auto& a : acc) a.assign(static_cast<size_t>(tw) * th, 0.0f);
   std::vector<float> acc_w(static_cast<size_t>(tw) * th, 0.0f);
+  std::vector<float> acc_w2(static_cast<size_t>(tw) * th, 0.0f);
   std::array<float, kMaxTileSize> feature{};  // one row's feature distances
 
   for (int dy = -r; dy <= r; ++dy) {
@@ -233,10 +249,10 @@ void filter_tile(const Planes& p, const DenoiseOptions& options, int width, int 
           const int y = y0 - f + j;
           for (int i = 0; i < ew; ++i) row[i] = 0.0f;
           for (int k = 0; k < 3; ++k) {
-            const float* up = p.colour[k].row(x0 - f, y);
-            const float* uq = p.colour[k].row(x0 - f + dx, y + dy);
-            const float* vp = p.variance[k].row(x0 - f, y);
-            const float* vq = p.variance[k].row(x0 - f + dx, y + dy);
+            const float* up = guide.colour[k].row(x0 - f, y);
+            const float* uq = guide.colour[k].row(x0 - f + dx, y + dy);
+            const float* vp = guide.variance[k].row(x0 - f, y);
+            const float* vq = guide.variance[k].row(x0 - f + dx, y + dy);
             for (int i = 0; i < ew; ++i) {
               const float d = up[i] - uq[i];
               const float vmin = vp[i] < vq[i] ? vp[i] : vq[i];
@@ -312,6 +328,7 @@ void filter_tile(const Planes& p, const DenoiseOptions& options, int width, int 
         float* ag = acc[1].data() + static_cast<size_t>(j) * tw + i0;
         float* ab = acc[2].data() + static_cast<size_t>(j) * tw + i0;
         float* aw = acc_w.data() + static_cast<size_t>(j) * tw + i0;
+        float* aw2 = acc_w2.data() + static_cast<size_t>(j) * tw + i0;
         const float* ur = p.colour[0].row(qx0 + dx, y + dy);
         const float* ug = p.colour[1].row(qx0 + dx, y + dy);
         const float* ub = p.colour[2].row(qx0 + dx, y + dy);
@@ -324,19 +341,19 @@ void filter_tile(const Planes& p, const DenoiseOptions& options, int width, int 
         accumulate(dst, ug, pg, ag, n);
         accumulate(dst, ub, pb, ab, n);
         for (int i = 0; i < n; ++i) aw[i] += dst[i];
+        for (int i = 0; i < n; ++i) aw2[i] += dst[i] * dst[i];
       }
     }
   }
   for (int j = 0; j < th; ++j) {
     for (int i = 0; i < tw; ++i) {
       const size_t t = static_cast<size_t>(j) * tw + i;
-      const glm::vec3& m = p.modulation[static_cast<size_t>(y0 + j) * width + (x0 + i)];
+      const size_t o = static_cast<size_t>(y0 + j) * width + (x0 + i);
       // The pixel's own weight is 1, so the sum of weights is at least 1.
       const float inv = 1.0f / acc_w[t];
       const int x = x0 + i, y = y0 + j;
-      out.at(x, y) = glm::vec3((p.colour[0].at(x, y) + acc[0][t] * inv) * m.x,
-                               (p.colour[1].at(x, y) + acc[1][t] * inv) * m.y,
-                               (p.colour[2].at(x, y) + acc[2][t] * inv) * m.z);
+      for (int k = 0; k < 3; ++k) out.colour[k][o] = p.colour[k].at(x, y) + acc[k][t] * inv;
+      out.variance_factor[o] = acc_w2[t] * inv * inv;
     }
   }
 }
@@ -350,8 +367,8 @@ void check_options(const DenoiseOptions& options) {
     throw Error("denoise",
                 "patch radius " + std::to_string(options.patch_radius) + " is outside 0..8");
   }
-  for (float v : {options.colour_strength, options.albedo_scale, options.albedo_relative_scale,
-                  options.normal_scale, options.depth_scale}) {
+  for (float v : {options.colour_strength, options.guided_colour_strength, options.albedo_scale,
+                  options.albedo_relative_scale, options.normal_scale, options.depth_scale}) {
     if (!std::isfinite(v)) throw Error("denoise", "a strength or scale is not finite");
   }
 }
@@ -374,19 +391,60 @@ Image denoise(const Image& colour, const Image& variance, const DenoiseFeatures&
   Image out(w, h);
   if (w == 0 || h == 0) return out;
 
-  const Planes planes = make_planes(colour, variance, features, options,
-                                    options.search_radius + options.patch_radius);
+  const int margin = options.search_radius + options.patch_radius;
+  const Planes planes = make_planes(colour, variance, features, options, margin);
   const int tiles_x = (w + kTileSize - 1) / kTileSize;
   const int tiles_y = (h + kTileSize - 1) / kTileSize;
-  parallel::for_range(tbb::blocked_range<int>(0, tiles_x * tiles_y, 1),
-                      [&](const tbb::blocked_range<int>& tiles) {
-                        for (int t = tiles.begin(); t < tiles.end(); ++t) {
-                          const int x0 = (t % tiles_x) * kTileSize;
-                          const int y0 = (t / tiles_x) * kTileSize;
-                          filter_tile(planes, options, w, h, x0, std::min(x0 + kTileSize, w), y0,
-                                      std::min(y0 + kTileSize, h), out);
-                        }
-                      });
+  auto run_pass = [&](const Guide& guide) {
+    PassResult result;
+    for (auto& c : result.colour) c.resize(static_cast<size_t>(w) * h);
+    result.variance_factor.resize(static_cast<size_t>(w) * h);
+    parallel::for_range(tbb::blocked_range<int>(0, tiles_x * tiles_y, 1),
+                        [&](const tbb::blocked_range<int>& tiles) {
+                          for (int t = tiles.begin(); t < tiles.end(); ++t) {
+                            const int x0 = (t % tiles_x) * kTileSize;
+                            const int y0 = (t / tiles_x) * kTileSize;
+                            filter_tile(planes, guide, options, w, h, x0,
+                                        std::min(x0 + kTileSize, w), y0,
+                                        std::min(y0 + kTileSize, h), result);
+                          }
+                        });
+    return result;
+  };
+  PassResult result = run_pass({planes.colour, planes.variance, options.colour_strength});
+  if (options.guided_pass) {
+    // The second pass compares patches of the first pass's result, whose noise is smaller by
+    // the factor sum(w^2) / (sum w)^2 (exact for independent neighbours), so its weights follow
+    // the image rather than the noise; it averages the noisy colour again, so each pixel's
+    // value is still a weighted mean of the input (the pilot estimate of Dabov et al.'s
+    // two-step BM3D, "Image denoising by sparse 3D transform-domain collaborative filtering",
+    // IEEE TIP 2007, with non-local means in both steps).
+    std::array<Plane, 3> guide_colour{Plane(w, h, margin), Plane(w, h, margin),
+                                      Plane(w, h, margin)};
+    std::array<Plane, 3> guide_variance{Plane(w, h, margin), Plane(w, h, margin),
+                                        Plane(w, h, margin)};
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const size_t o = static_cast<size_t>(y) * w + x;
+        for (int k = 0; k < 3; ++k) {
+          guide_colour[k].at(x, y) = result.colour[k][o];
+          guide_variance[k].at(x, y) = planes.variance[k].at(x, y) * result.variance_factor[o];
+        }
+      }
+    }
+    for (auto* group : {&guide_colour, &guide_variance}) {
+      for (Plane& plane : *group) plane.fill_border();
+    }
+    result = run_pass({guide_colour, guide_variance, options.guided_colour_strength});
+  }
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t o = static_cast<size_t>(y) * w + x;
+      const glm::vec3& m = planes.modulation[o];
+      out.at(x, y) = glm::vec3(result.colour[0][o] * m.x, result.colour[1][o] * m.y,
+                               result.colour[2][o] * m.z);
+    }
+  }
   return out;
 }
 
@@ -441,9 +499,17 @@ Image variance_from_halves(const Image& half_a, const Image& half_b, int radius)
   return radius == 0 ? raw : box_mean(raw, radius);
 }
 
-Image smooth_variance(const Image& variance, int radius) {
+Image smooth_variance(const Image& variance, int radius, float overestimate) {
   if (radius < 0) throw Error("denoise", "variance radius " + std::to_string(radius) + " < 0");
-  return radius == 0 ? variance : box_mean(variance, radius);
+  if (!(overestimate > 0.0f) || !std::isfinite(overestimate)) {
+    throw Error("denoise", "variance overestimate " + std::to_string(overestimate) + " is not > 0");
+  }
+  Image out = radius == 0 ? variance : box_mean(variance, radius);
+  const float scale = 1.0f / overestimate;
+  for (int y = 0; y < out.height(); ++y) {
+    for (int x = 0; x < out.width(); ++x) out.at(x, y) *= scale;
+  }
+  return out;
 }
 
 Image denoise_halves(const Image& half_a, const Image& half_b, const DenoiseFeatures& features,
