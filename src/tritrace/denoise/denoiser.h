@@ -49,6 +49,9 @@ struct DenoiseOptions {
   // inputs), so its distances need a larger k than the noisy colour's (docs/DENOISING.md).
   bool guided_pass = true;
   float guided_colour_strength = 4.0f;
+  // Scale each channel of the result so that its sum is the input's (where both are positive):
+  // the weighted means do not keep the total exactly around fireflies.
+  bool keep_mean = true;
 };
 
 // The amount added to the albedo when dividing colour by it, so that black and missing albedo (0
