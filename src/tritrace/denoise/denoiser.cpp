@@ -150,7 +150,10 @@ struct Guide {
 struct PassResult {
   std::array<std::vector<float>, 3> colour;
   std::vector<float> variance_factor;
+  std::vector<float> inverse_weight;  // 1 / sum w: the derivative of the result by its own input
 };
+
+Image box_mean(const Image& image, int radius);
 
 Planes make_planes(const Image& colour, const Image& variance, const DenoiseFeatures& features,
                    const DenoiseOptions& options, int margin) {
@@ -354,6 +357,41 @@ void filter_tile(const Planes& p, const Guide& guide, const DenoiseOptions& opti
       const int x = x0 + i, y = y0 + j;
       for (int k = 0; k < 3; ++k) out.colour[k][o] = p.colour[k].at(x, y) + acc[k][t] * inv;
       out.variance_factor[o] = acc_w2[t] * inv * inv;
+      out.inverse_weight[o] = inv;
+    }
+  }
+}
+
+// Per pixel, keeps whichever pass has the lower estimated error: Stein's unbiased risk estimate
+// of a weighted mean whose weights are taken as fixed, (out - u)^2 + 2 var / sum(w) - var per
+// channel (Van De Ville and Kocher, "SURE-Based Non-Local Means", IEEE SPL 2009; Rousselle,
+// Knaus and Zwicker 2012 and Li, Wu and Chuang, "SURE-based Optimization for Adaptive Sampling
+// and Reconstruction", SIGGRAPH Asia 2012, select between filters with it), averaged over the
+// (2 radius + 1)^2 pixels around (one pixel's estimate is as noisy as its colour). The guided
+// pass smooths more; where the image has detail that no feature explains (a glossy
+// reflection) its residuals grow and the first pass is kept.
+void select_by_sure(const Planes& p, int width, int height, int radius, const PassResult& second,
+                    PassResult& first) {
+  Image risk(width, height);  // x: the first pass's, y: the second's
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const size_t o = static_cast<size_t>(y) * width + x;
+      float r1 = 0.0f, r2 = 0.0f;
+      for (int k = 0; k < 3; ++k) {
+        const float u = p.colour[k].at(x, y), v = p.variance[k].at(x, y);
+        const float d1 = first.colour[k][o] - u, d2 = second.colour[k][o] - u;
+        r1 += d1 * d1 + v * (2.0f * first.inverse_weight[o] - 1.0f);
+        r2 += d2 * d2 + v * (2.0f * second.inverse_weight[o] - 1.0f);
+      }
+      risk.at(x, y) = glm::vec3(r1, r2, 0.0f);
+    }
+  }
+  if (radius > 0) risk = box_mean(risk, radius);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      if (risk.at(x, y).y > risk.at(x, y).x) continue;
+      const size_t o = static_cast<size_t>(y) * width + x;
+      for (int k = 0; k < 3; ++k) first.colour[k][o] = second.colour[k][o];
     }
   }
 }
@@ -422,6 +460,7 @@ Image denoise(const Image& colour, const Image& variance, const DenoiseFeatures&
     PassResult result;
     for (auto& c : result.colour) c.resize(static_cast<size_t>(w) * h);
     result.variance_factor.resize(static_cast<size_t>(w) * h);
+    result.inverse_weight.resize(static_cast<size_t>(w) * h);
     parallel::for_range(tbb::blocked_range<int>(0, tiles_x * tiles_y, 1),
                         [&](const tbb::blocked_range<int>& tiles) {
                           for (int t = tiles.begin(); t < tiles.end(); ++t) {
@@ -458,7 +497,12 @@ Image denoise(const Image& colour, const Image& variance, const DenoiseFeatures&
     for (auto* group : {&guide_colour, &guide_variance}) {
       for (Plane& plane : *group) plane.fill_border();
     }
-    result = run_pass({guide_colour, guide_variance, options.guided_colour_strength});
+    PassResult second = run_pass({guide_colour, guide_variance, options.guided_colour_strength});
+    if (options.sure_radius < 0) {
+      result = std::move(second);
+    } else {
+      select_by_sure(planes, w, h, options.sure_radius, second, result);
+    }
   }
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
