@@ -49,10 +49,9 @@ struct DenoiseOptions {
   // inputs), so its distances need a larger k than the noisy colour's (docs/DENOISING.md).
   bool guided_pass = true;
   float guided_colour_strength = 4.0f;
-  // Keep, per pixel, whichever pass has the lower estimated error (Stein's unbiased risk
-  // estimate, averaged over the (2 sure_radius + 1)^2 pixels around); negative: always the
-  // guided pass's result. The guided pass alone is better on cornell-area, the selection on
-  // glossy and caustic scenes (docs/DENOISING.md).
+  // Blend the two passes per pixel, each weighted by the other's estimated error (Stein's
+  // unbiased risk estimate, averaged over the (2 sure_radius + 1)^2 pixels around); negative:
+  // the guided pass's result alone (docs/DENOISING.md).
   int sure_radius = 3;
   // Scale each channel of the result so that its sum is the input's (where both are positive):
   // the weighted means do not keep the total exactly around fireflies.
