@@ -145,8 +145,8 @@ def main():
     print("|---|---|---|---|---|---|---|---|")
     fmt = lambda v, f: "" if v is None else format(v, f)  # noqa: E731
     for name, spp, rn, rd, mn, mr, bn, bd in rows:
-        print(f"| {name} | {spp}{'' if rd is not None else ' (not denoised)'} | {rn:.5f} "
-              f"| {fmt(rd, '.5f')} | {fmt(mn, '.4f')} | {mr:.4f} | {bn:.3f} | {fmt(bd, '.3f')} |")
+        print(f"| {name} | {spp}{'' if rd is not None else ' (not denoised)'} | {rn:.6f} "
+              f"| {fmt(rd, '.6f')} | {fmt(mn, '.4f')} | {mr:.4f} | {bn:.3f} | {fmt(bd, '.3f')} |")
 
 
 if __name__ == "__main__":

@@ -543,7 +543,7 @@ TEST(Denoiser, EdgeOfALightGainsNoLight) {
 // (docs/DENOISING.md) and on this image it smooths the shading too much at higher spp, which the
 // blend catches: it is never far from the better of the two (measured: 1.05x the guided pass
 // at 4 spp, 0.99x and 0.98x the first pass at 16 and 64).
-TEST(Denoiser, GuidedPassAndItsSelection) {
+TEST(Denoiser, GuidedPassAndTheSureBlend) {
   const int w = 128, h = 128;
   const Image clean = from_function(w, h, [&](int x, int y) {
     const glm::vec3 c = smooth_function(x, y, w, h);

@@ -370,8 +370,8 @@ void filter_tile(const Planes& p, const Guide& guide, const DenoiseOptions& opti
 // (2 radius + 1)^2 pixels around (one pixel's estimate is as noisy as its colour), each pass
 // weighted by the other's risk. The guided pass smooths more; where the image has detail that no
 // feature explains (a glossy reflection, a caustic) its residuals grow and the first pass gets
-// the weight. Blending measured better than picking the lower on all four scenes of
-// docs/DENOISING.md.
+// the weight. Blending measured better than picking the lower one on three of the four scenes of
+// docs/DENOISING.md and within 2% on the fourth.
 void blend_by_sure(const Planes& p, int width, int height, int radius, const PassResult& second,
                    PassResult& first) {
   Image risk(width, height);  // x: the first pass's, y: the second's

@@ -93,13 +93,15 @@ struct DenoiseFeatures {
 [[nodiscard]] Image variance_from_halves(const Image& half_a, const Image& half_b, int radius = 2);
 
 // How much larger than the variance of a pixel's mean the renderer's half-buffer variance AOV
-// is with its default Sobol sampler, measured against the sample variance of 32 independent
-// seeds on cornell-area (median per-pixel ratio 1.9 - 2.0 at 4, 16 and 64 spp; docs/DENOISING.md;
-// test HalfBufferVarianceOfTheSobolSamplerIsTwiceTheVariance). The halves, split by sample index
-// parity, each hold one point of every pair (2i, 2i + 1) of the shuffled Owen-scrambled Sobol
-// sequence, and the two points of a pair lie in opposite halves of the first dimension of every
-// 2-D group: the halves' errors are negatively correlated, so (a - b)^2 / 4 sees about the
-// variance of independent samples, not the lower variance of the stratified whole.
+// is with its default Sobol sampler, measured on cornell-area against the sample variance of
+// independent seeds (median per-pixel ratio 1.58, 1.95, 2.26 at 4, 16, 64 spp; far more at the
+// light's edge; docs/DENOISING.md). The halves, split by sample index parity, each hold one point
+// of every pair (2i, 2i + 1) of the shuffled Owen-scrambled Sobol sequence, and the two points of
+// a pair lie in opposite halves of every dimension: the halves' errors are negatively
+// correlated, so (a - b)^2 / 4 sees about the variance of independent samples, not the lower
+// variance of the stratified whole (test
+// HalfBufferVarianceOfTheSobolSamplerOverestimatesTheVariance). The factor depends on the scene; 2
+// is the middle of what cornell-area measured.
 inline constexpr float kSobolHalfBufferVarianceRatio = 2.0f;
 
 // The renderer's per-pixel variance AOV (one degree of freedom per pixel) averaged over the
