@@ -668,5 +668,17 @@ TEST(Denoiser, SmoothVarianceDividesByTheOverestimate) {
   EXPECT_THROW((void)smooth_variance(v, 2, 0.0f), Error);
 }
 
+// The SURE window is checked like the search radius: above 32 is an error, any negative value
+// means the guided pass alone.
+TEST(Denoiser, RejectsASureRadiusAbove32) {
+  const Image c = filled(8, 8, glm::vec3(0.5f));
+  const Flat flat(8, 8);
+  DenoiseOptions options;
+  options.sure_radius = 33;
+  EXPECT_THROW((void)denoise(c, c, flat.features(), options), Error);
+  options.sure_radius = -5;
+  EXPECT_EQ(denoise(c, c, flat.features(), options).pixels().size(), 64u);
+}
+
 }  // namespace
 }  // namespace tritrace

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tritrace/error.h"
@@ -206,8 +207,9 @@ Planes make_planes(const Image& colour, const Image& variance, const DenoiseFeat
   return p;
 }
 
-// Filters the pixels [x0, x1) x [y0, y1) into `out` (the demodulated colour's weighted means,
-// multiplied back by the modulation).
+// Filters the pixels [x0, x1) x [y0, y1) into `out`: the demodulated colour's weighted means,
+// with weights from the distances between `guide`'s patches and the features, and per pixel
+// sum(w^2) / (sum w)^2 and 1 / sum w.
 void filter_tile(const Planes& p, const Guide& guide, const DenoiseOptions& options, int width,
                  int height, int x0, int x1, int y0, int y1, PassResult& out) {
   const int r = options.search_radius;
@@ -435,6 +437,9 @@ void check_options(const DenoiseOptions& options) {
   if (options.patch_radius < 0 || options.patch_radius > 8) {
     throw Error("denoise",
                 "patch radius " + std::to_string(options.patch_radius) + " is outside 0..8");
+  }
+  if (options.sure_radius > 32) {
+    throw Error("denoise", "SURE radius " + std::to_string(options.sure_radius) + " is above 32");
   }
   for (float v : {options.colour_strength, options.guided_colour_strength, options.albedo_scale,
                   options.albedo_relative_scale, options.normal_scale, options.depth_scale}) {
