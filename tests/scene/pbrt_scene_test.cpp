@@ -347,6 +347,49 @@ TEST(PbrtScene, UniformAndImageInfiniteLightsBecomeTheEnvironment) {
   EXPECT_GT(blue, 4u);
 }
 
+TEST(PbrtScene, ImageTexturesFeedTheReflectance) {
+  const std::string dir = ::testing::TempDir() + "pbrt_tex";
+  std::filesystem::create_directories(dir);
+  Image two(2, 1);
+  two.at(0, 0) = glm::vec3(1.0f);  // 8-bit 255: sRGB-decoded 1
+  two.at(1, 0) = glm::vec3(0.0f);
+  write_image(two, dir + "/two.png");
+  Image linear(1, 1);
+  linear.at(0, 0) = glm::vec3(0.25f, 0.5f, 0.75f);
+  write_exr(linear, dir + "/one.exr");
+  const LoadedScene loaded = parse(
+      "WorldBegin\n"
+      "Texture \"png\" \"spectrum\" \"imagemap\" \"string filename\" \"" +
+      dir +
+      "/two.png\"\n"
+      "Texture \"exr\" \"spectrum\" \"imagemap\" \"string filename\" \"" +
+      dir +
+      "/one.exr\" \"float scale\" 2\n"
+      "Material \"diffuse\" \"texture reflectance\" \"png\"\n"
+      "Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0] \"point2 uv\" [0 0  1 0  0 1]\n"
+      "Material \"diffuse\" \"texture reflectance\" \"exr\"\n"
+      "Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0]\n");
+  const Scene& s = loaded.scene;
+  ASSERT_EQ(s.textures.size(), 2u);
+  const Material& png = s.materials[s.mesh.material()[0]];
+  ASSERT_TRUE(png.albedo_texture.present());
+  const Texture& t = s.textures[static_cast<size_t>(png.albedo_texture.index)];
+  EXPECT_EQ(t.texel(0, 0), glm::vec3(1.0f));
+  EXPECT_EQ(t.texel(1, 0), glm::vec3(0.0f));
+  EXPECT_EQ(png.albedo, glm::vec3(1.0f));
+  // pbrt's (u, v) go through unchanged: tritrace's textures, like pbrt's, put v = 0 at the bottom.
+  // Here uv = (x, y) at every corner, whatever order the corners are stored in.
+  const SurfaceTriangle tri = s.triangle(0);
+  EXPECT_EQ(s.uv(0, 0.0f, 0.0f), glm::vec2(tri.v0));
+  EXPECT_EQ(s.uv(0, 1.0f, 0.0f), glm::vec2(tri.v0 + tri.e1));
+  EXPECT_EQ(s.uv(0, 0.0f, 1.0f), glm::vec2(tri.v0 + tri.e2));
+  const Material& exr = s.materials[s.mesh.material()[1]];
+  EXPECT_EQ(s.textures[static_cast<size_t>(exr.albedo_texture.index)].texel(0, 0),
+            glm::vec3(0.25f, 0.5f, 0.75f));
+  EXPECT_EQ(exr.albedo, glm::vec3(1.0f));  // the scale 2, clamped to a reflectance of at most 1
+  EXPECT_TRUE(loaded.warnings.empty()) << loaded.warnings.front();
+}
+
 TEST(PbrtScene, ObjectInstancesArePlacedByTheirInstanceTransform) {
   const LoadedScene loaded = parse(
       "WorldBegin\nObjectBegin \"tri\"\nTranslate 0 0 1\n"

@@ -573,9 +573,11 @@ class Interpreter {
       spectrum_textures_[name] = tex;
       return;
     }
-    for (const char* k : {"mapping", "uscale", "vscale", "udelta", "vdelta"}) {
-      if (p.find(k) && std::string(k) != "mapping")
-        warn(d.at, "texture coordinate transforms (uscale ...) ignored");
+    const std::string mapping = p.get_string("mapping", "uv");
+    if (mapping != "uv") warn(d.at, "texture mapping \"" + mapping + "\" replaced by \"uv\"");
+    for (const char* k : {"uscale", "vscale", "udelta", "vdelta"}) {
+      if (p.find(k))
+        warn(d.at, "texture coordinate transforms (uscale, vscale, udelta, vdelta) ignored");
     }
     warn_unused(p, "Texture");
     spectrum_textures_[name] = tex;
