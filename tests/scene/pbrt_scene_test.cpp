@@ -72,6 +72,38 @@ TEST(PbrtScene, DiffuseSquareUnderPointLightHasTheHandComputedRadiance) {
   EXPECT_EQ(image.at(0, 0), glm::vec3(0.0f));
 }
 
+// A sphere of radius R and radiance L at distance d gives a surface whose normal makes the angle
+// theta with the direction to its centre the irradiance pi L (R / d)^2 cos theta; the file's
+// comment has the numbers. DISABLED: the path tracer renders this 2.7% dark (0.1074, independent
+// and Sobol samplers alike, with or without vertex normals), and 21% dark (0.0867) with the
+// sphere cut into 16 times as many triangles, while a flat disk light of 512 triangles is right to
+// 0.4%; Lambert's polygon formula gives 0.11043 for these very triangles, so the loss is in the
+// renderer's sampling of many small curved-surface emitters, not in the file's mapping. Enable
+// once that is fixed.
+TEST(PbrtScene, DISABLED_SphereAreaLightGivesTheIrradianceOfASphere) {
+  const Image image = render(load_scene(kData + "sphere_light.pbrt"));
+  const double expected = 0.5 * 10.0 * 0.0625 / (2.0 * std::sqrt(2.0));
+  // The image spans +-0.05 units about (1, 0, 0), over which the irradiance is nearly linear:
+  // its mean is the centre's.
+  double mean = 0.0;
+  for (int y = 0; y < 16; ++y) {
+    for (int x = 0; x < 16; ++x) mean += image.at(x, y).x / 256.0;
+  }
+  EXPECT_NEAR(mean, expected, 0.01 * expected);
+}
+
+TEST(PbrtScene, DiskAreaLightGivesTheIrradianceOfADisk) {
+  // A disk of radius R and radiance L facing a point on its axis at height h gives it the
+  // irradiance pi L R^2 / (R^2 + h^2): here the floor's radiance is 0.5 * 10 * 0.0625 / 1.0625.
+  const Image image = render(load_scene(kData + "disk_light.pbrt"));
+  const double expected = 0.5 * 10.0 * 0.0625 / 1.0625;
+  double mean = 0.0;
+  for (int y = 0; y < 16; ++y) {
+    for (int x = 0; x < 16; ++x) mean += image.at(x, y).x / 256.0;
+  }
+  EXPECT_NEAR(mean, expected, 0.01 * expected);
+}
+
 TEST(PbrtScene, WorldPlusXAppearsWherePbrtsLookAtPutsIt) {
   const LoadedScene loaded = load_scene(kData + "mirror.pbrt");
   // cross(up, dir) = cross(+z, +y) = -x: the image's right is world -x.
