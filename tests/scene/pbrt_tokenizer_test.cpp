@@ -113,6 +113,12 @@ TEST(PbrtParams, MalformedListsAreOneLineErrors) {
             "p.pbrt:1:10: \"bool b\": expected true or false, got '1'");
   EXPECT_EQ(error_of([] { params_of("\"float fov\" [1 2]").get_float("fov", 0); }),
             "p.pbrt:1:1: \"float fov\" takes one value");
+  EXPECT_EQ(error_of([] { params_of("\"integer n\" [1 2.5]"); }),
+            "p.pbrt:1:16: \"integer n\": expected an integer, got '2.5'");
+  EXPECT_EQ(error_of([] { params_of("\"integer n\" 1e12"); }),
+            "p.pbrt:1:13: \"integer n\": expected an integer, got '1e12'");
+  EXPECT_EQ(error_of([] { params_of("\"float x\" 1e39"); }),
+            "p.pbrt:1:11: \"float x\": '1e39' is beyond float range");
   EXPECT_EQ(error_of([] { params_of("\"float x\" [nan]"); }),
             "p.pbrt:1:12: \"float x\": expected a number, got 'nan'");
 }

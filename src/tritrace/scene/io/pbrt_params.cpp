@@ -273,6 +273,13 @@ PbrtParams parse_pbrt_params(PbrtTokenizer& tokens) {
         const std::optional<double> x =
             v.kind == PbrtToken::Kind::kWord ? parse_number(v.text) : std::nullopt;
         if (!x) fail(v.at, declared(p) + ": expected a number, got " + shown_token(v));
+        // Values must fit what they become: an int, or a float (tritrace renders in floats).
+        if (p.type == "integer" && !(*x == std::floor(*x) && std::abs(*x) <= 2147483647.0)) {
+          fail(v.at, declared(p) + ": expected an integer, got " + shown_token(v));
+        }
+        if (std::abs(*x) > 3.4e38) {
+          fail(v.at, declared(p) + ": " + shown_token(v) + " is beyond float range");
+        }
         p.numbers.push_back(*x);
       }
     }

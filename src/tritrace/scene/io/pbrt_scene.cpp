@@ -499,12 +499,12 @@ class Interpreter {
   }
 
   void sampler(const std::string& type, const PbrtParams& p, const PbrtToken& d) {
-    int spp = p.get_int("pixelsamples", static_cast<int>(kPbrtSpp));
+    int64_t spp = p.get_int("pixelsamples", static_cast<int>(kPbrtSpp));
     if (type == "stratified") {
-      spp = p.get_int("xsamples", 4) * p.get_int("ysamples", 4);
+      spp = int64_t{p.get_int("xsamples", 4)} * p.get_int("ysamples", 4);
       p.find("jitter");
     }
-    if (spp < 1 || static_cast<uint32_t>(spp) > kMaxSpp) {
+    if (spp < 1 || spp > int64_t{kMaxSpp}) {
       fail(d.at, "pixel samples must be from 1 to " + std::to_string(kMaxSpp));
     }
     out_.integrator.spp = static_cast<uint32_t>(spp);
