@@ -585,6 +585,8 @@ class Interpreter {
 
   int32_t image_texture(const std::string& name, const std::string& encoding, const PbrtToken& d) {
     if (name.empty()) fail(d.at, "imagemap needs a \"string filename\"");
+    if (!options_.read_images)
+      fail(d.at, "imagemap \"" + name + "\": image files are not read here");
     const std::string file = resolve(name, d.at);
     if (const auto it = texture_files_.find(file); it != texture_files_.end()) return it->second;
     try {
@@ -826,6 +828,9 @@ class Interpreter {
   // tritrace's latitude-longitude map of world directions through the light's transform.
   void environment_map(const std::string& name, float scale, const Placement& place,
                        const PbrtToken& d) {
+    if (!options_.read_images) {
+      fail(d.at, "infinite light \"" + name + "\": image files are not read here");
+    }
     const std::string file = resolve(name, d.at);
     Image image;
     try {

@@ -19,6 +19,9 @@ struct PbrtOptions {
   std::function<std::string(const std::string& path)> read_text;
   // Reads a "plymesh" file. Defaults to import_mesh_file (the native PLY reader, else assimp).
   std::function<ImportedMesh(const std::string& path)> read_mesh;
+  // Whether image files (imagemap textures, infinite lights' maps) are read; when false, naming
+  // one is an error (the fuzzer keeps inputs away from the disk).
+  bool read_images = true;
 };
 
 // Whether a path names a pbrt-v4 scene file: the extension .pbrt, any case.
