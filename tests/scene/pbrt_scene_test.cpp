@@ -423,14 +423,37 @@ TEST(PbrtScene, ImageTexturesFeedTheReflectance) {
 }
 
 TEST(PbrtScene, ObjectInstancesArePlacedByTheirInstanceTransform) {
+  // The object's shapes keep the transform they were defined with, inside the instance's.
   const LoadedScene loaded = parse(
-      "WorldBegin\nObjectBegin \"tri\"\nTranslate 0 0 1\n"
+      "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 -1  1 0 -1  0 1 -1]\n"
+      "ObjectBegin \"tri\"\nTranslate 0 0 1\n"
       "Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0]\nObjectEnd\n"
       "ObjectInstance \"tri\"\nTranslate 5 0 0\nObjectInstance \"tri\"\n");
   const Scene& s = loaded.scene;
-  ASSERT_EQ(s.mesh.size(), 2u);
-  EXPECT_EQ(s.mesh.v0()[0], glm::vec3(0, 0, 1));
-  EXPECT_EQ(s.mesh.v0()[1], glm::vec3(5, 0, 1));
+  EXPECT_EQ(s.mesh.size(), 1u);
+  EXPECT_EQ(s.prototypes.size(), 1u);
+  ASSERT_EQ(s.instances.size(), 2u);
+  const Scene flat = flattened(s);
+  ASSERT_EQ(flat.mesh.size(), 3u);
+  EXPECT_EQ(flat.mesh.v0()[0].z, -1.0f);
+  EXPECT_EQ(flat.mesh.bounds().lo, glm::vec3(0, 0, -1));
+  EXPECT_EQ(flat.mesh.bounds().hi, glm::vec3(6, 1, 1));
+  EXPECT_EQ(s.triangle(2).v0.x, flat.mesh.v0()[2].x);
+}
+
+TEST(PbrtScene, MirroredInstancesKeepTheirEmittingSide) {
+  // An area light facing -z (pbrt's normal cross(p1 - p0, p2 - p0)), instanced plainly and
+  // through Scale 1 1 -1, which pbrt's normal follows: the mirrored copy faces +z.
+  const LoadedScene loaded = parse(
+      "WorldBegin\nObjectBegin \"lamp\"\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
+      "Shape \"trianglemesh\" \"point3 P\" [0 0 0  0 1 0  1 0 0]\nObjectEnd\n"
+      "ObjectInstance \"lamp\"\nScale 1 1 -1\nObjectInstance \"lamp\"\n");
+  const Scene& s = loaded.scene;
+  ASSERT_EQ(s.instances.size(), 2u);
+  EXPECT_EQ(s.prototypes.size(), 2u);  // the mirrored placement's copy has its corners swapped
+  EXPECT_NEAR(s.triangle(0).normal.z, -1.0f, 1e-6f);
+  EXPECT_NEAR(s.triangle(1).normal.z, 1.0f, 1e-6f);
+  EXPECT_TRUE(s.materials[s.triangle(1).material].emits());
 }
 
 TEST(PbrtScene, EveryTruncationOfAFileLoadsOrFailsWithItsPlace) {

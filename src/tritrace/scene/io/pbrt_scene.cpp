@@ -407,7 +407,7 @@ class Interpreter {
       if (it == objects_.end())
         fail(d.at, "ObjectInstance of an undefined object \"" + object_name + "\"");
       if (object_) fail(d.at, "ObjectInstance inside an object definition");
-      instance(it->second, Placement(gs_.ctm), d.at);
+      instance(object_name, it->second, gs_.ctm, d.at);
     } else {
       fail(d.at, "unknown directive " + shown_token(d));
     }
@@ -928,26 +928,50 @@ class Interpreter {
     ++out_.stats.meshes;
   }
 
-  // An object definition's triangles placed again by `place` (mirroring swaps their corners, so
-  // their fronts move with their normals).
-  void instance(const Soup& object, const Placement& place, const PbrtLocation& at) {
-    if (object.corners.size() + world_.corners.size() > 3 * kMaxSceneTriangles) {
-      fail(at, "instancing makes more than " + std::to_string(kMaxSceneTriangles) + " triangles");
-    }
-    for (size_t t = 0; t < object.material.size(); ++t) {
-      const int order[3] = {0, place.mirrors ? 2 : 1, place.mirrors ? 1 : 2};
-      glm::vec3 p[3], n[3];
-      glm::vec2 uv[3];
-      for (int k = 0; k < 3; ++k) {
-        const size_t c = 3 * t + static_cast<size_t>(order[k]);
-        p[k] = place.point(object.corners[c]);
-        if (object.has_normals) n[k] = place.direction(object.normals[c]);
-        if (object.has_uvs) uv[k] = object.uvs[c];
+  // An instance of an object definition, as a tritrace instance of the object's triangles: one
+  // prototype per object, and a second with every triangle's corners swapped for mirroring
+  // placements (tritrace keeps the vertex order's front, pbrt carries the normal along). Placed
+  // once the scene's own triangles are known, which come first in tritrace's numbering.
+  void instance(const std::string& name, const Soup& object, const dmat4& m,
+                const PbrtLocation& at) {
+    const Placement place(m);
+    const auto key = std::make_pair(name, place.mirrors);
+    auto it = prototype_of_.find(key);
+    if (it == prototype_of_.end()) {
+      Soup copy = object;
+      if (place.mirrors) {
+        for (size_t t = 0; t < copy.material.size(); ++t) {
+          std::swap(copy.corners[3 * t + 1], copy.corners[3 * t + 2]);
+          if (copy.has_normals) std::swap(copy.normals[3 * t + 1], copy.normals[3 * t + 2]);
+          if (copy.has_uvs) std::swap(copy.uvs[3 * t + 1], copy.uvs[3 * t + 2]);
+        }
       }
-      world_.add(p, object.has_normals ? n : nullptr, object.has_uvs ? uv : nullptr,
-                 object.material[t]);
+      TriangleMesh mesh;
+      add_soup(mesh, copy, at.describe());
+      int64_t index = -1;
+      if (!mesh.empty()) {
+        index = static_cast<int64_t>(out_.scene.prototypes.size());
+        out_.scene.prototypes.push_back(std::move(mesh));
+      }
+      it = prototype_of_.emplace(key, index).first;
     }
+    if (it->second >= 0) placements_.push_back({static_cast<uint32_t>(it->second), m, at});
     ++out_.stats.meshes;
+  }
+
+  // Adds a soup's triangles through the loader's one gate (degenerate and non-finite ones are
+  // dropped and counted); `subject` names the place in the error for too many.
+  void add_soup(TriangleMesh& mesh, const Soup& soup, const std::string& subject) {
+    AddOptions options;
+    options.max_triangles = kMaxSceneTriangles;
+    const AddResult r = add_all_checked(
+        mesh, CornerView(soup.corners), soup.material,
+        soup.has_normals ? std::span<const glm::vec3>(soup.normals) : std::span<const glm::vec3>(),
+        soup.has_uvs ? std::span<const glm::vec2>(soup.uvs) : std::span<const glm::vec2>(), options,
+        out_.stats);
+    if (r == AddResult::kTooManyTriangles) {
+      throw Error(subject, "more than " + std::to_string(kMaxSceneTriangles) + " triangles");
+    }
   }
 
   template <typename T>
@@ -1109,22 +1133,28 @@ class Interpreter {
                   std::atan(std::tan(half) * static_cast<double>(c.height) / c.width);
 
     if (out_.scene.materials.empty()) current_material();
-    AddOptions options;
-    options.max_triangles = kMaxSceneTriangles;
-    const AddResult r = add_all_checked(
-        out_.scene.mesh, CornerView(world_.corners), world_.material,
-        world_.has_normals ? std::span<const glm::vec3>(world_.normals)
-                           : std::span<const glm::vec3>(),
-        world_.has_uvs ? std::span<const glm::vec2>(world_.uvs) : std::span<const glm::vec2>(),
-        options, out_.stats);
-    if (r == AddResult::kTooManyTriangles) {
-      throw Error(path_, "more than " + std::to_string(kMaxSceneTriangles) + " triangles");
+    add_soup(out_.scene.mesh, world_, path_);
+    for (const Placed& p : placements_) {
+      Affine a;
+      a.linear = glm::mat3(glm::dmat3(p.m));
+      a.translation = glm::vec3(p.m[3]);
+      try {
+        add_instance(out_.scene, p.prototype, a);
+      } catch (const Error& e) {
+        fail(p.at, "ObjectInstance: " + e.reason());
+      }
     }
     for (const Warning& w : warnings_) {
       out_.warnings.push_back(w.where + ": warning: " + w.what +
                               (w.count > 1 ? " (" + std::to_string(w.count) + " times)" : ""));
     }
   }
+
+  struct Placed {
+    uint32_t prototype;
+    dmat4 m;
+    PbrtLocation at;
+  };
 
   struct Saved {
     GraphicsState state;
@@ -1153,6 +1183,8 @@ class Interpreter {
   std::map<std::string, Soup> objects_;
   Soup* object_ = nullptr;
   std::string object_name_;
+  std::map<std::pair<std::string, bool>, int64_t> prototype_of_;  // -1: an empty object
+  std::vector<Placed> placements_;
   std::vector<Warning> warnings_;
 };
 
