@@ -228,6 +228,15 @@ TEST(PbrtScene, AreaLightsEmitOnTheNormalsSide) {
     EXPECT_TRUE(loaded.scene.materials[t.material].emits());
     EXPECT_FALSE(loaded.scene.materials[t.material].two_sided);
   }
+  // With vertex normals their side is the front, and ReverseOrientation flips them too.
+  for (const bool reverse : {false, true}) {
+    const LoadedScene loaded =
+        parse("WorldBegin\n" + std::string(reverse ? "ReverseOrientation\n" : "") +
+              "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
+              "Shape \"trianglemesh\" \"point3 P\" [0 0 0  0 1 0  1 0 0] "
+              "\"normal N\" [0 0 1  0 0 1  0 0 1]\n");
+    EXPECT_NEAR(loaded.scene.triangle(0).normal.z, reverse ? -1.0f : 1.0f, 1e-6f) << reverse;
+  }
   // A mirroring transform moves the normal with it: Scale 1 1 -1 turns -z into +z.
   const LoadedScene mirrored = parse("WorldBegin\nScale 1 1 -1\n" + shape);
   EXPECT_NEAR(mirrored.scene.triangle(0).normal.z, 1.0f, 1e-6f);
@@ -259,6 +268,40 @@ TEST(PbrtScene, QuadricsAreTessellatedWithOutwardFronts) {
   }
   EXPECT_GT(sphere, 1000u);
   EXPECT_GT(disk, 100u);
+}
+
+TEST(PbrtScene, LoopSubdivisionOfATetrahedronLandsOnTheHandComputedLimit) {
+  // Tetrahedron a, b, c, d about the origin (a + b + c + d = 0), one level. New vertices: the
+  // old ones (valence 3, beta 3/16) at (1 - 9/16) v + 3/16 (-v) = v / 4; an edge's at
+  // 3/8 (a + b) + 1/8 (c + d) = (a + b) / 4. Limits: an old vertex's ring sums to v / 2 and
+  // gamma = 1 / (3 + 2) = 1/5, so 2/5 v/4 + 1/5 v/2 = v / 5; an edge vertex e (valence 6,
+  // beta 1/16, gamma 1/12) has a ring summing to e, so 1/2 e + 1/12 e = 7/12 e = 7 (a + b) / 48.
+  const LoadedScene loaded = parse(
+      "WorldBegin\nShape \"loopsubdiv\" \"integer levels\" 1 "
+      "\"point3 P\" [1 1 1  1 -1 -1  -1 1 -1  -1 -1 1] \"integer indices\" [0 1 2  0 3 1  0 2 3  1 "
+      "3 2]\n");
+  const Scene& s = loaded.scene;
+  ASSERT_EQ(s.mesh.size(), 16u);
+  EXPECT_TRUE(loaded.warnings.empty()) << loaded.warnings.front();
+  const double corner = std::sqrt(3.0) / 5.0, edge = 7.0 * 2.0 / 48.0;
+  size_t corners = 0, edges = 0;
+  for (uint32_t i = 0; i < s.mesh.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec3 v = s.mesh.vertex(i, k);
+      const double r = glm::length(glm::dvec3(v));
+      if (std::abs(r - corner) < 1e-6) {
+        ++corners;
+      } else {
+        EXPECT_NEAR(r, edge, 1e-6) << i << " " << k;
+        ++edges;
+      }
+    }
+    // Outward: the control mesh's faces wind counter-clockwise seen from outside.
+    const SurfaceTriangle t = s.triangle(i);
+    EXPECT_GT(glm::dot(t.normal, t.v0 + (t.e1 + t.e2) / 3.0f), 0.0f) << i;
+  }
+  EXPECT_EQ(corners, 12u);  // 4 old vertices in 3 triangles each
+  EXPECT_EQ(edges, 36u);    // 6 edge vertices in 6 triangles each
 }
 
 TEST(PbrtScene, MaterialsMapToTritracesTypes) {

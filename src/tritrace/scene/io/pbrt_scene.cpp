@@ -896,8 +896,9 @@ class Interpreter {
 
   // Adds an object-space mesh placed by the current transform. Each triangle's front (where
   // tritrace's lab normal cross(e2, e1) points) is made pbrt's: the side of its vertex normals when
-  // it has them, else of cross(e1, e2) in object space, flipped by ReverseOrientation; placed by a
-  // mirroring transform the normal is carried over (pbrt flips it back), so the corners swap.
+  // it has them, else of cross(e1, e2) in object space; ReverseOrientation flips both (pbrt-v4's
+  // triangle meshes negate N under it); placed by a mirroring transform the normal is carried over
+  // (pbrt flips it back), so the corners swap.
   void add_mesh(const std::vector<glm::vec3>& positions, const std::vector<uint32_t>& indices,
                 const std::vector<glm::vec3>& normals, const std::vector<glm::vec2>& uvs) {
     const Placement place(gs_.ctm);
@@ -907,11 +908,12 @@ class Interpreter {
       const uint32_t i[3] = {indices[t], indices[t + 1], indices[t + 2]};
       const glm::vec3 a = positions[i[0]], b = positions[i[1]], c = positions[i[2]];
       const glm::dvec3 face = glm::cross(dvec3(b - a), dvec3(c - a));
-      dvec3 front = gs_.reverse ? -face : face;
+      dvec3 front = face;
       if (!normals.empty()) {
         const dvec3 sum = dvec3(normals[i[0]]) + dvec3(normals[i[1]]) + dvec3(normals[i[2]]);
         if (glm::dot(sum, sum) > 0.0) front = sum;
       }
+      if (gs_.reverse) front = -front;
       bool swap = glm::dot(face, front) > 0.0;
       if (place.mirrors) swap = !swap;
       const int order[3] = {0, swap ? 2 : 1, swap ? 1 : 2};
@@ -920,7 +922,7 @@ class Interpreter {
       for (int k = 0; k < 3; ++k) {
         const uint32_t v = i[order[k]];
         p[k] = place.point(positions[v]);
-        if (!normals.empty()) n[k] = place.direction(normals[v]);
+        if (!normals.empty()) n[k] = place.direction(gs_.reverse ? -normals[v] : normals[v]);
         if (!uvs.empty()) uv[k] = uvs[v];
       }
       soup.add(p, normals.empty() ? nullptr : n, uvs.empty() ? nullptr : uv, m);
@@ -1041,12 +1043,26 @@ class Interpreter {
         }
         idx = std::move(tri);
       }
-      if (type == "loopsubdiv") {
-        warn(d.at, "loopsubdiv rendered as its control mesh (not subdivided)");
-        p.find("levels");
-      }
       for (const char* k : {"S", "faceIndices"}) p.find(k);
-      add_mesh(positions, idx, normals, uvs);
+      if (type == "loopsubdiv") {
+        int levels = p.get_int("levels", 3);
+        if (levels < 0) fail(d.at, "\"integer levels\" must not be negative");
+        // Each level makes four triangles of one.
+        int64_t triangles = static_cast<int64_t>(idx.size() / 3);
+        int allowed = 0;
+        while (allowed < levels && triangles * 4 <= static_cast<int64_t>(kMaxSceneTriangles)) {
+          triangles *= 4;
+          ++allowed;
+        }
+        if (allowed < levels) {
+          warn(d.at, "loopsubdiv levels reduced to " + std::to_string(allowed) +
+                         " (more would exceed the triangle limit)");
+        }
+        if (!normals.empty() || !uvs.empty()) warn(d.at, "loopsubdiv \"N\" and \"uv\" ignored");
+        add_analytic(loop_subdivide(positions, idx, allowed));
+      } else {
+        add_mesh(positions, idx, normals, uvs);
+      }
     } else if (type == "plymesh") {
       const std::string name = p.get_string("filename", "");
       if (name.empty()) fail(d.at, "plymesh needs a \"string filename\"");
@@ -1092,13 +1108,9 @@ class Interpreter {
     warn_unused(p, what);
   }
 
-  // A tessellated quadric: its normals point outward, and inward under ReverseOrientation.
-  void add_analytic(PbrtMesh m) {
-    if (gs_.reverse) {
-      for (glm::vec3& n : m.normals) n = -n;
-    }
-    add_mesh(m.positions, m.indices, m.normals, m.uvs);
-  }
+  // A tessellated quadric (or subdivision surface): its normals point outward, and inward under
+  // ReverseOrientation (add_mesh flips them).
+  void add_analytic(const PbrtMesh& m) { add_mesh(m.positions, m.indices, m.normals, m.uvs); }
 
   // --- the result ----------------------------------------------------------------------------
 

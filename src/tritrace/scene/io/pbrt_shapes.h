@@ -34,4 +34,14 @@ PbrtMesh tessellate_disk(double height, double radius, double inner_radius, doub
 // pbrt's cylinder about the z axis from zmin to zmax, normals pointing away from the axis.
 PbrtMesh tessellate_cylinder(double radius, double zmin, double zmax, double phimax_degrees);
 
+// pbrt's "loopsubdiv": Loop subdivision (Loop 1987) `levels` times, with Warren's vertex weights
+// beta = 3/16 for valence 3, else 3 / (8 n), boundary edges and vertices by the crease rules
+// (1/2, 1/2 and 1/8, 3/4, 1/8), then every vertex moved to its limit position (interior:
+// weight 1 / (n + 3 / (8 beta)) on each neighbour; boundary: 1/5, 3/5, 1/5), as pbrt does. The
+// normals are the area-weighted means of the final faces' normals (pbrt takes the limit
+// surface's tangents instead). Vertices on more than two boundary edges and edges of more than
+// two faces keep the control positions and midpoints.
+PbrtMesh loop_subdivide(const std::vector<glm::vec3>& positions,
+                        const std::vector<uint32_t>& indices, int levels);
+
 }  // namespace tritrace
