@@ -370,6 +370,11 @@ TEST(PbrtScene, MalformedFilesAreOneLineErrorsWithTheirPlace) {
   for (const auto& [text, message] : cases) {
     EXPECT_EQ(error_of([&] { parse(text); }), message) << text;
   }
+  // A file that includes itself stops at the nesting limit with the place of the Include.
+  PbrtOptions self;
+  self.read_text = [](const std::string&) { return std::string("\n  Include \"s.pbrt\"\n"); };
+  EXPECT_EQ(error_of([&] { parse_pbrt_scene("Include \"s.pbrt\"", "s.pbrt", self); }),
+            "s.pbrt:2:3: Include nested more than 32 deep (does a file include itself?)");
   const std::string missing = error_of([] { parse("Include \"no/such.pbrt\""); });
   EXPECT_EQ(missing.rfind("s.pbrt:1:1: Include \"no/such.pbrt\": ", 0), 0u) << missing;
 }

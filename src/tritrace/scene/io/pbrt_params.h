@@ -42,9 +42,8 @@ class PbrtParams {
   std::vector<int> get_ints(std::string_view name) const;
 
   // A colour: "rgb"/"color" values, a "spectrum" (a named spectrum, one constant, or wavelength /
-  // value pairs), or a "blackbody" temperature; nullopt when absent or given as a "texture" (see
-  // texture_name). `illuminant` selects blackbody normalisation (luminance 1, as pbrt-v4 scales
-  // light spectra) and marks the spectrum as emitted.
+  // value pairs), a "blackbody" temperature (luminance 1, as pbrt-v4 normalises light spectra)
+  // or one "float"; nullopt when absent or given as a "texture" (see texture_name).
   std::optional<glm::vec3> get_rgb(std::string_view name) const;
   // The texture a parameter names ("texture reflectance" "checks"), or empty.
   std::string texture_name(std::string_view name) const;

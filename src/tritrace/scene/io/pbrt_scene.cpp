@@ -338,8 +338,13 @@ class Interpreter {
     } else if (name == "Integrator") {
       const std::string type = read_string(t, d);
       integrator(type, params(), d);
-    } else if (name == "PixelFilter" || name == "Accelerator" || name == "ColorSpace" ||
-               name == "Option" || name == "Attribute") {
+    } else if (name == "ColorSpace") {
+      // sRGB is what tritrace renders in; other spaces' colours are read as if sRGB.
+      const std::string space = read_string(t, d);
+      if (space != "srgb")
+        warn(d.at, "ColorSpace \"" + space + "\" ignored: colours are read as sRGB");
+    } else if (name == "PixelFilter" || name == "Accelerator" || name == "Option" ||
+               name == "Attribute") {
       // Each takes a string (Option takes a parameter instead) and parameters.
       if (name != "Option") read_string(t, d);
       params();
