@@ -123,6 +123,26 @@ TEST(PbrtScene, WorldPlusXAppearsWherePbrtsLookAtPutsIt) {
   EXPECT_EQ(right_half, 0.0f);
 }
 
+TEST(PbrtScene, ExampleBoxShowsItsRedWallOnTheLeft) {
+  // scenes/cornell_box.pbrt puts the red wall at world +x, which pbrt's LookAt along +y with z up
+  // draws on the left; it loads without a warning.
+  SceneOverrides small;
+  small.width = 40;
+  small.height = 40;
+  LoadedScene loaded =
+      load_scene(std::string(TRITRACE_SOURCE_DIR) + "/scenes/cornell_box.pbrt", small);
+  EXPECT_TRUE(loaded.warnings.empty()) << loaded.warnings.front();
+  loaded.integrator.spp = 16;
+  const Image image = render(std::move(loaded));
+  glm::vec3 left(0.0f), right(0.0f);
+  for (int y = 10; y < 30; ++y) {
+    left += image.at(1, y);
+    right += image.at(38, y);
+  }
+  EXPECT_GT(left.r, 2.0f * left.g);
+  EXPECT_GT(right.g, 2.0f * right.r);
+}
+
 TEST(PbrtScene, ScaleMinusOneXBeforeLookAtMirrorsTheImage) {
   // The Blender exporter's habit: with Scale -1 1 1 first, world +x is on the right.
   const LoadedScene loaded =
