@@ -819,8 +819,11 @@ class Interpreter {
       } else {
         environment_map(file, static_cast<float>(p.get_float("scale", 1.0)), place, d);
       }
-      p.find("illuminance");
-      p.find("portal");
+      if (p.find("illuminance")) {
+        warn(d.at,
+             "an infinite light's \"illuminance\" ignored (L or the image and scale are used)");
+      }
+      p.find("portal");  // only guides pbrt's sampling
     } else {
       warn(d.at, "LightSource \"" + type + "\" not supported: skipped");
       return;
