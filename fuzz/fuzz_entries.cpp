@@ -14,6 +14,7 @@
 #include "tritrace/image/image_io.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/renderer.h"
+#include "tritrace/scene/io/pbrt_scene.h"
 #include "tritrace/scene/io/scene_file.h"
 #include "tritrace/scene/io/scene_loader.h"
 
@@ -52,6 +53,25 @@ void scene_json_one_input(const uint8_t* data, size_t size) {
     options.read_mesh = fixed_mesh;
     LoadedScene loaded = parse_scene_json(
         std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.json", options);
+    SceneOverrides small;
+    small.width = kSide;
+    small.height = kSide;
+    apply_overrides(loaded, small);
+    render_tiny(loaded.scene);
+  } catch (const Error&) {
+  }
+}
+
+void pbrt_scene_one_input(const uint8_t* data, size_t size) {
+  try {
+    PbrtOptions options;
+    options.read_text = [](const std::string& path) -> std::string {
+      throw Error(path, "not read by the fuzzer");
+    };
+    options.read_mesh = fixed_mesh;
+    options.read_images = false;
+    LoadedScene loaded = parse_pbrt_scene(
+        std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.pbrt", options);
     SceneOverrides small;
     small.width = kSide;
     small.height = kSide;

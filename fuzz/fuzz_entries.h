@@ -12,6 +12,11 @@ namespace tritrace::fuzz {
 // A scene that loads is rendered at 8 x 8.
 void scene_json_one_input(const uint8_t* data, size_t size);
 
+// The bytes are a pbrt-v4 scene file; Include and Import fail, "plymesh" files resolve to a fixed
+// small mesh and image files are refused, so nothing reaches the disk. A scene that loads is
+// rendered at 8 x 8.
+void pbrt_scene_one_input(const uint8_t* data, size_t size);
+
 // The first byte picks the format hint given to assimp, the rest is the file; a mesh that imports
 // becomes a scene with the default camera and light and is rendered at 8 x 8.
 // isolate_assimp: import through the child-process importer, as tritrace does (the replay), or in

@@ -1,6 +1,6 @@
 // Replays saved fuzzer inputs through the same entry points, in the normal build and under ctest:
-// `tritrace_fuzz_replay TARGET FILE_OR_FOLDER...`, TARGET one of scene_json, mesh_memory,
-// hdr_image, exr_image, partial_film. Passing means no crash.
+// `tritrace_fuzz_replay TARGET FILE_OR_FOLDER...`, TARGET one of scene_json, pbrt_scene,
+// mesh_memory, hdr_image, exr_image, partial_film. Passing means no crash.
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -26,6 +26,7 @@ struct Target {
 
 constexpr Target kTargets[] = {
     {"scene_json", tritrace::fuzz::scene_json_one_input},
+    {"pbrt_scene", tritrace::fuzz::pbrt_scene_one_input},
     {"mesh_memory", mesh_memory_isolated},
     {"hdr_image", tritrace::fuzz::hdr_image_one_input},
     {"exr_image", tritrace::fuzz::exr_image_one_input},
@@ -36,10 +37,10 @@ constexpr Target kTargets[] = {
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(
-        stderr,
-        "usage: %s scene_json|mesh_memory|hdr_image|exr_image|partial_film FILE_OR_FOLDER...\n",
-        argv[0]);
+    std::fprintf(stderr,
+                 "usage: %s scene_json|pbrt_scene|mesh_memory|hdr_image|exr_image|partial_film "
+                 "FILE_OR_FOLDER...\n",
+                 argv[0]);
     return 2;
   }
   const Target* target = nullptr;

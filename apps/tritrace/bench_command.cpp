@@ -114,9 +114,10 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
       "bench",
       "Measure every acceleration structure on the lab workload or the path tracer's, beside "
       "Embree, in one run");
-  sub->add_option("files", args.files,
-                  "Scene files (.json) or mesh files to measure, after the --scene ones (the "
-                  "default scenes only when neither is given)")
+  sub->add_option(
+         "files", args.files,
+         "Scene files (.json, .pbrt) or mesh files to measure, after the --scene ones (the "
+         "default scenes only when neither is given)")
       ->type_name("FILE ...");
   sub->add_option("--scene", args.scenes,
                   "Scene to measure, repeatable (default: cornell, terrain:1m, terrain:10m; with "

@@ -18,14 +18,14 @@ std::string vec(glm::vec3 v) {
 }  // namespace
 
 CLI::App* add_info_command(CLI::App& app, InfoArgs& args) {
-  CLI::App* sub = app.add_subcommand(
-      "info",
-      "Load a scene (.json) or mesh file as render would and print what it holds; for a partial "
-      "film (.exr from render --spp-range / --tile) print its render and part");
-  sub->add_option(
-         "FILE", args.file,
-         "Scene (.json), mesh file (any format assimp reads) or partial film (.exr); default: "
-         "built-in cornell")
+  CLI::App* sub =
+      app.add_subcommand("info",
+                         "Load a scene (.json or .pbrt) or mesh file as render would and print "
+                         "what it holds; for a partial film (.exr from render --spp-range / "
+                         "--tile) print its render and part");
+  sub->add_option("FILE", args.file,
+                  "Scene (.json or .pbrt), mesh file (any format assimp reads) or partial film "
+                  "(.exr); default: built-in cornell")
       ->type_name("FILE");
   return sub;
 }
@@ -39,6 +39,7 @@ int run_info(const InfoArgs& args) {
   }
   const LoadedScene loaded =
       args.file.empty() ? load_builtin_scene("cornell") : load_scene(args.file);
+  for (const std::string& w : loaded.warnings) std::fprintf(stderr, "tritrace: %s\n", w.c_str());
   const Scene& s = loaded.scene;
   const Bounds3 b = scene_bounds(s);
   std::printf("file: %s\n", args.file.empty() ? "(built-in cornell)" : args.file.c_str());

@@ -17,10 +17,10 @@
 namespace tritrace::cli {
 
 CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
-  CLI::App* sub = app.add_subcommand(
-      "render",
-      "Render a scene (.json), a mesh file, or with no FILE the built-in Cornell box, with the "
-      "lab's shading or the path tracer");
+  CLI::App* sub = app.add_subcommand("render",
+                                     "Render a scene (.json or .pbrt), a mesh file, or with no "
+                                     "FILE the built-in Cornell box, with the "
+                                     "lab's shading or the path tracer");
   add_scene_flags(*sub, args.job);
   sub->add_option("-o,--output", args.job.output,
                   "Output image: .png, .ppm (8-bit), .pfm or .exr (float, linear radiance); "
@@ -139,6 +139,9 @@ int run_render(const RenderArgs& args) {
     std::fprintf(
         stderr, "tritrace: %s: warning: dropped %zu degenerate and %zu non-finite triangles\n",
         settings.file.c_str(), loaded.stats.dropped_degenerate, loaded.stats.dropped_non_finite);
+  }
+  if (!args.quiet) {
+    for (const std::string& w : loaded.warnings) std::fprintf(stderr, "tritrace: %s\n", w.c_str());
   }
 
   RenderJob job(settings, std::move(loaded));

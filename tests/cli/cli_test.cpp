@@ -2168,4 +2168,36 @@ TEST_F(CliTest, DenoiseNamesTheFileAndTheMissingLayer) {
   ExpectOnlyFiles(work_, {"in.exr", "partial.exr"});
 }
 
+// pbrt-v4 scene files: render takes the film's size and file name, and each kind of thing it
+// cannot render is one warning line naming where it first appears.
+TEST_F(CliTest, PbrtFileRendersWithItsFilmAndWarnsOncePerKind) {
+  std::ofstream(work_ / "scene.pbrt")
+      << "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
+         "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 6 "
+         "\"string filename\" \"out.png\"\n"
+         "Sampler \"independent\" \"integer pixelsamples\" 2\nWorldBegin\n"
+         "LightSource \"point\" \"rgb I\" [10 10 10] \"point3 from\" [0 0 2]\n"
+         "Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n"
+         "Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n"
+         "Shape \"sphere\"\n";
+  const RunResult r = Run({"render", "scene.pbrt"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("tritrace: scene.pbrt:7: warning: Shape \"curve\" not supported: skipped "
+                       "(2 times)\n"),
+            std::string::npos)
+      << r.err;
+  ExpectRgb8Image(work_ / "out.png", 8, 6);
+  const RunResult info = Run({"info", "scene.pbrt"});
+  EXPECT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("camera: 8x6 at (0, 0, 5)"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("integrator: path, 2 spp, max depth 5"), std::string::npos) << info.out;
+}
+
+TEST_F(CliTest, PbrtErrorsNameFileLineAndColumn) {
+  std::ofstream(work_ / "bad.pbrt") << "WorldBegin\n  Frobnicate 1\n";
+  ExpectErrorLine(Run({"render", "bad.pbrt"}), 1, "bad.pbrt:2:3", "unknown directive 'Frobnicate'");
+  std::ofstream(work_ / "cut.pbrt") << "WorldBegin\nShape \"sphere\" \"float radius\" [1";
+  ExpectErrorLine(Run({"info", "cut.pbrt"}), 1, "cut.pbrt:2:31", "unterminated '['");
+}
+
 }  // namespace

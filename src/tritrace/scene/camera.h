@@ -36,6 +36,14 @@ class Camera {
     return moved;
   }
 
+  // The same camera seen in a mirror: the image's x axis reversed (right negated), as pbrt's
+  // left-handed camera space has it (CameraSpec::mirror_x).
+  Camera mirrored_x() const {
+    Camera mirrored = *this;
+    mirrored.right_ = -right_;
+    return mirrored;
+  }
+
   // The rays through the pixels [x0, x1) x [y0, y1), row by row, into out[0, (x1-x0)*(y1-y0)):
   // the same bits as primary_ray (tested), simd::kLanes pixels at a time where the build has SIMD.
   void primary_rays(int x0, int y0, int x1, int y1, Ray* out) const;

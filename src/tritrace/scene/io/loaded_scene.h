@@ -7,6 +7,7 @@
 #include <glm/vec3.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "tritrace/image/image_limits.h"  // kMaxImageSide
 #include "tritrace/scene/integrator_spec.h"
@@ -30,6 +31,9 @@ struct CameraSpec {
   // whose rays the lab's images depend on bit for bit; position (0, 0, -distance), look_at and up
   // then only describe it. Scene files and meshes are built with Camera::look_at.
   bool lab_orbit = false;
+  // The image's x axis runs opposite to Camera::look_at's cross(forward, up): pbrt's camera, whose
+  // +x is cross(up, forward) (scene/io/pbrt_scene.h). The camera is built mirrored.
+  bool mirror_x = false;
 };
 
 // Command-line values that replace the scene's own (see docs/SCENE_FORMAT.md).
@@ -53,6 +57,9 @@ struct LoadedScene {
   CameraSpec camera;  // the scene's own camera, before overrides: scene.camera is built from both
   LoadStats stats;
   std::string output;  // the scene file's output path; empty when it names none
+  // What the loader skipped or approximated, one line per kind ("FILE:LINE: warning: what"), for
+  // the front ends to print after "tritrace: " (pbrt-v4 files; empty for the others).
+  std::vector<std::string> warnings;
 };
 
 }  // namespace tritrace

@@ -11,6 +11,7 @@
 #include "tritrace/math/rotation.h"
 #include "tritrace/scene/cornell_box.h"
 #include "tritrace/scene/io/input_file.h"
+#include "tritrace/scene/io/pbrt_scene.h"
 #include "tritrace/scene/io/scene_file.h"
 #include "tritrace/scene/io/triangle_filter.h"
 #include "tritrace/scene/procedural.h"
@@ -67,6 +68,7 @@ void apply_overrides(LoadedScene& loaded, const SceneOverrides& overrides) {
     focal = Camera::focal_for_vertical_fov(c.height, *c.vertical_fov_degrees);
   if (c.focal_length_px) focal = *c.focal_length_px;
   loaded.scene.camera = Camera::look_at(c.width, c.height, c.position, c.look_at, c.up, focal);
+  if (c.mirror_x) loaded.scene.camera = loaded.scene.camera.mirrored_x();
 }
 
 bool is_scene_file(const std::string& path) {
@@ -134,6 +136,11 @@ LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& over
 LoadedScene load_scene(const std::string& path, const SceneOverrides& overrides) {
   if (is_scene_file(path)) {
     LoadedScene loaded = parse_scene_json(read_input_file(path), path);
+    apply_overrides(loaded, overrides);
+    return loaded;
+  }
+  if (is_pbrt_file(path)) {
+    LoadedScene loaded = load_pbrt_scene(path);
     apply_overrides(loaded, overrides);
     return loaded;
   }

@@ -1,5 +1,6 @@
 // The one entry point front ends use to turn a file into a Scene: .json files are scene files,
-// anything else is a mesh for assimp, rendered with defaults framed on its bounds.
+// .pbrt files pbrt-v4 scenes (pbrt_scene.h), anything else is a mesh for assimp, rendered with
+// defaults framed on its bounds.
 #pragma once
 
 #include <string>
