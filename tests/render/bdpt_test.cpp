@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "tritrace/accel/bvh/bvh_accel.h"
+#include "tritrace/accel/make_accel.h"
 #include "tritrace/error.h"
 #include "tritrace/render/path_integrator.h"
 #include "tritrace/render/renderer.h"
@@ -356,6 +357,42 @@ TEST(Bdpt, AgreesWithThePathTracerOnGlassAndRoughMetal) {
     const Image path = render_path(scene, accel, {.spp = 1024, .seed = 2});
     expect_agree(bdpt, path, 0.01, 16, 0.03, 0.99);
   }
+}
+
+// The principled material's mixes (a half-metallic rough block, a varnished diffuse block with a
+// smooth coat: delta and non-delta lobes in one Bsdf) and a rough glass wall, in cornell-area.
+TEST(Bdpt, AgreesWithThePathTracerOnPrincipledAndRoughGlass) {
+  Scene scene = make_cornell_area({.width = 32, .height = 32});
+  const glm::vec3 red(0.75f, 0.15f, 0.15f), blue(0.15f, 0.15f, 0.75f), white(0.75f);
+  for (Material& m : scene.materials) {
+    if (m.emits()) continue;
+    if (m.albedo == red) {
+      m.type = MaterialType::kPrincipled;
+      m.metallic = 0.5f;
+      m.roughness = 0.4f;
+    } else if (m.albedo == blue) {
+      m.type = MaterialType::kPrincipled;
+      m.roughness = 0.0f;  // a smooth (delta) coat over the diffuse base
+    } else if (m.albedo == white) {
+      m.type = MaterialType::kDielectric;  // the back wall: rough glass, light passes both ways
+      m.roughness = 0.3f;
+      m.albedo = glm::vec3(0.9f);
+    }
+  }
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const Image bdpt = render_bdpt(scene, accel, {}, {.spp = 128, .seed = 1});
+  const Image path = render_path(scene, accel, {.spp = 1024, .seed = 2});
+  expect_agree(bdpt, path, 0.01, 16, 0.03, 0.99);
+}
+
+// Instanced geometry under the lab's point light (scenes/instances.json).
+TEST(Bdpt, AgreesWithThePathTracerOnInstances) {
+  const Scene scene = example("instances.json", 32);
+  ASSERT_FALSE(scene.instances.empty());
+  const auto accel = make_accel(AccelKind::kBvh, scene, Kernel::kWatertight);
+  const Image bdpt = render_bdpt(scene, *accel, {}, {.spp = 128, .seed = 1});
+  const Image path = render_path(scene, *accel, {.spp = 1024, .seed = 2});
+  expect_agree(bdpt, path, 0.01, 16, 0.03, 0.99);
 }
 
 // A scene with an environment is refused, never rendered without it.
