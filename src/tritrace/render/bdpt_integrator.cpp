@@ -9,6 +9,7 @@
 #include <cassert>
 #include <cmath>
 #include <glm/geometric.hpp>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -208,7 +209,9 @@ int BdptTracer::walk(Vertex* path, int count, int max_vertices, Ray ray, glm::ve
   const int roulette_depth = it_.settings_.roulette_depth;
   glm::vec3 rr_beta(1.0f);  // the throughput since the subpath's start, for Russian roulette
   while (count < max_vertices) {
-    const Hit hit = accel_.intersect(ray);
+    // One ray at a time: the accel's incoherent query (a packet of one would cost a third more).
+    Hit hit;
+    accel_.intersect_incoherent(std::span<const Ray>(&ray, 1), std::span<Hit>(&hit, 1));
     ++traced_;
     if (first_hit != nullptr) {
       *first_hit = hit;
@@ -347,7 +350,9 @@ bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
   r.tmin = 0.0f;
   r.tmax = length;
   ++traced_;
-  return !accel_.occluded(r);
+  uint8_t blocked = 0;
+  accel_.occluded_incoherent(std::span<const Ray>(&r, 1), std::span<uint8_t>(&blocked, 1));
+  return blocked == 0;
 }
 
 // The power heuristic over the strategies with t >= 2 that can sample the path of light vertices
