@@ -186,6 +186,26 @@ void expect_same_mean(MeanAndError a, MeanAndError b, double power) {
   EXPECT_LT(error, power * b.mean);
 }
 
+// --max-depth means what it means for the path tracer: 0 is the emitters the camera sees (the
+// same image to the bit: same camera samples, Le with weight 1), 1 adds light reaching the first
+// hit directly (the same image in expectation; with the point light of the lab's box as well).
+TEST(Bdpt, MaxDepthCountsBouncesAsThePathTracerDoes) {
+  const Scene scene = make_cornell_area({.width = 32, .height = 32});
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  PathSettings path_settings;
+  path_settings.max_depth = 0;
+  const Image path0 = render(scene, accel, PathIntegrator(scene, path_settings), {.spp = 4});
+  EXPECT_TRUE(same_bits(render_bdpt(scene, accel, {.max_depth = 0}, {.spp = 4}), path0));
+  EXPECT_GT(luminance_mean(path0), 0.0);
+  path_settings.max_depth = 1;
+  for (const Scene& s : {scene, make_cornell_box({.width = 32, .height = 32})}) {
+    const BvhAccel a(s.mesh, kDefaultKernel);
+    const Image bdpt = render_bdpt(s, a, {.max_depth = 1}, {.spp = 256, .seed = 1});
+    const Image path = render(s, a, PathIntegrator(s, path_settings), {.spp = 512, .seed = 2});
+    expect_agree(bdpt, path, 0.005, 16, 0.03, 0.99);
+  }
+}
+
 // A closed cube of smooth glass (index 1.5) in cornell-area without its ceiling
 // light, with a two-sided emitter inside: every path leaves the emitter through one or more delta
 // refractions. Light subpaths carry importance through them, which refraction does not scale;

@@ -462,7 +462,11 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
       }
       if (!(max_component(contribution) > 0.0f)) continue;
       const float weight = settings.unweighted ? 1.0f : mis_weight(light, camera, s, t);
-      total += contribution * weight;
+      const glm::vec3 term = contribution * weight;
+      // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
+      // dropped rather than let a NaN or infinity into the pixel.
+      if (!std::isfinite(term.x + term.y + term.z)) continue;
+      total += term;
     }
   }
   return total;
