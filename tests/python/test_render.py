@@ -92,14 +92,13 @@ def test_integrator_and_kernel_choices_are_the_clis(tmp_path, cornell):
                                             "moller-trumbore", "--accel", "bvh-single"))
 
 
-def test_bdpt_is_the_clis_and_refuses_an_environment(tmp_path, cornell):
+def test_bdpt_is_the_clis(tmp_path, cornell):
     frame = tritrace.render(cornell, integrator="bdpt", spp=2, width=32, height=24)
     assert frame.integrator == "bdpt"
     assert_same_bits(frame.image, cli_image(tmp_path, "--integrator", "bdpt", "--spp", 2,
                                             "--width", 32, "--height", 24))
-    sky = tritrace.load(str(REPO / "scenes" / "sky.json"))
-    with pytest.raises(ValueError, match="environment"):
-        tritrace.render(sky, integrator="bdpt", spp=1, width=8, height=8)
+    with pytest.raises(ValueError, match="clamp: "):
+        tritrace.render(cornell, integrator="bdpt", spp=2, clamp=1.0)
 
 
 def test_aovs_are_the_clis_exr_layers(tmp_path):

@@ -1,6 +1,7 @@
-// The bidirectional path tracer against oracles that do not use it: a white furnace (radiance
-// Le / (1 - a) everywhere), the path tracer's images of the same scenes (cornell-area, the lab's
-// point-light box, glass and rough metal in the box, an emitter shut inside a glass cube, whose
+// The bidirectional path tracer against oracles that do not use it: white furnaces (radiance
+// Le / (1 - a) everywhere; 1 under a uniform environment), the path tracer's images of the same
+// scenes (cornell-area, the lab's point-light box, glass and rough metal in the box, principled
+// materials, instances, environments, an emitter shut inside a glass cube, whose
 // light leaves through delta refractions: the adjoint's classic 1/eta^2 mistake would show), the
 // strategies against each other (each alone, unweighted, estimates the same paths; weighted, they
 // add up to the whole image), and images independent of threads and tiles.
@@ -415,13 +416,47 @@ TEST(Bdpt, AgreesWithThePathTracerOnInstances) {
   expect_agree(bdpt, path, 0.01, 16, 0.03, 0.99);
 }
 
-// A scene with an environment is refused, never rendered without it.
-TEST(Bdpt, RefusesAnEnvironment) {
-  Scene scene = make_cornell_area({.width = 8, .height = 8});
-  EXPECT_TRUE(bdpt_unsupported(scene).empty());
-  scene.environment = glm::vec3(0.5f);
-  EXPECT_FALSE(bdpt_unsupported(scene).empty());
-  EXPECT_THROW(BdptIntegrator{scene}, Error);
+// The lab's two blocks alone (no room), white (albedo 1, both sides) under a uniform environment
+// of radiance 1: a white furnace, radiance 1 everywhere (escaping camera rays see 1 too). Light
+// subpaths start on the disk of the scene's bounding sphere.
+TEST(Bdpt, UniformEnvironmentFurnaceGivesOne) {
+  const Scene box = make_cornell_box({.width = 16, .height = 16});
+  Scene scene = box;
+  scene.lights.clear();
+  scene.mesh = TriangleMesh();
+  for (uint32_t prim = 10; prim < box.mesh.size(); ++prim) {
+    const SurfaceTriangle t = stored_triangle(box.mesh, prim);
+    scene.mesh.add(t.v0, t.v0 + t.e1, t.v0 + t.e2, 0);
+  }
+  scene.materials = {Material{.albedo = glm::vec3(1.0f)}};
+  scene.environment = glm::vec3(1.0f);
+  scene.camera = Camera(16, 16, 0.3, 1.6f);  // close: the blocks fill most of the image
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const Image image = render_bdpt(scene, accel, {}, {.spp = 64, .seed = 3});
+  std::vector<double> v;
+  for (const glm::vec3& p : image.pixels()) v.push_back((p.x + p.y + p.z) / 3.0);
+  double mean = 0.0, var = 0.0;
+  for (double x : v) mean += x;
+  mean /= static_cast<double>(v.size());
+  for (double x : v) var += (x - mean) * (x - mean);
+  const double se = std::sqrt(var / (v.size() - 1.0) / static_cast<double>(v.size()));
+  std::printf("  furnace mean %.5f +- %.5f\n", mean, se);
+  EXPECT_LT(std::abs(mean - 1.0), 4.0 * se + 1e-4);
+  EXPECT_LT(se, 0.01);
+}
+
+// cornell-area under a uniform sky that enters through the open front, and the sky map scene
+// (scenes/sky.json: a sun and sky, gold, rough glass, white): bdpt and path agree.
+TEST(Bdpt, AgreesWithThePathTracerUnderEnvironments) {
+  Scene open = make_cornell_area({.width = 32, .height = 32});
+  open.environment = glm::vec3(0.4f, 0.5f, 0.6f);
+  const Scene sky = example("sky.json", 32);
+  for (const Scene* scene : {static_cast<const Scene*>(&open), &sky}) {
+    const BvhAccel accel(scene->mesh, kDefaultKernel);
+    const Image bdpt = render_bdpt(*scene, accel, {}, {.spp = 128, .seed = 1});
+    const Image path = render_path(*scene, accel, {.spp = 1024, .seed = 2});
+    expect_agree(bdpt, path, 0.01, 16, 0.03, 0.99);
+  }
 }
 
 }  // namespace

@@ -31,7 +31,9 @@ float mean(glm::vec3 c) {
   return (c.x + c.y + c.z) / 3.0f;
 }
 
-enum class VertexType : uint8_t { kCamera, kLight, kSurface };
+// kEnvironment: the light at infinity, as a light subpath's first vertex or as the end of a camera
+// subpath that escaped; its `w_env` is the direction from the scene towards it.
+enum class VertexType : uint8_t { kCamera, kLight, kSurface, kEnvironment };
 
 // One vertex of a subpath. Light vertices are a subpath's first (on a point light or an emissive
 // triangle); surface vertices carry the Bsdf of the hit.
@@ -44,13 +46,15 @@ struct Vertex {
   bool two_sided = false;    // its material emits (or would emit) from both sides
   bool emits = false;
   glm::vec3 p{0.0f};
-  glm::vec3 ng{0.0f};  // the triangle's lab normal (zero for the camera and point lights)
-  glm::vec3 ns{0.0f};  // the shading normal on ng's side (the Bsdf frame's z)
-  glm::vec3 wo{0.0f};  // towards the previous vertex of its subpath (surface vertices)
+  glm::vec3 ng{0.0f};     // the triangle's lab normal (zero for the camera and point lights)
+  glm::vec3 ns{0.0f};     // the shading normal on ng's side (the Bsdf frame's z)
+  glm::vec3 wo{0.0f};     // towards the previous vertex of its subpath (surface vertices)
+  glm::vec3 w_env{0.0f};  // an environment vertex's direction, from the scene towards it
   glm::vec3 beta{0.0f};
   glm::vec3 le{0.0f};  // a light vertex's emission (radiance, or a point light's intensity)
   float pdf_fwd = 0.0f;
   float pdf_rev = 0.0f;
+  float env_pdf_pos = 0.0f;  // an environment vertex's density per area across w_env
   uint32_t prim = 0;
   float u = 0.0f, v = 0.0f;  // barycentrics on the triangle
   SurfaceTriangle tri{};
@@ -59,6 +63,10 @@ struct Vertex {
   Bsdf bsdf{Material{}};
   const Material* material = nullptr;
 };
+
+bool infinite(const Vertex& x) {
+  return x.type == VertexType::kEnvironment;
+}
 
 // Whether direction w (world, leaving the vertex) lies on the same side of the shading and the
 // geometric surface: where it does not, the vertex carries nothing that way (docs/BDPT.md).
@@ -93,7 +101,7 @@ float emission_pdf(const Vertex& x, glm::vec3 w) {
 
 // The radiance light vertex (or emitting surface) x sends along w.
 glm::vec3 emission(const Scene& scene, const Vertex& x, glm::vec3 w) {
-  if (x.point_light) return x.le;
+  if (x.point_light || infinite(x)) return x.le;
   glm::vec3 le = emitted_radiance(*x.material, x.ng, w);
   if (x.material->emission_texture.present() && max_component(le) > 0.0f) {
     le = textured(scene, x.material->emission_texture, le, scene.uv(x.prim, x.u, x.v));
@@ -101,8 +109,13 @@ glm::vec3 emission(const Scene& scene, const Vertex& x, glm::vec3 w) {
   return le;
 }
 
-// A solid-angle density at `from` towards `to`, as an area density at `to`.
+// A solid-angle density at `from` towards `to`, as an area density at `to`. An environment vertex
+// keeps solid angle (it has no area); from an environment vertex the density is already per area
+// of the plane across the direction, so only `to`'s cosine converts it (pbrt's BDPT chapter does
+// the same).
 float to_area(float pdf_dir, const Vertex& from, const Vertex& to) {
+  if (infinite(to)) return pdf_dir;
+  if (infinite(from)) return pdf_dir * std::abs(glm::dot(to.ng, from.w_env));
   const glm::vec3 d = to.p - from.p;
   const float dist2 = glm::dot(d, d);
   if (!(dist2 > 0.0f)) return 0.0f;
@@ -114,12 +127,15 @@ float to_area(float pdf_dir, const Vertex& from, const Vertex& to) {
 }
 
 glm::vec3 direction(const Vertex& from, const Vertex& to) {
+  if (infinite(to)) return to.w_env;
+  if (infinite(from)) return -from.w_env;
   return glm::normalize(to.p - from.p);
 }
 
 // The area density with which vertex x, reached from `prev` (null for a light vertex), samples
 // `next`.
 float pdf_area(const Vertex& x, const Vertex* prev, const Vertex& next) {
+  if (infinite(x)) return to_area(x.env_pdf_pos, x, next);
   const glm::vec3 w_next = direction(x, next);
   if (x.type == VertexType::kLight) return to_area(emission_pdf(x, w_next), x, next);
   return to_area(surface_pdf(x, direction(x, *prev), w_next), x, next);
@@ -217,7 +233,24 @@ int BdptTracer::walk(Vertex* path, int count, int max_vertices, Ray ray, glm::ve
       *first_hit = hit;
       first_hit = nullptr;
     }
-    if (!hit.found()) break;
+    if (!hit.found()) {
+      // A camera subpath that escapes meets the environment (strategy s = 0).
+      if (!light && it_.has_environment_) {
+        Vertex& e = path[count];
+        e.type = VertexType::kEnvironment;
+        e.delta = e.point_light = e.smooth = false;
+        e.connectible = false;
+        e.emits = true;
+        e.w_env = glm::normalize(ray.dir);
+        e.le = it_.environment_radiance(e.w_env);
+        e.env_pdf_pos = it_.environment_pdf_pos_;
+        e.beta = beta;
+        e.pdf_fwd = pdf_dir;  // solid angle
+        e.pdf_rev = 0.0f;
+        ++count;
+      }
+      break;
+    }
     Vertex& prev = path[count - 1];
     Vertex& x = path[count];
     make_surface(x, ray, hit);
@@ -284,6 +317,31 @@ int BdptTracer::light_subpath(Vertex* path, int max_vertices, Sampler& sampler) 
   Ray ray;
   glm::vec3 beta;
   float pdf_dir;
+  if (e.environment) {
+    // A direction towards the environment (the map's importance sampling, or uniform for a
+    // constant colour), then a point on the disk of the scene's bounding sphere across it, from
+    // which the ray enters the scene (pbrt's BDPT chapter, infinite area lights).
+    x.type = VertexType::kEnvironment;
+    x.point_light = x.delta = x.smooth = false;
+    x.emits = true;
+    float dir_pdf = 0.0f;
+    x.w_env = it_.sample_environment(u_dir, dir_pdf);
+    x.le = it_.environment_radiance(x.w_env);
+    x.env_pdf_pos = it_.environment_pdf_pos_;
+    // The origin density is the direction's (solid angle), as the escaped camera subpath's is.
+    x.pdf_fwd = pick.pmf * dir_pdf;
+    if (!(x.pdf_fwd > 0.0f) || !(max_component(x.le) > 0.0f)) return 1;
+    x.beta = glm::vec3(1.0f / x.pdf_fwd);
+    const Frame frame = Frame::from_normal(x.w_env);
+    const glm::vec2 d = sample_uniform_disk_concentric(u_point);
+    const float r = it_.environment_radius_;
+    ray.origin = it_.environment_centre_ + r * (x.w_env + d.x * frame.x + d.y * frame.y);
+    ray.dir = -x.w_env;
+    ray.tmin = 0.0f;
+    ray.tmax = kRayTMax;
+    beta = x.le * (1.0f / (x.pdf_fwd * x.env_pdf_pos));
+    return walk(path, 1, max_vertices, ray, beta, x.env_pdf_pos, true, sampler, nullptr);
+  }
   if (e.point) {
     // Not delta in the MIS sense: a point light can be connected to (its position is a delta,
     // which no camera subpath can hit: the weights test point_light for that).
@@ -337,6 +395,17 @@ int BdptTracer::light_subpath(Vertex* path, int max_vertices, Sampler& sampler) 
 bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
   const glm::vec3 w = direction(c, l);
   const glm::vec3 from = ray_start(c, w, it_.offset_);
+  if (infinite(l)) {
+    Ray r;
+    r.origin = from;
+    r.dir = w;
+    r.tmin = 0.0f;
+    r.tmax = kRayTMax;
+    ++traced_;
+    uint8_t blocked = 0;
+    accel_.occluded_incoherent(std::span<const Ray>(&r, 1), std::span<uint8_t>(&blocked, 1));
+    return blocked == 0;
+  }
   const glm::vec3 to =
       l.point_light ? offset_ray_origin(l.p, -w, triangle_extent(c.tri.e1, c.tri.e2), it_.offset_)
                     : ray_start(l, -w, it_.offset_);
@@ -380,8 +449,13 @@ float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const 
     qs->pdf_rev = pdf_area(pt, &pt_minus, *qs);
     if (qs_minus != nullptr) qs_minus->pdf_rev = pdf_area(*qs, &pt, *qs_minus);
   } else {
-    pt.pdf_rev = it_.origin_pdf(pt.prim);
-    pt_minus.pdf_rev = to_area(emission_pdf(pt, direction(pt, pt_minus)), pt, pt_minus);
+    if (infinite(pt)) {
+      pt.pdf_rev = it_.environment_pmf_ * it_.environment_dir_pdf(pt.w_env);
+      pt_minus.pdf_rev = pdf_area(pt, nullptr, pt_minus);
+    } else {
+      pt.pdf_rev = it_.origin_pdf(pt.prim);
+      pt_minus.pdf_rev = to_area(emission_pdf(pt, direction(pt, pt_minus)), pt, pt_minus);
+    }
   }
 
   float sum = 0.0f;
@@ -446,15 +520,17 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
       } else {
         const Vertex& qs = light[s - 1];
         if (!pt.connectible || !qs.connectible) continue;
-        const glm::vec3 d = qs.p - pt.p;
-        const float dist2 = glm::dot(d, d);
+        // The environment is at infinity: no distance, and no cosine on its side.
+        const glm::vec3 d = infinite(qs) ? qs.w_env : qs.p - pt.p;
+        const float dist2 = infinite(qs) ? 1.0f : glm::dot(d, d);
         if (!(dist2 > 0.0f)) continue;
         const glm::vec3 w = d * (1.0f / std::sqrt(dist2));  // from pt towards qs
         const glm::vec3 f_camera = surface_f(pt, pt.wo, w);
         if (!(max_component(f_camera) > 0.0f)) continue;
         const glm::vec3 f_light = s == 1 ? emission(scene_, qs, -w) : surface_f(qs, -w, qs.wo);
         if (!(max_component(f_light) > 0.0f)) continue;
-        const float cos_light = qs.point_light ? 1.0f : std::abs(glm::dot(qs.ng, w));
+        const float cos_light =
+            qs.point_light || infinite(qs) ? 1.0f : std::abs(glm::dot(qs.ng, w));
         const float g = std::abs(glm::dot(pt.ng, w)) * cos_light / dist2;
         contribution = pt.beta * f_camera * (g * f_light) * qs.beta;
         if (!(max_component(contribution) > 0.0f)) continue;
@@ -473,10 +549,6 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
 }
 
 std::string bdpt_unsupported(const Scene& scene) {
-  if (scene.environment_map || max_component(scene.environment) > 0.0f) {
-    return "bdpt does not handle an environment light yet (point lights and emissive triangles "
-           "only); use --integrator path";
-  }
   uint64_t instanced = 0;
   for (const Instance& inst : scene.instances) {
     const TriangleMesh& proto = scene.prototypes[inst.prototype];
@@ -537,7 +609,32 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
       }
     }
   }
+  if (scene.environment_map) {
+    environment_ = EnvironmentLight(*scene.environment_map);
+    has_environment_ = environment_map_ = !environment_.black();
+  } else {
+    environment_colour_ = scene.environment;
+    has_environment_ = max_component(environment_colour_) > 0.0f;
+  }
+  if (has_environment_) {
+    // Chosen half the time beside other emitters, as the path tracer's light sampler does (a
+    // light at infinity has no finite power to compare).
+    double others = 0.0;
+    for (float p : power) others += static_cast<double>(p);
+    Emitter e;
+    e.environment = true;
+    emitters_.push_back(e);
+    power.push_back(others > 0.0 ? static_cast<float>(others) : 1.0f);
+    // The bounding sphere, a little larger so that rays from its disk start outside everything.
+    const Bounds3 b = scene_bounds(scene);
+    environment_centre_ = 0.5f * (b.lo + b.hi);
+    environment_radius_ = std::max(1e-3f, 0.5f * glm::length(b.hi - b.lo) * 1.01f);
+    environment_pdf_pos_ = 1.0f / (kPi * environment_radius_ * environment_radius_);
+  }
   table_ = AliasTable(power);
+  if (has_environment_) {
+    environment_pmf_ = table_.pmf(static_cast<uint32_t>(emitters_.size() - 1));
+  }
   for (size_t k = 0; k < emitters_.size(); ++k) {
     emitters_[k].pmf = table_.pmf(static_cast<uint32_t>(k));
   }
@@ -546,6 +643,24 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
     emissive_prims_.push_back(prim);
     emissive_index_.push_back(index);
   }
+}
+
+glm::vec3 BdptIntegrator::environment_radiance(glm::vec3 w) const {
+  return environment_map_ ? environment_.radiance(w) : environment_colour_;
+}
+
+float BdptIntegrator::environment_dir_pdf(glm::vec3 w) const {
+  return environment_map_ ? environment_.pdf(w) : uniform_sphere_pdf();
+}
+
+glm::vec3 BdptIntegrator::sample_environment(glm::vec2 u, float& pdf) const {
+  if (environment_map_) {
+    const EnvironmentLight::Sample e = environment_.sample(u);
+    pdf = e.pdf;
+    return e.wi;
+  }
+  pdf = uniform_sphere_pdf();
+  return sample_uniform_sphere(u);
 }
 
 float BdptIntegrator::origin_pdf(uint32_t prim) const {

@@ -2,9 +2,8 @@
 // per camera sample one camera subpath and one light subpath, every connection strategy (s, t)
 // with t >= 2 evaluated and combined by multiple importance sampling (power heuristic). Light
 // tracing to the camera (t = 1) is not done yet, so every contribution lands in the sample's own
-// pixel and the image is deterministic like the path tracer's. Point lights and emissive
-// triangles; scenes with an environment are refused (bdpt_unsupported). docs/BDPT.md has the
-// design.
+// pixel and the image is deterministic like the path tracer's. Point lights, emissive triangles
+// and the environment (a constant colour or a map). docs/BDPT.md has the design.
 #pragma once
 
 #include <cstdint>
@@ -13,6 +12,7 @@
 
 #include "tritrace/math/offset_ray.h"
 #include "tritrace/math/sampling.h"
+#include "tritrace/render/environment_light.h"
 #include "tritrace/render/integrator.h"
 
 namespace tritrace {
@@ -49,9 +49,10 @@ class BdptIntegrator final : public Integrator {
 
   const BdptSettings& settings() const { return settings_; }
 
-  // An emitter for light subpaths: a point light or an emissive triangle.
+  // An emitter for light subpaths: a point light, an emissive triangle or the environment.
   struct Emitter {
     bool point = false;
+    bool environment = false;
     uint32_t prim = 0;          // the triangle (scene numbering), or the index into scene.lights
     glm::vec3 position{0.0f};   // a point light's
     glm::vec3 intensity{0.0f};  // a point light's, P / (4 pi)
@@ -70,6 +71,22 @@ class BdptIntegrator final : public Integrator {
   // The area density with which a light subpath starts at point of triangle `prim` (pmf / area);
   // 0 for a triangle that is not an emitter.
   float origin_pdf(uint32_t prim) const;
+
+  // The environment (a map, or a constant colour that is not black): its radiance from direction
+  // w (pointing away from the scene), the solid-angle density with which light subpaths choose w,
+  // and that choice. Light subpaths from it start on the disk of radius environment_radius_ about
+  // environment_centre_ across w (the scene's bounding sphere), density environment_pdf_pos_.
+  glm::vec3 environment_radiance(glm::vec3 w) const;
+  float environment_dir_pdf(glm::vec3 w) const;
+  glm::vec3 sample_environment(glm::vec2 u, float& pdf) const;
+  bool has_environment_ = false;
+  bool environment_map_ = false;
+  EnvironmentLight environment_;
+  glm::vec3 environment_colour_{0.0f};
+  float environment_pmf_ = 0.0f;
+  float environment_pdf_pos_ = 0.0f;
+  glm::vec3 environment_centre_{0.0f};
+  float environment_radius_ = 0.0f;
 
   friend class BdptTracer;
 };
