@@ -51,7 +51,10 @@ struct Vertex {
   glm::vec3 wo{0.0f};     // towards the previous vertex of its subpath (surface vertices)
   glm::vec3 w_env{0.0f};  // an environment vertex's direction, from the scene towards it
   glm::vec3 beta{0.0f};
-  glm::vec3 le{0.0f};  // a light vertex's emission (radiance, or a point light's intensity)
+  glm::vec3 le{0.0f};        // a light vertex's emission (radiance, or a point light's intensity)
+  glm::vec3 albedo{0.0f};    // the material's albedo here (textured), for the albedo AOV
+  glm::vec3 aov_tint{1.0f};  // the sampled bounce's weight without 1/eta^2 (the AOVs' tint)
+  bool specular = false;     // every lobe a delta lobe: the AOVs look through it
   float pdf_fwd = 0.0f;
   float pdf_rev = 0.0f;
   float env_pdf_pos = 0.0f;  // an environment vertex's density per area across w_env
@@ -168,6 +171,11 @@ class BdptTracer {
 
   glm::vec3 sample(const Ray& camera_ray, Sampler& sampler, Hit& first_hit);
   uint64_t traced() const { return traced_; }
+  // The albedo and normal AOVs of the last sample's camera subpath, as the path tracer writes them
+  // (path_integrator.cpp): those of the first surface that is not specular, seen through perfect
+  // mirrors and smooth glass with their tint; a specular surface's own where the subpath ends
+  // there; zero where it escapes.
+  void surface_aovs(glm::vec3& albedo, glm::vec3& normal) const;
 
  private:
   // Fills vertex x from a hit of ray `ray`.
@@ -187,7 +195,34 @@ class BdptTracer {
   const Scene& scene_;
   const Accel& accel_;
   uint64_t traced_ = 0;
+  int camera_count_ = 0;
+  bool camera_escaped_ = false;
 };
+
+void BdptTracer::surface_aovs(glm::vec3& albedo, glm::vec3& normal) const {
+  albedo = normal = glm::vec3(0.0f);
+  const Vertex* camera = thread_subpaths().camera.data();
+  glm::vec3 tint(1.0f);
+  for (int i = 1; i < camera_count_; ++i) {
+    const Vertex& x = camera[i];
+    if (infinite(x)) break;
+    // The path tracer's AOV normal: the face on the side the subpath arrived from, or the shading
+    // normal turned to that side where it agrees with it about wo.
+    const glm::vec3 n_face = glm::dot(x.ng, x.wo) >= 0.0f ? x.ng : -x.ng;
+    glm::vec3 n = n_face;
+    if (x.smooth) {
+      const glm::vec3 ns = n_face == x.ng ? x.ns : -x.ns;
+      if (shading_agrees(x.wo, ns, n_face)) n = ns;
+    }
+    albedo = tint * x.albedo;
+    normal = n;
+    if (!x.specular) return;
+    tint *= x.aov_tint;
+  }
+  // Every surface met was specular: the provisional values stay where the subpath ended at one,
+  // and are zero where it escaped.
+  if (camera_escaped_) albedo = normal = glm::vec3(0.0f);
+}
 
 bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
   x.type = VertexType::kSurface;
@@ -212,7 +247,9 @@ bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
         textured(scene_, x.material->albedo_texture, albedo, scene_.uv(hit.prim, hit.u, hit.v));
   }
   x.bsdf = Bsdf(*x.material, albedo);
+  x.albedo = albedo;
   x.connectible = !x.bsdf.all_delta();
+  x.specular = !x.material->is_diffuse() && !x.connectible;
   x.two_sided = x.material->two_sided;
   x.emits = x.material->emits();
   x.delta = false;
@@ -234,6 +271,7 @@ int BdptTracer::walk(Vertex* path, int count, int max_vertices, Ray ray, glm::ve
       first_hit = nullptr;
     }
     if (!hit.found()) {
+      if (!light) camera_escaped_ = true;
       // A camera subpath that escapes meets the environment (strategy s = 0).
       if (!light && it_.has_environment_) {
         Vertex& e = path[count];
@@ -284,6 +322,7 @@ int BdptTracer::walk(Vertex* path, int count, int max_vertices, Ray ray, glm::ve
       }
     }
     x.delta = bs.delta;
+    x.aov_tint = bs.weight * (1.0f / bs.radiance_scale);
     const float pdf_rev_dir = bs.delta ? 0.0f : x.bsdf.pdf(bs.wi, wo_local);
     prev.pdf_rev = to_area(pdf_rev_dir, x, prev);
     beta *= factor;
@@ -502,9 +541,11 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
   c0.beta = glm::vec3(1.0f);
   c0.pdf_fwd = c0.pdf_rev = 0.0f;
   first_hit = Hit{};
+  camera_escaped_ = false;
   // The camera's own density (for t = 1) is never needed: 1 stands for it.
   const int nc =
       walk(camera, 1, max_camera, camera_ray, glm::vec3(1.0f), 1.0f, false, sampler, &first_hit);
+  camera_count_ = nc;
   const int nl = light_subpath(light, max_light, sampler);
 
   const bool only = settings.only_s >= 0 && settings.only_t >= 0;
@@ -678,9 +719,16 @@ uint64_t BdptIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
   std::array<Hit, kMaxBatch> first_hits;
   for (size_t i = 0; i < n; ++i) {
     out.radiance[i] = tracer.sample(batch.rays[i], batch.samplers[i], first_hits[i]);
+    if (!out.albedo.empty() || !out.normal.empty()) {
+      glm::vec3 albedo, normal;
+      tracer.surface_aovs(albedo, normal);
+      if (!out.albedo.empty()) out.albedo[i] = albedo;
+      if (!out.normal.empty()) out.normal[i] = normal;
+    }
   }
-  // The AOVs of the first hit (the path tracer looks through specular surfaces; not yet here).
-  write_first_hit_aovs(scene, batch.rays, std::span<const Hit>(first_hits.data(), n), out);
+  // Depth is the first hit's, whatever it is.
+  write_first_hit_aovs(scene, batch.rays, std::span<const Hit>(first_hits.data(), n),
+                       SampleOutput{.depth = out.depth});
   return tracer.traced();
 }
 
