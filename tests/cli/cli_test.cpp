@@ -762,6 +762,20 @@ TEST_F(CliTest, BenchDenoiseTimesTheDenoiserOnEachPathFrame) {
   EXPECT_NE(lab.err.find("--denoise"), std::string::npos) << lab.err;
 }
 
+TEST_F(CliTest, BenchTimesTheBidirectionalPathTracer) {
+  const RunResult r = Run({"bench", "--integrator", "bdpt", "--width", "16", "--height", "16",
+                           "--spp", "2", "--reps", "1", "--accel", "bvh", "--json", "b.json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("integrator bdpt, 2 spp"), std::string::npos) << r.out;
+  const nlohmann::json records = nlohmann::json::parse(ReadFile(work_ / "b.json"));
+  ASSERT_TRUE(records.is_array());
+  ASSERT_FALSE(records.empty());
+  for (const nlohmann::json& rec : records) {
+    EXPECT_EQ(rec["scene"], "cornell-area");
+    EXPECT_EQ(rec["integrator"], "bdpt");
+  }
+}
+
 TEST_F(CliTest, BenchWithThePathTracerReportsPathsPerSecond) {
   const RunResult r = Run({"bench", "--integrator", "path", "--width", "32", "--height", "24",
                            "--spp", "2", "--reps", "2", "--json", "p.json"});
