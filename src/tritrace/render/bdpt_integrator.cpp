@@ -55,6 +55,9 @@ struct Vertex {
   glm::vec3 albedo{0.0f};    // the material's albedo here (textured), for the albedo AOV
   glm::vec3 aov_tint{1.0f};  // the sampled bounce's weight without 1/eta^2 (the AOVs' tint)
   bool specular = false;     // every lobe a delta lobe: the AOVs look through it
+  // Ray starts on the front (ng) and back side, computed when first needed (ray_start).
+  mutable uint8_t start_known = 0;
+  mutable glm::vec3 start[2]{};
   float pdf_fwd = 0.0f;
   float pdf_rev = 0.0f;
   float env_pdf_pos = 0.0f;  // an environment vertex's density per area across w_env
@@ -144,11 +147,19 @@ float pdf_area(const Vertex& x, const Vertex* prev, const Vertex& next) {
   return to_area(surface_pdf(x, direction(x, *prev), w_next), x, next);
 }
 
-// Where a ray from vertex x towards w starts (on the side w leaves to).
+// Where a ray from vertex x towards w starts (on the side w leaves to). A vertex takes part in
+// many connections: each side's point is computed once and kept.
 glm::vec3 ray_start(const Vertex& x, glm::vec3 w, const RayOffsetParams& offset) {
-  const glm::vec3 side = glm::dot(x.ng, w) >= 0.0f ? x.ng : -x.ng;
-  const glm::vec3 at = x.smooth ? terminator_safe_point(x.corners, x.u, x.v, x.p, side) : x.p;
-  return leave_surface(x.tri, at, side, offset);
+  const bool front = glm::dot(x.ng, w) >= 0.0f;
+  const uint8_t bit = front ? 1 : 2;
+  glm::vec3& start = x.start[front ? 0 : 1];
+  if (!(x.start_known & bit)) {
+    const glm::vec3 side = front ? x.ng : -x.ng;
+    const glm::vec3 at = x.smooth ? terminator_safe_point(x.corners, x.u, x.v, x.p, side) : x.p;
+    start = leave_surface(x.tri, at, side, offset);
+    x.start_known |= bit;
+  }
+  return start;
 }
 
 // Per thread: the two subpaths, grown once to the depth limit.
@@ -227,6 +238,7 @@ void BdptTracer::surface_aovs(glm::vec3& albedo, glm::vec3& normal) const {
 bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
   x.type = VertexType::kSurface;
   x.point_light = false;
+  x.start_known = 0;
   x.prim = hit.prim;
   x.u = hit.u;
   x.v = hit.v;
@@ -350,6 +362,7 @@ int BdptTracer::light_subpath(Vertex* path, int max_vertices, Sampler& sampler) 
   const BdptIntegrator::Emitter& e = it_.emitters_[pick.index];
   Vertex& x = path[0];
   x.type = VertexType::kLight;
+  x.start_known = 0;
   x.connectible = true;
   x.wo = glm::vec3(0.0f);
   x.pdf_rev = 0.0f;
