@@ -18,6 +18,7 @@
 
 #include "buffer_cache.h"
 #include "convert.h"
+#include "denoise_arrays.h"
 #include "ray_queries.h"
 #include "scene_data.h"
 #include "tritrace/accel/make_accel.h"
@@ -805,6 +806,25 @@ milliseconds, rays, threads: what was rendered and how.)")
                std::to_string(f.image.shape(0)) + ", " + f.integrator + ", " +
                std::to_string(f.spp) + " spp>";
       });
+
+  m.def("denoise", &denoise_arrays, "color"_a, "albedo"_a = none, "normal"_a = none,
+        "depth"_a = none, "variance"_a = none, py::kw_only(), "search_radius"_a = 7,
+        "threads"_a = none,
+        R"(Denoises an image with the built-in feature-guided denoiser, as `tritrace denoise`
+denoises an EXR with the same layers, returning a new float32 (height, width, 3) array.
+
+color: (height, width, 3) linear radiance; albedo and normal: (height, width, 3), depth:
+(height, width), the first non-specular hit's features as render() returns them (aovs
+"albedo", "normal", "depth"), or None to leave that feature out (without albedo the colour is
+not divided by it); variance: (height, width, 3), the variance of each pixel's mean (render()'s
+aovs "variance"), averaged over 5 x 5 pixels as `tritrace denoise` averages an EXR's variance
+layer, or None to estimate it from the image (larger than the truth at edges). So
+denoise(f.image, f.albedo, f.normal, f.depth, f.variance) of a render f is the image
+render(..., denoise=True) returns, bit for bit. Any real dtype (converted once to float32);
+every value must be finite. search_radius: 1 to 32 (a (2r+1)^2 window; larger smooths more
+and takes longer); threads: None (all cores) or a count. The result is the same for any
+thread count. Releases the GIL while filtering. Bad shapes or values raise ValueError naming
+the argument, wrong types TypeError.)");
 
   m.def("render", &render_scene, "scene"_a, py::kw_only(), "integrator"_a = none, "spp"_a = none,
         "width"_a = none, "height"_a = none, "seed"_a = none, "sampler"_a = none,

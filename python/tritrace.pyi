@@ -258,3 +258,31 @@ def render(
     pixel took on average, aovs "spp" gives Frame.spp_map. Bad values raise ValueError with the
     CLI's message, wrong types TypeError.
     """
+
+
+def denoise(
+    color: npt.ArrayLike,
+    albedo: Optional[npt.ArrayLike] = None,
+    normal: Optional[npt.ArrayLike] = None,
+    depth: Optional[npt.ArrayLike] = None,
+    variance: Optional[npt.ArrayLike] = None,
+    *,
+    search_radius: int = 7,
+    threads: Optional[int] = None,
+) -> npt.NDArray[np.float32]:
+    """Denoises an image with the built-in feature-guided denoiser, as `tritrace denoise`
+    denoises an EXR with the same layers; returns a new float32 (height, width, 3) array.
+
+    color: (height, width, 3) linear radiance. albedo and normal: (height, width, 3), depth:
+    (height, width): the first non-specular hit's features as render() returns them (aovs
+    "albedo", "normal", "depth"), or None to leave that feature out (without albedo the colour
+    is not divided by it). variance: (height, width, 3), the variance of each pixel's mean
+    (render()'s aovs "variance"), averaged over 5 x 5 pixels as `tritrace denoise` averages an
+    EXR's variance layer; None estimates it from the image (larger than the truth at edges).
+    So denoise(f.image, f.albedo, f.normal, f.depth, f.variance) of a render f is the image
+    render(..., denoise=True) returns, bit for bit. Any real dtype (converted once to float32);
+    every value must be finite. search_radius: 1 to 32 (a (2r+1)^2 window; larger smooths more
+    and takes longer). threads: None (all cores) or a count; the result is the same for any.
+    Releases the GIL while filtering. Bad shapes or values raise ValueError naming the
+    argument, wrong types TypeError.
+    """

@@ -25,9 +25,29 @@ std::string window_title(double frame_ms, int width, int height, uint32_t spp,
 
 std::string window_title(double frame_ms, int width, int height, uint32_t spp, uint32_t target_spp,
                          uint32_t denoised_spp) {
-  std::string title = window_title(frame_ms, width, height, spp, target_spp);
-  return title + (denoised_spp > 0 ? ", denoised at " + std::to_string(denoised_spp) + " spp"
-                                   : std::string(", denoise on"));
+  return window_title(frame_ms, width, height,
+                      PathTitle{.spp = spp,
+                                .target_spp = target_spp,
+                                .denoise = true,
+                                .denoised_spp = denoised_spp,
+                                .stopped = {},
+                                .refining = {}});
+}
+
+std::string window_title(double frame_ms, int width, int height, const PathTitle& path) {
+  std::string title = window_title(frame_ms, width, height, path.spp, path.target_spp);
+  if (path.noise_threshold > 0.0f) {
+    char threshold[48];
+    std::snprintf(threshold, sizeof threshold, ", noise threshold %g", path.noise_threshold);
+    title += threshold;
+  }
+  if (path.denoise) {
+    title += path.denoised_spp > 0 ? ", denoised at " + std::to_string(path.denoised_spp) + " spp"
+                                   : std::string(", denoise on");
+  }
+  if (!path.stopped.empty()) title += ", stopped: " + path.stopped;
+  if (!path.refining.empty()) title += ", " + path.refining;
+  return title;
 }
 
 double RenderTimeReport::seconds_until_due(double now) const {

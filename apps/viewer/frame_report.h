@@ -19,6 +19,21 @@ std::string window_title(double frame_ms, int width, int height, uint32_t spp, u
 std::string window_title(double frame_ms, int width, int height, uint32_t spp, uint32_t target_spp,
                          uint32_t denoised_spp);
 
+// Everything the path tracer's title tells besides the frame time and size.
+struct PathTitle {
+  uint32_t spp = 0;              // the samples per pixel the window shows
+  uint32_t target_spp = 1;       // --spp: the most at rest
+  float noise_threshold = 0.0f;  // adaptive sampling's threshold; 0: off
+  bool denoise = false;          // N is on
+  uint32_t denoised_spp = 0;     // the spp of the denoised image shown; 0: none shown yet
+  std::string stopped{};         // why refinement at rest stopped ("time limit"); empty: it goes on
+  std::string refining{};  // what is being rendered meanwhile ("refining to 256 spp, part 3/8")
+};
+// "tritrace — 52.3 ms/frame, 128/1024 spp, 500x500, noise threshold 0.05, denoised at 128 spp,
+// stopped: converged": the overloads above, with the threshold when adaptive sampling is on, the
+// reason when refinement at rest has stopped, and what is being refined while a level renders.
+std::string window_title(double frame_ms, int width, int height, const PathTitle& path);
+
 // Collects frame times and says when the next "Render time: N ms" line is due: at once for the
 // first frame, then at most once a second, giving the mean of the frames since the last line.
 class RenderTimeReport {

@@ -23,6 +23,9 @@ class SampleSchedule {
   uint32_t samples_taken() const { return taken_; }
   uint32_t target() const { return target_; }
   bool done() const { return taken_ >= target_; }
+  // The last frame's render time per sample (0 before any): what one sample of the whole image
+  // costs.
+  double ms_per_sample() const { return ms_per_sample_; }
 
   // A resting frame grows at most this many times over the one before: a single fast frame (the
   // machine briefly idle) must not commit the next to far more than the budget.

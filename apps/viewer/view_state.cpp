@@ -98,6 +98,11 @@ std::string render_command_line(const JobSettings& flags, const ViewState& state
   if (rendered.clamp > 0.0f) line += " --clamp " + format_float(rendered.clamp);
   const FilterKind filter = filter_choice(flags);
   if (filter != FilterKind::kBox) line += " --filter " + std::string(filter_name(filter));
+  // Adaptive sampling decides which samples each pixel takes, and the denoiser (N) is the image.
+  if (!flags.noise_threshold.empty()) {
+    line += " --noise-threshold " + shell_quote(flags.noise_threshold);
+  }
+  if (flags.denoise) line += " --denoise";
   return line;
 }
 

@@ -70,8 +70,9 @@ inline constexpr IntegratorSpec kLabSpec{.kind = IntegratorSpec::Kind::kLab};
 // accel and kernel when not the defaults, and every view value in a form the CLI reads back
 // exactly, so that its image is the viewer's bit for bit. `rendered` is how the image was made:
 // for the path tracer, `--integrator path`, its spp (the samples the image holds) and seed, and
-// --max-depth and --filter when the flags gave them; for the lab integrator, `--integrator lab`
-// only when the flags asked for it.
+// --max-depth, --filter and --noise-threshold when the flags gave them, and --denoise when
+// flags.denoise is set (the viewer sets it when the image is denoised); for the lab integrator,
+// `--integrator lab` only when the flags asked for it.
 std::string render_command_line(const JobSettings& flags, const ViewState& state, int width,
                                 int height, const IntegratorSpec& rendered = kLabSpec);
 

@@ -25,10 +25,12 @@
 #include <thread>
 #include <vector>
 
+#include "film_parts.h"
 #include "flags/flag_values.h"
 #include "frame_report.h"
 #include "overlay.h"
 #include "pixels.h"
+#include "refinement.h"
 #include "sample_schedule.h"
 #include "screenshot.h"
 #include "tritrace/accel/make_accel.h"
@@ -220,11 +222,37 @@ class Viewer {
     spec_ = job_->spec();
     path_ = job_->path();
     render_options_ = job_->options();
-    schedule_.emplace(spec_.spp, kFrameBudgetMs);
+    check_path_only();
+    limits_.max_spp = spec_.spp;
+    limits_.noise_threshold = render_options_.noise_threshold;
+    JobSettings time_limit;  // the library's conversion of the checked text
+    time_limit.time_limit = options_.time_limit;
+    limits_.time_limit_seconds = time_limit_seconds(time_limit);
+    // As `tritrace render --time-limit`: without --spp, refinement goes on until the time is up.
+    if (limits_.time_limit_seconds && options_.scene.spp.empty()) {
+      limits_.max_spp = spec_.spp = kMaxSpp;
+    }
+    // Frames accumulate uniformly; the adaptive levels set the threshold themselves.
+    render_options_.noise_threshold = 0.0f;
+    schedule_.emplace(uniform_end(limits_), kFrameBudgetMs);
+    denoise_ = path_ && options_.denoise;
     return loop();
   }
 
  private:
+  // The viewer's own path-tracer settings, refused with the lab integrator for the reasons the
+  // render job refuses them (it checks --noise-threshold itself).
+  void check_path_only() const {
+    if (path_) return;
+    if (options_.time_limit.empty() && !options_.denoise) return;
+    const bool time = !options_.time_limit.empty();
+    throw Error(time ? "--time-limit" : "--denoise",
+                std::string("applies to the path tracer; ") +
+                    (time ? "the lab integrator takes one sample per pixel"
+                          : "the lab integrator's image has no noise"),
+                ExitCode::kUsage);
+  }
+
   // Loads the scene and builds its accel on a thread of their own, while this one keeps the
   // window answering and shows the phase (the words of `tritrace render`'s phase line) with its
   // time in the title and in the window. Returns false when the window was closed (or Esc
@@ -369,8 +397,8 @@ class Viewer {
       if (need_render) {
         new_image = render_frame(times);
         if (new_image) need_present = true;
-        // The path tracer goes on adding samples while the view rests, up to the scene's spp.
-        need_render = path_ && !schedule_->done();
+        // The path tracer goes on refining while the view rests, until a limit stops it.
+        need_render = path_ && stopped_ == StopReason::kNone;
       }
       if (need_present) {
         present(times);
@@ -441,27 +469,47 @@ class Viewer {
     if (path_) {
       // Any change of the view or size starts the film over; otherwise this frame adds the
       // next whole sample indices [taken, taken + k) of every pixel, so the film after N samples
-      // holds exactly the sums `tritrace render --spp N` makes, added in the same order.
+      // holds exactly the sums `tritrace render --spp N` makes, added in the same order. With a
+      // noise threshold, past uniform_end the frame renders a tile part of the next adaptive
+      // level instead (refinement.h).
       const int w = scene.camera.width(), h = scene.camera.height();
       const bool restart = film_.width() != w || film_.height() != h || film_view_ != view_ ||
-                           (denoise_ && !(film_.aovs() == kDenoiseAovs));
-      const uint32_t spp = schedule_->next_frame(restart);
-      if (spp == 0) {
-        // The film holds its samples; a denoised image may still be due (the key was pressed).
-        // Or the image shown is denoised but should no longer be (the key turned it off).
-        if (!denoise_due() && !(shown_denoised_ && !keep_denoised())) return false;
-      } else {
-        if (restart) {
-          film_ = Film(w, h, denoise_ ? kDenoiseAovs : AovSet{});
-          film_view_ = view_;
-          denoised_spp_ = 0;
+                           (denoise_ && !has_denoise_aovs(film_.aovs()));
+      const StopReason stopped_before = stopped_;
+      bool added = false;
+      if (restart) {
+        film_ = Film(w, h, denoise_ ? kDenoiseAovs : AovSet{});
+        film_view_ = view_;
+        denoised_spp_ = 0;
+        level_.reset();
+        level_ms_per_sample_ = 0.0;
+        converged_ = false;
+        stopped_ = StopReason::kNone;
+        rest_start_ = start;
+      }
+      if (stopped_ == StopReason::kNone) {
+        const uint32_t spp = schedule_->next_frame(restart);
+        if (spp > 0) {
+          RenderOptions options = render_options_;
+          options.first_sample = schedule_->samples_taken();
+          options.spp = spp;
+          job_->render_to_film(film_, options, &stats);
+          schedule_->frame_rendered(spp, stats.milliseconds);
+          image_spp_ = schedule_->samples_taken();
+          added = true;
+        } else {
+          added = render_level_part(w, h, stats);
         }
-        RenderOptions options = render_options_;
-        options.first_sample = schedule_->samples_taken();
-        options.spp = spp;
-        job_->render_to_film(film_, options, &stats);
-        schedule_->frame_rendered(spp, stats.milliseconds);
-        image_spp_ = schedule_->samples_taken();
+        stopped_ =
+            stop_reason(limits_, image_spp_, converged_, seconds_since(rest_start_, Clock::now()));
+        // A level left unfinished is dropped: the image stays the last whole one.
+        if (stopped_ != StopReason::kNone) level_.reset();
+      }
+      if (!added && stopped_ == stopped_before) {
+        if (level_) show_level_progress(stats.milliseconds);
+        // A denoised image may still be due (the key was pressed), or the image shown is
+        // denoised but should no longer be (the key turned it off).
+        if (!denoise_due() && !(shown_denoised_ && !keep_denoised())) return false;
       }
     } else {
       image_ = job_->render(&stats).image;
@@ -510,27 +558,82 @@ class Viewer {
     return true;
   }
 
+  // Renders the next tile part of the next adaptive level (starting the level when none is under
+  // way); true when that completed the level, which then becomes the film shown. False, with
+  // nothing rendered, when there is no level left (the image has max_spp samples).
+  bool render_level_part(int w, int h, RenderStats& stats) {
+    if (!level_) {
+      const uint32_t spp = next_adaptive_level(image_spp_, limits_.max_spp);
+      if (spp == 0) return false;
+      const int tiles =
+          ((w + kPartTileSize - 1) / kPartTileSize) * ((h + kPartTileSize - 1) / kPartTileSize);
+      // The last level's cost per sample where there is one (pixels that stopped make an
+      // adaptive sample cheaper than a uniform frame's), else the uniform frames'.
+      const double ms_per_sample =
+          level_ms_per_sample_ > 0.0 ? level_ms_per_sample_ : schedule_->ms_per_sample();
+      level_.emplace();
+      level_->spp = spp;
+      level_->parts = level_parts(ms_per_sample, spp, kFrameBudgetMs, tiles);
+    }
+    Level& level = *level_;
+    // The spp AOV says whether every pixel stopped before the level's end (converged).
+    AovSet aovs = film_.aovs();
+    aovs.spp = true;
+    Film part(w, h, aovs);
+    RenderOptions options = render_options_;
+    options.first_sample = 0;
+    options.spp = level.spp;
+    options.noise_threshold = limits_.noise_threshold;
+    options.tile_part = level.next_part;
+    options.tile_parts = level.parts;
+    job_->render_to_film(part, options, &stats);
+    level.milliseconds += stats.milliseconds;
+    copy_tile_part(part, level.next_part, level.parts, level.film);
+    if (++level.next_part < level.parts) return false;
+    level_ms_per_sample_ = level.milliseconds / level.spp;
+    float most = 0.0f;
+    const Image taken = level.film.resolve_spp();
+    for (const glm::vec3& p : taken.pixels()) most = std::max(most, p.x);
+    converged_ = most < static_cast<float>(level.spp);
+    film_ = std::move(level.film);
+    image_spp_ = level.spp;
+    level_.reset();
+    return true;
+  }
+
+  // The title while a level renders: the image's, and how far the level is.
+  void show_level_progress(double part_ms) {
+    PathTitle title = path_title();
+    title.refining = "refining to " + std::to_string(level_->spp) + " spp, part " +
+                     std::to_string(level_->next_part) + "/" + std::to_string(level_->parts);
+    SDL_SetWindowTitle(window_.get(),
+                       window_title(part_ms, image_.width(), image_.height(), title).c_str());
+  }
+
+  static bool has_denoise_aovs(const AovSet& aovs) {
+    return aovs.albedo && aovs.normal && aovs.depth && aovs.variance;
+  }
+
   // The viewer denoises only a view at rest: the film not started over by this frame (so at 2 spp
   // or more, with both halves for the variance), and then each time its samples have doubled
-  // since the last denoised image (2, 4, 8, ... spp) and once more when the film is complete.
+  // since the last denoised image (2, 4, 8, ... spp) and once more when refinement stops.
   // Denoising costs about as much as rendering 16 spp, so its share of the time falls as samples
   // grow, while the image shown improves at least as fast as the noise the samples remove.
   bool denoise_due() const {
-    if (!denoise_ || image_spp_ < 2 || film_.width() == 0 || !(film_.aovs() == kDenoiseAovs)) {
+    if (!denoise_ || image_spp_ < 2 || film_.width() == 0 || !has_denoise_aovs(film_.aovs())) {
       return false;
     }
     if (denoised_spp_ == 0) return true;
-    return image_spp_ >= 2 * denoised_spp_ || (schedule_->done() && image_spp_ > denoised_spp_);
+    return image_spp_ >= 2 * denoised_spp_ ||
+           (stopped_ != StopReason::kNone && image_spp_ > denoised_spp_);
   }
 
   // The denoised image shown is of this film and still wanted.
   bool keep_denoised() const { return denoise_ && shown_denoised_ && denoised_spp_ > 0; }
 
-  // The film denoised with its own features and the variance of its sample halves.
-  Image denoised_frame() const {
-    const AovImages aovs = film_.resolve_aovs();
-    return denoise(film_.resolve(), aovs.variance, {aovs.albedo, aovs.normal, aovs.depth});
-  }
+  // The film denoised with its own features and the variance of its sample halves, exactly as
+  // `tritrace render --denoise` denoises its film.
+  Image denoised_frame() const { return denoise_film_image(film_.resolve(), film_.resolve_aovs()); }
 
   // How image_ becomes bytes, in the window as in files: as `tritrace render` writes it.
   ImageEncoding encoding() const { return path_ ? ImageEncoding::srgb() : ImageEncoding::lab(); }
@@ -562,23 +665,38 @@ class Viewer {
   void frame_done(const FrameTimes& times) {
     last_times_ = times;
     const int w = image_.width(), h = image_.height();
-    const std::string title = !path_     ? window_title(times.total(), w, h)
-                              : denoise_ ? window_title(times.total(), w, h, image_spp_, spec_.spp,
-                                                        shown_denoised_ ? denoised_spp_ : 0)
-                                         : window_title(times.total(), w, h, image_spp_, spec_.spp);
+    const std::string title =
+        path_ ? window_title(times.total(), w, h, path_title()) : window_title(times.total(), w, h);
     SDL_SetWindowTitle(window_.get(), title.c_str());
     if (!options_.quiet && !benchmarking()) report_.add_frame(times.total());
     if (benchmarking()) benchmark_.push_back(times);
   }
 
+  // What the path tracer's title says besides the frame time and size.
+  PathTitle path_title() const {
+    return PathTitle{.spp = image_spp_,
+                     .target_spp = limits_.max_spp,
+                     .noise_threshold = limits_.noise_threshold,
+                     .denoise = denoise_,
+                     .denoised_spp = shown_denoised_ ? denoised_spp_ : 0,
+                     .stopped = std::string(stop_reason_text(stopped_)),
+                     .refining = {}};
+  }
+
+  // The image shown, with --denoise when it is denoised.
   std::string command_for_image() const {
-    return render_command_line(options_.scene, image_view_, image_.width(), image_.height(),
+    JobSettings flags = options_.scene;
+    flags.denoise = shown_denoised_;
+    return render_command_line(flags, image_view_, image_.width(), image_.height(),
                                rendered_spec());
   }
 
-  // The view at rest as the image it converges to: for the path tracer, at the scene's spp.
+  // The view at rest as the image it converges to: for the path tracer, at the scene's spp (and
+  // denoised when N is on).
   std::string command_for_view() const {
-    return render_command_line(options_.scene, image_view_, image_.width(), image_.height(), spec_);
+    JobSettings flags = options_.scene;
+    flags.denoise = denoise_;
+    return render_command_line(flags, image_view_, image_.width(), image_.height(), spec_);
   }
 
   void save_screenshot() {
@@ -587,9 +705,8 @@ class Viewer {
     const std::filesystem::path path = next_screenshot_path(ec ? "." : folder);
     try {
       write_image(image_, path.string(), encoding());
-      // A denoised screenshot is that command's image denoised in the viewer.
-      print_line("saved " + path.string() + ": " + command_for_image() +
-                 (shown_denoised_ ? "  (denoised)" : ""));
+      // A denoised screenshot's command has --denoise: the viewer denoises as render does.
+      print_line("saved " + path.string() + ": " + command_for_image());
     } catch (const Error& e) {
       // A full disk or a read-only folder must not end the session: say so and go on.
       std::fprintf(stderr, "tritrace-view: %s\n", e.what());
@@ -614,22 +731,36 @@ class Viewer {
     if (image_view_.light) view += ", light " + format_vec3(*image_view_.light);
     std::string shading = "integrator " + std::string(integrator_name(spec_.kind));
     if (path_) {
-      shading += ": " + std::to_string(image_spp_) + " of " + std::to_string(spec_.spp) + " spp, " +
-                 std::string(sampler_name(spec_.sampler)) + " sampler, seed " +
+      shading += ": " + std::to_string(image_spp_) + " of " + std::to_string(limits_.max_spp) +
+                 " spp" +
+                 (stopped_ != StopReason::kNone
+                      ? " (stopped: " + std::string(stop_reason_text(stopped_)) + ")"
+                      : std::string()) +
+                 ", " + std::string(sampler_name(spec_.sampler)) + " sampler, seed " +
                  std::to_string(spec_.seed) + ", max depth " + std::to_string(spec_.max_depth) +
                  ", " + std::string(filter_name(render_options_.filter)) + " filter";
     }
-    return {"tritrace-view (H hides this)",
-            stats,
-            scene,
-            view,
-            shading,
-            "",
-            "Left/Right    orbit the camera",
-            "Up/Down       move the camera forward/back",
-            "W/S A/D Q/E   move the light +z/-z, -x/+x, up/down",
-            "N denoise the resting image (path; on: " + std::string(denoise_ ? "yes" : "no") + ")",
-            "R reset   P screenshot   H help   Esc quit"};
+    std::string limits;
+    if (path_) {
+      limits = "refinement at rest: up to " + std::to_string(limits_.max_spp) + " spp";
+      if (limits_.adaptive()) {
+        limits += ", noise threshold " + format_float(limits_.noise_threshold);
+      }
+      if (limits_.time_limit_seconds) {
+        limits += ", time limit " + format_double(*limits_.time_limit_seconds) + " s";
+      }
+    }
+    std::vector<std::string> lines{"tritrace-view (H hides this)", stats, scene, view, shading};
+    if (path_) lines.push_back(limits);
+    const std::vector<std::string> keys{
+        "",
+        "Left/Right    orbit the camera",
+        "Up/Down       move the camera forward/back",
+        "W/S A/D Q/E   move the light +z/-z, -x/+x, up/down",
+        "N denoise the resting image (path; on: " + std::string(denoise_ ? "yes" : "no") + ")",
+        "R reset   P screenshot   H help   Esc quit"};
+    lines.insert(lines.end(), keys.begin(), keys.end());
+    return lines;
   }
 
   void print_benchmark() const {
@@ -667,7 +798,22 @@ class Viewer {
   Film film_;                                  // the path tracer's samples of film_view_
   ViewState film_view_;
   std::optional<SampleSchedule> schedule_;
-  uint32_t image_spp_ = 0;  // the samples per pixel image_ is the mean of (path)
+  uint32_t image_spp_ = 0;        // the samples per pixel image_ is the mean of (path)
+  RefinementLimits limits_;       // --spp, --noise-threshold, --time-limit (path)
+  Clock::time_point rest_start_;  // when the film last started over: the view came to rest
+  StopReason stopped_ = StopReason::kNone;  // why the film takes no more samples
+  bool converged_ = false;  // the last adaptive level stopped every pixel before its end
+  // An adaptive level being rendered a tile part per frame, into a film of its own; film_ keeps
+  // the last whole image until the level is complete.
+  struct Level {
+    uint32_t spp = 0;
+    int parts = 1;
+    int next_part = 0;
+    double milliseconds = 0.0;  // the render time of its parts so far
+    Film film;
+  };
+  std::optional<Level> level_;
+  double level_ms_per_sample_ = 0.0;  // the last whole level's; 0: none since the restart
   // N: denoise the path tracer's film while the view rests (denoise_due). The film then keeps the
   // denoiser's features and the even half's sums for the variance.
   static constexpr AovSet kDenoiseAovs{

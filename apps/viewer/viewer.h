@@ -14,6 +14,11 @@ struct ViewerOptions {
   bool quiet = false;        // no "Render time" lines
   bool print_state = false;  // print the view as a `tritrace render` command when it comes to rest
   int benchmark_frames = 0;  // > 0: render this many frames turning, print medians, exit
+  // The path tracer's refinement at rest stops this many seconds after the view came to rest
+  // (the checked text of --time-limit; empty: no limit). scene.noise_threshold is the viewer's
+  // --noise-threshold, and scene.spp the most samples at rest.
+  std::string time_limit;
+  bool denoise = false;  // --denoise: start with the denoiser on (as if N were pressed)
 };
 
 // The line printed (after "tritrace-view: ") when there is no display to open a window on.

@@ -10,8 +10,8 @@ DOC = pathlib.Path(__file__).resolve().parents[2] / "docs" / "PYTHON.md"
 EXAMPLES = re.findall(r"```python\n(.*?)```", DOC.read_text(), re.S)
 
 
-def test_the_doc_has_its_three_examples():
-    assert len(EXAMPLES) == 3
+def test_the_doc_has_its_four_examples():
+    assert len(EXAMPLES) == 4
 
 
 @pytest.mark.parametrize("index", range(len(EXAMPLES)))
@@ -31,6 +31,11 @@ def test_example_runs(index, tmp_path, capsys):
         assert namespace["visible"].shape == (100, 50)
         assert 0 < namespace["visible"].mean() < 1  # the blocks hide some pairs, not all
         assert "of the pairs see each other" in capsys.readouterr().out
+    elif index == 3:
+        out = capsys.readouterr().out
+        assert "as render(denoise=True): True" in out
+        before, after = (float(v) for v in out.split("RMSE ")[1].split(" -> "))
+        assert after < 0.7 * before
     else:
         assert (tmp_path / "views.npz").exists()
         assert namespace["images"].shape == (8, 128, 128, 3)

@@ -87,7 +87,7 @@ def check_signature(function, node):
         assert same_default(a, b), f"{node.name}({name}): {a} vs {b}"
 
 
-@pytest.mark.parametrize("name", ["load", "render"])
+@pytest.mark.parametrize("name", ["load", "render", "denoise"])
 def test_functions_have_the_stubs_parameters(name):
     check_signature(getattr(tritrace, name), stub_top_level()[name])
 

@@ -34,6 +34,23 @@ TEST(WindowTitle, SaysWhenTheImageIsDenoised) {
             "tritrace \u2014 8.0 ms/frame, 1/64 spp, 64x48, denoise on");
 }
 
+TEST(WindowTitle, SaysTheThresholdAndWhyRefinementStopped) {
+  EXPECT_EQ(window_title(52.34, 500, 500,
+                         PathTitle{.spp = 128, .target_spp = 1024, .noise_threshold = 0.05f}),
+            "tritrace \u2014 52.3 ms/frame, 128/1024 spp, 500x500, noise threshold 0.05");
+  EXPECT_EQ(window_title(8.0, 64, 48,
+                         PathTitle{.spp = 40,
+                                   .target_spp = 1000,
+                                   .denoise = true,
+                                   .denoised_spp = 32,
+                                   .stopped = "time limit"}),
+            "tritrace \u2014 8.0 ms/frame, 40/1000 spp, 64x48, denoised at 32 spp, stopped: time "
+            "limit");
+  EXPECT_EQ(
+      window_title(8.0, 64, 48, PathTitle{.spp = 64, .target_spp = 64, .stopped = "spp reached"}),
+      "tritrace \u2014 8.0 ms/frame, 64/64 spp, 64x48, stopped: spp reached");
+}
+
 TEST(RenderTimeReport, FirstFrameAtOnceThenAtMostOncePerSecond) {
   RenderTimeReport r;
   EXPECT_FALSE(r.pending());

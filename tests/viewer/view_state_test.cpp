@@ -180,6 +180,23 @@ TEST(CommandLine, NamesTheBidirectionalPathTracer) {
             "--integrator bdpt --spp 12 --seed 5");
 }
 
+TEST(CommandLine, TheNoiseThresholdAndTheDenoiserChangeThePixels) {
+  JobSettings flags;
+  flags.scene = "cornell-area";
+  flags.noise_threshold = "0.05";
+  ViewState s;
+  IntegratorSpec path;
+  path.kind = IntegratorSpec::Kind::kPath;
+  path.spp = 256;
+  EXPECT_EQ(render_command_line(flags, s, 64, 48, path),
+            "tritrace render --scene cornell-area --yaw 0 --distance 3 --width 64 --height 48 "
+            "--integrator path --spp 256 --seed 0 --noise-threshold 0.05");
+  flags.denoise = true;
+  EXPECT_EQ(render_command_line(flags, s, 64, 48, path),
+            "tritrace render --scene cornell-area --yaw 0 --distance 3 --width 64 --height 48 "
+            "--integrator path --spp 256 --seed 0 --noise-threshold 0.05 --denoise");
+}
+
 TEST(CommandLine, TheLabIntegratorOnlyWhenAskedFor) {
   JobSettings flags;
   flags.scene = "cornell-area";  // a path tracer's scene, shown with the lab's shading

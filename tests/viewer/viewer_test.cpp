@@ -414,6 +414,22 @@ class ViewerTest : public ::testing::Test {
     return std::nullopt;
   }
 
+  // Polls the title until `ok` holds (false after `timeout`).
+  template <typename Ok>
+  bool WaitForTitle(Ok ok, std::chrono::milliseconds timeout = 30s) {
+    for (const Clock::time_point end = Clock::now() + timeout; Clock::now() < end;) {
+      if (ok(Title())) return true;
+      if (WaitExit(viewer_, 0ms).has_value()) return false;
+      std::this_thread::sleep_for(20ms);
+    }
+    return false;
+  }
+
+  // Whether `shot`'s command has `flag` (a flag without a value).
+  static bool HasFlag(const Shot& shot, const std::string& flag) {
+    return std::find(shot.command.begin(), shot.command.end(), flag) != shot.command.end();
+  }
+
   // utime + stime of the viewer, in seconds.
   double CpuSeconds() const {
     const std::string stat = ReadFile("/proc/" + std::to_string(viewer_) + "/stat");
@@ -637,6 +653,134 @@ TEST_F(ViewerTest, PathScreenshotsAreTheCliImageAtTheirSamples) {
   EXPECT_NE(ReadFile(turned.path), ReadFile(done.path));
 }
 
+// With --noise-threshold the resting view is refined in whole adaptive images of 128, 256, ...
+// spp, each a few tiles a frame, until a level stops every pixel before its end: the title says
+// "stopped: converged", and the screenshot's command (with --noise-threshold and the level's spp)
+// renders the same file byte for byte. (At 64 x 48 with T 0.3 no pixel takes more than 512
+// samples, measured with `tritrace render --aovs spp`; so the level of 1024 is the last.) The
+// same with the denoiser on: each level's film denoised as `render --denoise` denoises it.
+TEST_F(ViewerTest, NoiseThresholdRefinesInAdaptiveLevelsUntilConverged) {
+  ASSERT_NO_FATAL_FAILURE(StartViewer({"--scene", "cornell-area", "--width", "64", "--height", "48",
+                                       "--spp", "4096", "--noise-threshold", "0.3", "-q"}));
+  EXPECT_TRUE(WaitForTitle([](const std::string& t) {
+    return t.find("stopped: converged") != std::string::npos;
+  })) << Title()
+      << "; stderr: " << Err();
+  const std::string title = Title();
+  EXPECT_NE(title.find(", 1024/4096 spp, "), std::string::npos) << title;
+  EXPECT_NE(title.find("noise threshold 0.3"), std::string::npos) << title;
+  const Shot shot = Screenshot(1);
+  ASSERT_FALSE(shot.command.empty());
+  EXPECT_EQ(Value(shot, "--spp"), "1024");
+  EXPECT_EQ(Value(shot, "--noise-threshold"), "0.3");
+  RenderWithCli(shot.command, "cli.png");
+  EXPECT_EQ(ReadFile(shot.path), ReadFile(work_.path() / "cli.png"));
+  // Stopped: no more samples, and the view sleeps.
+  std::this_thread::sleep_for(300ms);
+  const double cpu_before = CpuSeconds();
+  std::this_thread::sleep_for(1s);
+  EXPECT_LT(CpuSeconds() - cpu_before, 0.1);
+  EXPECT_EQ(TitleSpp()->first, 1024);
+  EXPECT_FALSE(HasFlag(shot, "--denoise"));
+
+  // N: the film starts over with the denoiser's features and is refined to the same level.
+  Key("n");
+  EXPECT_TRUE(WaitForTitle([](const std::string& t) {
+    return t.find("denoised at 1024 spp, stopped: converged") != std::string::npos;
+  })) << Title();
+  const Shot denoised = Screenshot(2);
+  ASSERT_FALSE(denoised.command.empty());
+  EXPECT_TRUE(HasFlag(denoised, "--denoise"));
+  EXPECT_EQ(Value(denoised, "--spp"), "1024");
+  RenderWithCli(denoised.command, "cli_denoised.png");
+  EXPECT_EQ(ReadFile(denoised.path), ReadFile(work_.path() / "cli_denoised.png"));
+  EXPECT_NE(ReadFile(denoised.path), ReadFile(shot.path));
+}
+
+// --time-limit stops refinement that long after the view comes to rest, also in the middle of an
+// adaptive level (which is dropped: the image stays the last whole level, the CLI's at its spp);
+// moving the view starts over, and the limit stops it again.
+TEST_F(ViewerTest, TimeLimitStopsRefinementAndAKeyRestartsIt) {
+  ASSERT_NO_FATAL_FAILURE(
+      StartViewer({"--scene", "cornell-area", "--width", "64", "--height", "48",
+                   "--noise-threshold", "0.002", "--time-limit", "1.5", "-q", "--print-state"}));
+  ASSERT_FALSE(WaitForLines("view: ", 1).empty());
+  const auto stopped = [](const std::string& t) {
+    return t.find("stopped: time limit") != std::string::npos;
+  };
+  EXPECT_TRUE(WaitForTitle(stopped)) << Title() << "; stderr: " << Err();
+  // Without --spp the most is the CLI's for --time-limit, 2^24.
+  const std::optional<std::pair<int, int>> spp = TitleSpp();
+  ASSERT_TRUE(spp.has_value());
+  EXPECT_EQ(spp->second, 16777216);
+  EXPECT_GE(spp->first, 1);
+  const Shot shot = Screenshot(1);
+  ASSERT_FALSE(shot.command.empty());
+  EXPECT_EQ(Value(shot, "--spp"), std::to_string(spp->first));
+  EXPECT_EQ(Value(shot, "--noise-threshold"), "0.002");
+  RenderWithCli(shot.command, "cli.png");
+  EXPECT_EQ(ReadFile(shot.path), ReadFile(work_.path() / "cli.png")) << "at " << spp->first;
+  std::this_thread::sleep_for(500ms);
+  EXPECT_EQ(TitleSpp()->first, spp->first) << "no samples after the limit";
+
+  Hold("Left", 300ms);
+  ASSERT_FALSE(WaitForLines("view: ", 2).empty());
+  EXPECT_TRUE(WaitForTitle([&](const std::string& t) { return !stopped(t); }, 5s)) << Title();
+  EXPECT_TRUE(WaitForTitle(stopped)) << Title();
+}
+
+// --denoise starts with the denoiser on; the resting image is `tritrace render --denoise`'s, and
+// the screenshot's command says --denoise.
+TEST_F(ViewerTest, DenoisedScreenshotIsTheCliDenoisedImage) {
+  ASSERT_NO_FATAL_FAILURE(StartViewer({"--scene", "cornell-area", "--width", "48", "--height", "40",
+                                       "--spp", "32", "--denoise", "-q", "--print-state"}));
+  // The view's command: the image it converges to is denoised.
+  const std::vector<std::string> view = WaitForLines("view: ", 1);
+  ASSERT_FALSE(view.empty());
+  EXPECT_NE(view[0].find(" --spp 32 --seed 0 --denoise"), std::string::npos) << view[0];
+  EXPECT_TRUE(WaitForTitle([](const std::string& t) {
+    return t.find("32/32 spp") != std::string::npos &&
+           t.find("denoised at 32 spp") != std::string::npos &&
+           t.find("stopped: spp reached") != std::string::npos;
+  })) << Title()
+      << "; stderr: " << Err();
+  const Shot shot = Screenshot(1);
+  ASSERT_FALSE(shot.command.empty());
+  EXPECT_TRUE(HasFlag(shot, "--denoise"));
+  RenderWithCli(shot.command, "cli.png");
+  EXPECT_EQ(ReadFile(shot.path), ReadFile(work_.path() / "cli.png"));
+  // N turns it off: the next screenshot is the noisy film, without --denoise.
+  Key("n");
+  EXPECT_TRUE(WaitForTitle([](const std::string& t) {
+    return t.find("denoise") == std::string::npos;
+  })) << Title();
+  const Shot plain = Screenshot(2);
+  EXPECT_FALSE(HasFlag(plain, "--denoise"));
+  EXPECT_NE(ReadFile(plain.path), ReadFile(shot.path));
+}
+
+// The path tracer's settings mean nothing to the lab integrator: refused as `tritrace render`
+// refuses them.
+TEST_F(ViewerTest, PathSettingsWithTheLabIntegratorAreUsageErrors) {
+  for (const auto& [flags, line] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"--time-limit", "2"},
+            "tritrace-view: --time-limit: applies to the path tracer; the lab integrator takes one "
+            "sample per pixel\n"},
+           {{"--noise-threshold", "0.1"},
+            "tritrace-view: --noise-threshold: applies to the path tracer; the lab integrator "
+            "takes one sample per pixel\n"},
+           {{"--denoise"},
+            "tritrace-view: --denoise: applies to the path tracer; the lab integrator's image has "
+            "no noise\n"},
+       }) {
+    std::vector<std::string> args{TRITRACE_VIEW_PATH, "--width", "32", "--height", "32"};
+    args.insert(args.end(), flags.begin(), flags.end());
+    const RunResult r = RunCommand(args, env_, work_.path(), 30s);
+    EXPECT_EQ(r.exit_code, 2) << line;
+    EXPECT_EQ(r.err, line);
+  }
+}
+
 // Once the film has the scene's samples, the path tracer stops and the viewer sleeps like the
 // lab's.
 TEST_F(ViewerTest, IdlePathTracerUsesAlmostNoCpuOnceConverged) {
@@ -763,6 +907,11 @@ TEST(ViewerFlags, BadValuesNameTheFlagAndExitTwo) {
             "tritrace-view: --light: must be three finite numbers X,Y,Z, got '1,2'"},
            {{"--kernel", "fast"}, "tritrace-view: --kernel: unknown kernel 'fast'"},
            {{"--bogus"}, "tritrace-view: --bogus: unknown option or argument (see --help)"},
+           {{"--noise-threshold", "1"},
+            "tritrace-view: --noise-threshold: must be a relative error greater than 0 and less "
+            "than 1"},
+           {{"--time-limit", "0"},
+            "tritrace-view: --time-limit: must be a number of seconds greater than 0"},
        }) {
     std::vector<std::string> args{TRITRACE_VIEW_PATH};
     args.insert(args.end(), c.args.begin(), c.args.end());
