@@ -162,7 +162,9 @@ glm::vec3 ray_start(const Vertex& x, glm::vec3 w, const RayOffsetParams& offset)
   return start;
 }
 
-// Per thread: the two subpaths, grown once to the depth limit.
+// Per thread: the two subpaths. They grow (doubling) as long subpaths need, up to the depth limit,
+// rather than to it at once: --max-depth 65536 would otherwise take tens of megabytes per thread.
+inline constexpr size_t kInitialSubpathVertices = 16;
 struct Subpaths {
   std::vector<Vertex> camera, light;
 };
@@ -194,10 +196,10 @@ class BdptTracer {
   // Extends `path` (count vertices, the last the walk starts from) with vertices sampled from
   // `ray`, whose direction has density pdf_dir at the last vertex; beta is the throughput the
   // next vertex receives. `light` selects the adjoint (importance) transport. Returns the count.
-  int walk(Vertex* path, int count, int max_vertices, Ray ray, glm::vec3 beta, float pdf_dir,
-           bool light, Sampler& sampler, Hit* first_hit);
+  int walk(std::vector<Vertex>& path, int count, int max_vertices, Ray ray, glm::vec3 beta,
+           float pdf_dir, bool light, Sampler& sampler, Hit* first_hit);
   // Light subpath: returns its vertex count (0 when the scene has no emitter).
-  int light_subpath(Vertex* path, int max_vertices, Sampler& sampler);
+  int light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler);
   // Whether nothing blocks the segment between camera-side vertex c and light-side vertex l.
   bool visible(const Vertex& c, const Vertex& l);
   float mis_weight(Vertex* light, Vertex* camera, int s, int t) const;
@@ -269,11 +271,15 @@ bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
   return true;
 }
 
-int BdptTracer::walk(Vertex* path, int count, int max_vertices, Ray ray, glm::vec3 beta,
-                     float pdf_dir, bool light, Sampler& sampler, Hit* first_hit) {
+int BdptTracer::walk(std::vector<Vertex>& path, int count, int max_vertices, Ray ray,
+                     glm::vec3 beta, float pdf_dir, bool light, Sampler& sampler, Hit* first_hit) {
   const int roulette_depth = it_.settings_.roulette_depth;
   glm::vec3 rr_beta(1.0f);  // the throughput since the subpath's start, for Russian roulette
   while (count < max_vertices) {
+    // Room for vertex `count` (references into `path` are taken after this only).
+    if (static_cast<size_t>(count) >= path.size()) {
+      path.resize(std::min(2 * path.size(), static_cast<size_t>(max_vertices)));
+    }
     // One ray at a time: the accel's incoherent query (a packet of one would cost a third more).
     Hit hit;
     accel_.intersect_incoherent(std::span<const Ray>(&ray, 1), std::span<Hit>(&hit, 1));
@@ -355,7 +361,7 @@ int BdptTracer::walk(Vertex* path, int count, int max_vertices, Ray ray, glm::ve
   return count;
 }
 
-int BdptTracer::light_subpath(Vertex* path, int max_vertices, Sampler& sampler) {
+int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler) {
   const auto [u_choice, u_point, u_dir] = sampler.get_2d_groups<3>();
   if (it_.table_.empty() || max_vertices < 1) return 0;
   const AliasTable::Sample pick = it_.table_.sample(u_choice.x);
@@ -539,14 +545,11 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
   const int max_camera = settings.max_depth + 2;
   const int max_light = settings.max_depth + 1;
   Subpaths& sub = thread_subpaths();
-  if (sub.camera.size() < static_cast<size_t>(max_camera)) {
-    sub.camera.resize(static_cast<size_t>(max_camera));
-    sub.light.resize(static_cast<size_t>(max_light));
+  if (sub.camera.empty()) {
+    sub.camera.resize(kInitialSubpathVertices);
+    sub.light.resize(kInitialSubpathVertices);
   }
-  Vertex* camera = sub.camera.data();
-  Vertex* light = sub.light.data();
-
-  Vertex& c0 = camera[0];
+  Vertex& c0 = sub.camera[0];
   c0.type = VertexType::kCamera;
   c0.p = camera_ray.origin;
   c0.delta = false;
@@ -556,10 +559,13 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
   first_hit = Hit{};
   camera_escaped_ = false;
   // The camera's own density (for t = 1) is never needed: 1 stands for it.
-  const int nc =
-      walk(camera, 1, max_camera, camera_ray, glm::vec3(1.0f), 1.0f, false, sampler, &first_hit);
+  const int nc = walk(sub.camera, 1, max_camera, camera_ray, glm::vec3(1.0f), 1.0f, false, sampler,
+                      &first_hit);
   camera_count_ = nc;
-  const int nl = light_subpath(light, max_light, sampler);
+  const int nl = light_subpath(sub.light, max_light, sampler);
+  // The subpaths no longer grow: plain pointers from here.
+  Vertex* camera = sub.camera.data();
+  Vertex* light = sub.light.data();
 
   const bool only = settings.only_s >= 0 && settings.only_t >= 0;
   glm::vec3 total(0.0f);
