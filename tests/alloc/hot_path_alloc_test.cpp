@@ -97,8 +97,8 @@ TEST_P(HotPath, PathTracerTileLoopAllocatesNothing) {
   EXPECT_GT(traced, 3u * 128u * 128u);  // camera rays, shadow rays and bounces
 }
 
-// The bidirectional path tracer keeps its subpaths in per-thread arrays grown once to the depth
-// limit: after the first tiles, none of its work allocates.
+// The bidirectional path tracer keeps its subpaths in per-thread arrays that grow only when a
+// longer subpath than any before needs it: after the first tiles, none of its work allocates.
 TEST_P(HotPath, BdptTileLoopAllocatesNothing) {
   const Scene scene = make_builtin_scene("cornell-area", {.width = 32, .height = 32});
   const std::unique_ptr<Accel> accel = make_accel(GetParam(), scene.mesh, kDefaultKernel);
