@@ -5,7 +5,9 @@ For each scene: a long uniform reference render, then adaptive renders (threshol
 most) and uniform renders, alternating, each timed by the render's own summary line (render time
 only, no load or accel build). RMSE is over all pixels and channels of the linear radiance
 against the reference; uniform's RMSE is also scaled to the adaptive render's time as
-RMSE x sqrt(t_uniform / t_adaptive) (Monte Carlo error falls as 1 / sqrt(time)).
+RMSE x sqrt(t_uniform / t_adaptive) (Monte Carlo error falls as 1 / sqrt(time)), by the render
+time of the summary line and by the process's CPU time (steadier on a shared machine). Each
+configuration ends with the medians of its rounds.
 
 Usage: bench/adaptive_rmse.py TRITRACE [--size 128] [--ref-spp 8192] [--rounds 2]
 No NumPy: PFM files are read with the standard library.
@@ -15,6 +17,7 @@ import array
 import math
 import os
 import re
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -61,12 +64,21 @@ def relmse(a, ref):
 
 
 def render(tritrace, scene, size, extra, out):
+    """Runs one render: (render ms from the summary line, the process's CPU ms, mean spp or None,
+    the command). CPU time (user + system of the process and its threads) is the steadier clock
+    on a machine shared with other work: wall time there depends on what else runs."""
     cmd = [tritrace, "render", *SCENES[scene], "--width", str(size), "--height", str(size),
            "-o", out, *extra]
-    text = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
+    text = proc.stdout.read()
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    if proc.returncode != 0:
+        raise subprocess.CalledProcessError(proc.returncode, cmd)
+    cpu_ms = (usage.ru_utime + usage.ru_stime) * 1e3
     ms = float(re.search(r" in ([0-9.]+) ms", text).group(1))
     mean = re.search(r"mean ([0-9.]+) spp", text)
-    return ms, (float(mean.group(1)) if mean else None), " ".join(cmd)
+    return ms, cpu_ms, (float(mean.group(1)) if mean else None), " ".join(cmd)
 
 
 def main():
@@ -75,6 +87,7 @@ def main():
     p.add_argument("--size", type=int, default=128)
     p.add_argument("--ref-spp", type=int, default=8192)
     p.add_argument("--rounds", type=int, default=2)
+    p.add_argument("--first-seed", type=int, default=0, help="round r uses seed first-seed + r + 1")
     p.add_argument("--ref-dir", default=None, help="reuse <scene>_ref.pfm from here")
     p.add_argument("--configs", default="glass:0.05:1024:128,cornell-area:0.05:1024:128",
                    help="scene:threshold:max_spp:uniform_spp,...")
@@ -84,30 +97,52 @@ def main():
         scene, t, most, uni = config.split(":")
         ref_path = os.path.join(a.ref_dir or tmp, scene + "_ref.pfm")
         if not os.path.exists(ref_path):
-            ms, _, cmd = render(a.tritrace, scene, a.size,
-                                ["--spp", str(a.ref_spp), "--seed", "99"], ref_path)
+            ms, _, _, cmd = render(a.tritrace, scene, a.size,
+                                   ["--spp", str(a.ref_spp), "--seed", "99"], ref_path)
             print("reference: %s (%.0f ms)" % (cmd, ms))
         ref = read_pfm(ref_path)
+        ratios, cpu_ratios, mean_diffs, uniform_diffs = [], [], [], []
+        ref_mean = sum(ref) / len(ref)
         for r in range(a.rounds):
-            seed = str(r + 1)
+            seed = str(r + 1 + a.first_seed)
             out = os.path.join(tmp, "x.pfm")
-            ta, mean, cmd_a = render(a.tritrace, scene, a.size,
-                                     ["--spp", most, "--noise-threshold", t, "--seed", seed], out)
+            ta, ca, mean, cmd_a = render(a.tritrace, scene, a.size,
+                                         ["--spp", most, "--noise-threshold", t, "--seed", seed],
+                                         out)
             img = read_pfm(out)
             ea, ra, da = rmse(img, ref), relmse(img, ref), display_rmse(img, ref)
-            tu, _, cmd_u = render(a.tritrace, scene, a.size, ["--spp", uni, "--seed", seed], out)
+            mean_diffs.append(sum(img) / len(img) - ref_mean)
+            tu, cu, _, cmd_u = render(a.tritrace, scene, a.size, ["--spp", uni, "--seed", seed],
+                                      out)
             img = read_pfm(out)
             eu, ru, du = rmse(img, ref), relmse(img, ref), display_rmse(img, ref)
+            uniform_diffs.append(sum(img) / len(img) - ref_mean)
             # At equal time: RMSE scales as 1 / sqrt(time), relMSE (a squared error) as 1 / time.
             eu_eq, ru_eq, du_eq = eu * math.sqrt(tu / ta), ru * tu / ta, du * math.sqrt(tu / ta)
-            print("%s round %d: adaptive T=%s max %s spp: %.0f ms, mean %.1f spp, RMSE %.5f, "
-                  "relMSE %.3g | uniform %s spp: %.0f ms, RMSE %.5f (%.5f at adaptive's time), "
-                  "relMSE %.3g (%.3g) | RMSE ratio %.2f, relMSE ratio %.2f, display RMSE "
-                  "%.5f vs %.5f, ratio %.2f"
-                  % (scene, r, t, most, ta, mean, ea, ra, uni, tu, eu, eu_eq, ru, ru_eq,
-                     ea / eu_eq, ra / ru_eq, da, du_eq, da / du_eq))
+            cpu_ratio = ea / (eu * math.sqrt(cu / ca))
+            ratios.append(ea / eu_eq)
+            cpu_ratios.append(cpu_ratio)
+            print("%s round %d: adaptive T=%s max %s spp: %.0f ms (CPU %.0f), mean %.1f spp, "
+                  "RMSE %.5f, relMSE %.3g | uniform %s spp: %.0f ms (CPU %.0f), RMSE %.5f "
+                  "(%.5f at adaptive's time), relMSE %.3g (%.3g) | RMSE ratio %.2f (CPU time "
+                  "%.2f), relMSE ratio %.2f, display RMSE %.5f vs %.5f, ratio %.2f"
+                  % (scene, r, t, most, ta, ca, mean, ea, ra, uni, tu, cu, eu, eu_eq, ru, ru_eq,
+                     ea / eu_eq, cpu_ratio, ra / ru_eq, da, du_eq, da / du_eq))
             if r == 0:
                 print("  " + cmd_a + "\n  " + cmd_u)
+        print("%s T=%s: median RMSE ratio %.2f (render time), %.2f (CPU time) over %d rounds"
+              % (scene, t, statistics.median(ratios), statistics.median(cpu_ratios), a.rounds))
+        if a.rounds > 1:
+            # Bias check: the images' mean minus the reference's, against the standard error of
+            # that mean over the rounds (seeds), for adaptive and, as a control, uniform sampling
+            # (a heavy-tailed scene's low-spp images fall short of the mean most of the time, and
+            # a few seeds then understate the standard error, for both).
+            for name, diffs in (("adaptive", mean_diffs), ("uniform", uniform_diffs)):
+                d = statistics.mean(diffs)
+                se = statistics.stdev(diffs) / math.sqrt(len(diffs))
+                print("%s T=%s: %s image mean - reference mean = %.3g (reference %.5g), "
+                      "standard error over seeds %.2g, %.1f standard errors"
+                      % (scene, t, name, d, ref_mean, se, abs(d) / se if se > 0 else 0.0))
     return 0
 
 

@@ -16,7 +16,6 @@
 #include "build_info.h"
 #include "flags/flag_values.h"
 #include "tritrace/accel/make_accel.h"
-#include "tritrace/denoise/denoiser.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/job/render_job.h"
@@ -319,9 +318,8 @@ int run_bench(const BenchArgs& args) {
             const RenderedImage frame = job.render(&stats);
             if (args.denoise) {
               const auto start = std::chrono::steady_clock::now();
-              const Image denoised =
-                  denoise(frame.image, frame.aovs.variance,
-                          {frame.aovs.albedo, frame.aovs.normal, frame.aovs.depth});
+              // What render --denoise runs: the variance layer smoothed and corrected, both passes.
+              const Image denoised = denoise_film_image(frame.image, frame.aovs);
               const std::chrono::duration<double, std::milli> took =
                   std::chrono::steady_clock::now() - start;
               if (i > 0) denoise_ms.push_back(took.count());

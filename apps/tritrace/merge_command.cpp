@@ -43,11 +43,12 @@ int run_merge(const MergeArgs& args) {
   const bool path = info.render.integrator != "lab";  // path or bdpt: sRGB output
   check_exposure(settings, path);
   const Film film = merge_parts(args.parts);
-  const RenderedImage rendered{film.resolve(), film.resolve_aovs()};
-  write_render(rendered, args.output, path, settings);
-  const Image& image = rendered.image;
+  RenderedImage rendered{film.resolve(), film.resolve_aovs()};
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  rendered.record = merged_record(info.render, film, ms * 1e-3);
+  write_render(rendered, args.output, path, settings);
+  const Image& image = rendered.image;
   if (!args.quiet) {
     std::printf("merged %zu part%s of render %s (%dx%d, %u spp) in %.1f ms to %s\n",
                 args.parts.size(), args.parts.size() == 1 ? "" : "s", info.render.hash.c_str(),

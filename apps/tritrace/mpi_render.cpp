@@ -147,10 +147,11 @@ size_t piece_bytes() {
   return bytes;
 }
 
-// A result is a head (unit index, float count) followed by the floats' bytes in pieces.
-void send_result(uint64_t unit, const std::vector<float>& data, size_t piece) {
-  const uint64_t head[2] = {unit, data.size()};
-  MPI_Send(head, 2, MPI_UINT64_T, 0, kResult, MPI_COMM_WORLD);
+// A result is a head (unit index, float count, camera samples taken) followed by the floats' bytes
+// in pieces. The samples add up to the render's mean spp under adaptive sampling.
+void send_result(uint64_t unit, const std::vector<float>& data, uint64_t samples, size_t piece) {
+  const uint64_t head[3] = {unit, data.size(), samples};
+  MPI_Send(head, 3, MPI_UINT64_T, 0, kResult, MPI_COMM_WORLD);
   const char* bytes = reinterpret_cast<const char*>(data.data());
   const size_t total = data.size() * sizeof(float);
   for (size_t at = 0; at < total; at += piece) {
@@ -199,15 +200,18 @@ void setup(const RenderArgs& args, RankSetup& s) {
   std::exit(1);
 }
 
-// Renders a unit of the job into an image-sized film and keeps only the unit's pixels.
-Film render_unit(const RankSetup& s, const PartRange& u) {
+// Renders a unit of the job into an image-sized film and keeps only the unit's pixels; adds the
+// camera samples it took to `samples`.
+Film render_unit(const RankSetup& s, const PartRange& u, uint64_t& samples) {
   RenderOptions options = s.job->options();
   options.first_sample = u.first;
   options.spp = u.end - u.first;
   options.tile_part = u.tile;
   options.tile_parts = u.tiles;
   Film film = s.job->make_film();
-  s.job->render_to_film(film, options, nullptr);
+  RenderStats stats;
+  s.job->render_to_film(film, options, &stats);
+  samples += stats.samples;
   return pack_part(film, u.tile, u.tiles);
 }
 
@@ -226,9 +230,10 @@ void work(int rank, const RankSetup& s, const std::vector<PartRange>& units) {
     if (status.MPI_TAG == kStop) return;
     if (must_die) std::raise(SIGKILL);
     const PartRange& u = units[static_cast<size_t>(unit)];
-    const Film packed = render_unit(s, u);
+    uint64_t samples = 0;
+    const Film packed = render_unit(s, u, samples);
     const PackedShape shape = packed_shape(s.identity.width, s.identity.height, u.tile, u.tiles);
-    send_result(static_cast<uint64_t>(unit), pack(packed, shape.pixels), piece);
+    send_result(static_cast<uint64_t>(unit), pack(packed, shape.pixels), samples, piece);
   }
 }
 
@@ -333,6 +338,7 @@ int run_render_mpi(const RenderArgs& args) {
   // the one ending where it starts is held until then; units are handed out in that order, so
   // few are ever held.
   FilmMerger merger(s.identity, units.front().tiles);
+  uint64_t samples = 0;  // camera samples taken by every unit, for the mean spp
   std::vector<bool> received(units.size(), false);
   try {
     std::vector<PartInfo> infos;
@@ -344,7 +350,7 @@ int run_render_mpi(const RenderArgs& args) {
     (void)plan_merge(names, infos);
     if (ranks == 1) {
       // No worker: rank 0 renders every unit itself.
-      for (const PartRange& u : units) merger.add(u, render_unit(s, u));
+      for (const PartRange& u : units) merger.add(u, render_unit(s, u, samples));
     }
   } catch (const Error& e) {
     abort_job(0, e.what());
@@ -356,8 +362,8 @@ int run_render_mpi(const RenderArgs& args) {
     MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &status);
     const int from = status.MPI_SOURCE;
     if (status.MPI_TAG == kResult) {
-      uint64_t head[2] = {0, 0};
-      MPI_Recv(head, 2, MPI_UINT64_T, from, kResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+      uint64_t head[3] = {0, 0, 0};
+      MPI_Recv(head, 3, MPI_UINT64_T, from, kResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
       const uint64_t u = head[0];
       const std::string sender = "rank " + std::to_string(from);
       if (u >= units.size() || received[u]) abort_job(0, sender + " sent an unknown unit");
@@ -369,6 +375,7 @@ int run_render_mpi(const RenderArgs& args) {
       std::vector<float> data(head[1]);
       if (!receive_pieces(from, data)) abort_job(0, sender + " sent a unit of the wrong size");
       received[u] = true;
+      samples += head[2];
       try {
         merger.add(units[u], unpack(data, s.identity, units[u]));
       } catch (const Error& e) {
@@ -389,14 +396,21 @@ int run_render_mpi(const RenderArgs& args) {
   }
 
   const size_t most_held = merger.most_held();
+  // The whole job's time (start-up, rendering and gathering on every rank), as the EXR records it.
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   try {
     const Film film = std::move(merger).finish();
-    s.job->write(film, args.job.output);
+    RenderStats stats;
+    stats.milliseconds = ms;
+    stats.samples = samples;
+    stats.pixels =
+        static_cast<uint64_t>(s.identity.width) * static_cast<uint64_t>(s.identity.height);
+    stats.spp = s.identity.spp;
+    s.job->write(film, args.job.output, stats);
   } catch (const Error& e) {
     abort_job(0, e.what());
   }
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (!args.quiet) {
     std::printf(
         "rendered %dx%d, %u spp on %d rank%s (%zu units, at most %zu held for merging, start-up "

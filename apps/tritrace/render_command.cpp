@@ -58,8 +58,9 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
   sub->add_option("--time-limit", args.job.time_limit,
                   "Render the path tracer's samples in passes until SECONDS have passed (the "
                   "first pass of 8 samples always; --spp, if given, is the most a pixel takes), "
-                  "then write the image and say how many spp it reached; the image is the one "
-                  "--spp of that many gives")
+                  "or with --noise-threshold until every pixel has stopped, whichever comes "
+                  "first; then write the image and say how many spp it reached and why it "
+                  "stopped; the image is the one --spp of that many gives")
       ->type_name("SECONDS")
       ->check(checked(setting_check("--time-limit")));
   sub->add_flag("--denoise", args.job.denoise,
@@ -69,12 +70,14 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
                 "them are written");
   sub->add_option("--noise-threshold", args.job.noise_threshold,
                   "Adaptive sampling for the path tracer: each pixel stops taking samples once the "
-                  "estimated relative standard error of its mean luminance (from the running "
-                  "second moment of its own samples; below a luminance of 0.1 relative to 0.1) "
-                  "is below T at a check and was below 1.41 T at the one before (checks at 32, 64, "
+                  "estimated standard error of its mean luminance L (from the running second "
+                  "moment of its own samples) divided by sqrt(L) (sqrt(0.1) below L = 0.1), a "
+                  "relative error at L = 1, is below T at a check and was below 1.41 T at the one "
+                  "before (checks at 32, 64, "
                   "128, ... samples, so the first stop is at 64); --spp is the most a pixel "
                   "takes. The image is the same for any thread count and tile size, and --tile "
-                  "parts and --mpi still merge exactly; not with --spp-range or --time-limit. "
+                  "parts and --mpi still merge exactly; not with --spp-range. With --time-limit, "
+                  "passes until the time is up or every pixel has stopped. "
                   "--aovs spp writes how many samples each pixel took")
       ->type_name("T")
       ->check(checked(setting_check("--noise-threshold")));
@@ -181,8 +184,13 @@ int run_render(const RenderArgs& args) {
   if (!args.quiet) {
     const Image& image = rendered.image;
     if (job.path()) {
+      const RenderStop stop = rendered.record.stop;
       const std::string limit =
-          timed ? " (time limit " + settings.time_limit + " s)" : std::string();
+          !timed ? std::string()
+                 : " (time limit " + settings.time_limit + " s" +
+                       (stop == RenderStop::kTimeLimit   ? ": stopped by the time limit)"
+                        : stop == RenderStop::kConverged ? ": every pixel converged first)"
+                                                         : ": --spp reached first)");
       std::printf(
           "rendered %dx%d, %u spp%s in %.1f ms%s (%.3g Mpaths/s, %.3g Mrays/s, %d thread%s) to "
           "%s\n",

@@ -63,6 +63,22 @@ std::string ReadFile(const fs::path& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
+// An EXR file's bytes with the values of the times tritrace records in the header
+// (tritrace.renderSeconds, tritrace.denoiseSeconds: 4-byte floats after the name, the type and
+// the size) zeroed: two renders of the same image are then the same bytes, every other attribute
+// included. The times are the only part of tritrace's EXR that a clock decides.
+std::string ReadExrWithoutTimes(const fs::path& path) {
+  std::string bytes = ReadFile(path);
+  for (const char* name : {"tritrace.renderSeconds", "tritrace.denoiseSeconds"}) {
+    const std::string key = std::string(name) + std::string("\0float\0\x04\0\0\0", 11);
+    const size_t at = bytes.find(key);
+    if (at != std::string::npos && at + key.size() + 4 <= bytes.size()) {
+      bytes.replace(at + key.size(), 4, 4, '\0');
+    }
+  }
+  return bytes;
+}
+
 // Every entry in `folder`, hidden ones included, sorted.
 std::vector<std::string> ListFolder(const fs::path& folder) {
   std::vector<std::string> names;
@@ -1766,7 +1782,8 @@ TEST_F(DistributedCliTest, AdaptiveTilePartsMergeBitForBit) {
   }
   const RunResult merged = Merge(tiles, "merged.exr");
   ASSERT_EQ(merged.exit_code, 0) << merged.err;
-  EXPECT_TRUE(ReadFile(work_ / "merged.exr") == ReadFile(work_ / "whole.exr"));
+  EXPECT_TRUE(ReadExrWithoutTimes(work_ / "merged.exr") ==
+              ReadExrWithoutTimes(work_ / "whole.exr"));
   // Uniform sampling makes another file.
   ASSERT_EQ(Run({"render", "--scene", "cornell-area", "--spp", "128", "--width", "40", "--height",
                  "40", "--aovs", "spp", "-o", "uniform.exr"})
@@ -1781,19 +1798,103 @@ TEST_F(DistributedCliTest, AdaptiveTilePartsMergeBitForBit) {
   EXPECT_EQ(bad.exit_code, 2);
 }
 
+// The EXR's header records the render: spp, the mean spp under adaptive sampling (the mean of the
+// spp layer, read back with OpenEXR), the render time, the time limit and the threshold, and why
+// it stopped; a merge of tile parts records the whole render's, and the summary line says the
+// same. A generous time limit gives the threshold alone's image; a tiny one stops after the first
+// pass of 8 and says so.
+TEST_F(DistributedCliTest, TheExrHeaderRecordsSppTimeLimitAndThreshold) {
+  const auto adaptive = [](std::vector<std::string> extra) {
+    std::vector<std::string> args = {
+        "render", "--scene", "cornell-area",      "--spp", "128", "--width", "40", "--height", "40",
+        "--aovs", "spp",     "--noise-threshold", "0.05"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  };
+  const auto mean_spp = [](const ExrContents& e) {
+    double sum = 0.0;
+    for (float v : e.channels.at("spp").values) sum += v;
+    return sum / static_cast<double>(e.channels.at("spp").values.size());
+  };
+  const RunResult alone = Run(adaptive({"-o", "alone.exr"}));
+  ASSERT_EQ(alone.exit_code, 0) << alone.err;
+  const ExrContents a = read_exr_channels((work_ / "alone.exr").string());
+  EXPECT_EQ(a.numbers.at("tritrace.spp"), 128.0);
+  EXPECT_EQ(a.numbers.at("tritrace.noiseThreshold"), static_cast<double>(0.05f));
+  EXPECT_EQ(a.numbers.at("tritrace.meanSpp"), static_cast<double>(static_cast<float>(mean_spp(a))));
+  EXPECT_LT(a.numbers.at("tritrace.meanSpp"), 128.0);
+  EXPECT_GT(a.numbers.at("tritrace.renderSeconds"), 0.0);
+  EXPECT_EQ(a.numbers.count("tritrace.timeLimit"), 0u);
+  EXPECT_EQ(a.strings.at("tritrace.stoppedBy"), "spp");
+  // The summary's render time is the header's (ms there, seconds here, both rounded).
+  std::smatch ms;
+  ASSERT_TRUE(std::regex_search(alone.out, ms, std::regex(" in ([0-9.]+) ms"))) << alone.out;
+  EXPECT_NEAR(std::stod(ms[1]) * 1e-3, a.numbers.at("tritrace.renderSeconds"), 1e-3);
+
+  const RunResult generous = Run(adaptive({"--time-limit", "100000", "-o", "generous.exr"}));
+  ASSERT_EQ(generous.exit_code, 0) << generous.err;
+  EXPECT_NE(generous.out.find("(time limit 100000 s: "), std::string::npos) << generous.out;
+  const ExrContents g = read_exr_channels((work_ / "generous.exr").string());
+  for (const char* c : {"R", "G", "B", "spp"}) {
+    EXPECT_EQ(g.channels.at(c).values, a.channels.at(c).values) << c;
+  }
+  EXPECT_EQ(g.numbers.at("tritrace.timeLimit"), 100000.0);
+  EXPECT_EQ(g.numbers.at("tritrace.meanSpp"), a.numbers.at("tritrace.meanSpp"));
+
+  const RunResult tiny = Run(adaptive({"--time-limit", "1e-9", "-o", "tiny.exr"}));
+  ASSERT_EQ(tiny.exit_code, 0) << tiny.err;
+  EXPECT_NE(tiny.out.find("rendered 40x40, 8 spp at most (mean 8.0 spp, noise threshold 0.05)"),
+            std::string::npos)
+      << tiny.out;
+  EXPECT_NE(tiny.out.find("(time limit 1e-9 s: stopped by the time limit)"), std::string::npos)
+      << tiny.out;
+  const ExrContents t = read_exr_channels((work_ / "tiny.exr").string());
+  EXPECT_EQ(t.numbers.at("tritrace.spp"), 8.0);
+  EXPECT_EQ(t.numbers.at("tritrace.meanSpp"), 8.0);
+  EXPECT_EQ(t.numbers.at("tritrace.timeLimit"), static_cast<double>(1e-9f));
+  EXPECT_EQ(t.strings.at("tritrace.stoppedBy"), "time limit");
+
+  // Tile parts merged: the whole render's spp, mean spp and threshold; its own time.
+  std::vector<std::string> tiles;
+  for (const char* i : {"0", "1"}) {
+    const std::string name = std::string("t") + i + ".exr";
+    ASSERT_EQ(Run(adaptive({"--tile", std::string(i) + "/2", "-o", name, "-q"})).exit_code, 0);
+    tiles.push_back(name);
+  }
+  ASSERT_EQ(Merge(tiles, "merged.exr").exit_code, 0);
+  const ExrContents m = read_exr_channels((work_ / "merged.exr").string());
+  for (const char* key : {"tritrace.spp", "tritrace.meanSpp", "tritrace.noiseThreshold"}) {
+    EXPECT_EQ(m.numbers.at(key), a.numbers.at(key)) << key;
+  }
+  EXPECT_GE(m.numbers.at("tritrace.renderSeconds"), 0.0);
+
+  // Uniform sampling: spp and the time only.
+  ASSERT_EQ(Run({"render", "--scene", "cornell-area", "--spp", "16", "--width", "16", "--height",
+                 "16", "-o", "uniform.exr", "-q"})
+                .exit_code,
+            0);
+  const ExrContents u = read_exr_channels((work_ / "uniform.exr").string());
+  EXPECT_EQ(u.numbers.at("tritrace.spp"), 16.0);
+  EXPECT_EQ(u.numbers.count("tritrace.meanSpp"), 0u);
+  EXPECT_EQ(u.numbers.count("tritrace.noiseThreshold"), 0u);
+}
+
 TEST_F(DistributedCliTest, AovsAndTheLabImageMergeBitForBit) {
-  const std::string whole = Whole("whole.exr", {"--aovs", "albedo,normal,depth,variance"});
+  Whole("whole.exr", {"--aovs", "albedo,normal,depth,variance"});
+  const std::string whole = ReadExrWithoutTimes(work_ / "whole.exr");
   RenderPart("a.exr", {"--aovs", "albedo,normal,depth,variance", "--spp-range", "0:8"});
   RenderPart("b.exr", {"--aovs", "albedo,normal,depth,variance", "--spp-range", "8:20"});
   ASSERT_EQ(Merge({"a.exr", "b.exr"}, "merged.exr").exit_code, 0);
-  EXPECT_TRUE(ReadFile(work_ / "merged.exr") == whole) << "radiance and every AOV";
+  EXPECT_TRUE(ReadExrWithoutTimes(work_ / "merged.exr") == whole) << "radiance and every AOV";
   // Tile parts of sample ranges, the variance's half buffers included.
   RenderPart("t0a.exr", {"--aovs", "variance", "--tile", "0/2", "--spp-range", "0:8"});
   RenderPart("t0b.exr", {"--aovs", "variance", "--tile", "0/2", "--spp-range", "8:20"});
   RenderPart("t1.exr", {"--aovs", "variance", "--tile", "1/2"});
-  const std::string variance_only = Whole("variance.exr", {"--aovs", "variance"});
+  Whole("variance.exr", {"--aovs", "variance"});
+  const std::string variance_only = ReadExrWithoutTimes(work_ / "variance.exr");
   ASSERT_EQ(Merge({"t1.exr", "t0b.exr", "t0a.exr"}, "tiles.exr").exit_code, 0);
-  EXPECT_TRUE(ReadFile(work_ / "tiles.exr") == variance_only) << "variance from tile parts";
+  EXPECT_TRUE(ReadExrWithoutTimes(work_ / "tiles.exr") == variance_only)
+      << "variance from tile parts";
 
   const std::vector<std::string> lab = {"render", "--width", "40", "--height", "40", "-q"};
   auto run_lab = [&](std::vector<std::string> extra) {

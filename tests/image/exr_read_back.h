@@ -3,9 +3,12 @@
 #pragma once
 
 #include <ImfChannelList.h>
+#include <ImfFloatAttribute.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
+#include <ImfIntAttribute.h>
+#include <ImfStringAttribute.h>
 
 #include <map>
 #include <string>
@@ -23,6 +26,10 @@ struct ExrContents {
   int height = 0;
   Imf::Compression compression = Imf::NO_COMPRESSION;
   std::map<std::string, ExrChannelData> channels;  // by full name, e.g. "albedo.R"
+  // The header's int and float attributes (as double) and string attributes, by name, beyond
+  // OpenEXR's own (tritrace.spp, tritrace.renderSeconds, ...).
+  std::map<std::string, double> numbers;
+  std::map<std::string, std::string> strings;
 };
 
 inline ExrContents read_exr_channels(const std::string& path) {
@@ -33,6 +40,15 @@ inline ExrContents read_exr_channels(const std::string& path) {
   contents.width = window.max.x - window.min.x + 1;
   contents.height = window.max.y - window.min.y + 1;
   contents.compression = header.compression();
+  for (auto it = header.begin(); it != header.end(); ++it) {
+    if (const auto* i = dynamic_cast<const Imf::IntAttribute*>(&it.attribute())) {
+      contents.numbers[it.name()] = i->value();
+    } else if (const auto* f = dynamic_cast<const Imf::FloatAttribute*>(&it.attribute())) {
+      contents.numbers[it.name()] = f->value();
+    } else if (const auto* t = dynamic_cast<const Imf::StringAttribute*>(&it.attribute())) {
+      contents.strings[it.name()] = t->value();
+    }
+  }
   const size_t count = static_cast<size_t>(contents.width) * contents.height;
   for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
     ExrChannelData& data = contents.channels[it.name()];

@@ -369,6 +369,28 @@ TEST_F(TempDir, ExrWithOnlyDepthHasRgbAndZ) {
   EXPECT_EQ(channel_at(back, "Z", 0, 0), 2.5f);
 }
 
+// Header attributes come back through OpenEXR's reader with their types and values; a name that
+// is empty or one of OpenEXR's own (which would replace the file's channel list or compression)
+// is refused before anything is written.
+TEST_F(TempDir, ExrHeaderAttributesRoundTripAndOpenExrsOwnNamesAreRefused) {
+  const std::vector<ExrAttribute> attributes = {{"tritrace.spp", 256},
+                                                {"tritrace.renderSeconds", 1.25f},
+                                                {"tritrace.stoppedBy", std::string("time limit")}};
+  write_exr(layer_image(4, 4, 0.5f), path("a.exr"), {}, ExrPixelType::kFloat, attributes);
+  const ExrContents back = read_exr_channels(path("a.exr"));
+  EXPECT_EQ(back.numbers.at("tritrace.spp"), 256.0);
+  EXPECT_EQ(back.numbers.at("tritrace.renderSeconds"), 1.25);
+  EXPECT_EQ(back.strings.at("tritrace.stoppedBy"), "time limit");
+  EXPECT_EQ(channel_at(back, "G", 1, 1), 0.5f + 5 * 0.0625f + 0.25f);  // layer_image's pixel
+  for (const char* bad : {"", "compression", "channels"}) {
+    const std::vector<ExrAttribute> one = {{bad, 1}};
+    EXPECT_THROW(write_exr(layer_image(4, 4, 0.0f), path("b.exr"), {}, ExrPixelType::kFloat, one),
+                 Error)
+        << bad;
+  }
+  EXPECT_EQ(entries(), 1u);
+}
+
 TEST_F(TempDir, ExrAovOfAnotherSizeThrowsAndWritesNothing) {
   const std::string p = path("bad.exr");
   try {

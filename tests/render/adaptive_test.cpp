@@ -132,7 +132,8 @@ TEST(AdaptiveSampling, FlatPixelsStopAtTheFirstChanceAndNoisyOnesGoOn) {
       }
       const float luminance = 0.2126f * m.x + 0.7152f * m.y + 0.0722f * m.z;
       const float var = 0.2126f * v.x + 0.7152f * v.y + 0.0722f * v.z;
-      if (std::sqrt(var) > 8.0f * threshold * std::max(luminance, float(kAdaptiveDarkFloor))) {
+      if (std::sqrt(var) >
+          8.0f * threshold * std::sqrt(std::max(luminance, float(kAdaptiveDarkFloor)))) {
         ++noisy;
         noisy_on += n > 64.0f;
       }
@@ -192,21 +193,74 @@ TEST_F(AdaptiveTest, NeedsTheSamplesFromZeroInOneGo) {
                Error);
 }
 
-TEST(AdaptiveError, RelativeStandardErrorWithADarkFloor) {
+// Passes that continue one film with the adaptive state (how --time-limit renders with
+// --noise-threshold) make every decision one call of the same total spp makes: the film, its
+// variance and spp AOVs are the one-call film's bit for bit, whether a pass ends before, at or
+// after a check (32, 64, 128), and whatever the threads and tile size of each pass.
+TEST_F(AdaptiveTest, PassesWithTheStateAreOneCallBitForBit) {
+  const RenderOptions whole{.threads = 1, .spp = 200, .noise_threshold = 0.05f};
+  const Film one = film(whole);
+  Film passes(scene_.camera.width(), scene_.camera.height(), kSppAndVariance);
+  AdaptiveState state;
+  const uint32_t cuts[] = {0, 8, 32, 40, 64, 128, 136, 200};
+  for (size_t k = 0; k + 1 < std::size(cuts); ++k) {
+    RenderOptions pass = whole;
+    pass.threads = 1 + static_cast<int>(k % 3);
+    pass.tile_size = 3 + static_cast<int>(k);
+    pass.first_sample = cuts[k];
+    pass.spp = cuts[k + 1] - cuts[k];
+    pass.adaptive_state = &state;
+    render_to_film(scene_, *accel_, integrator_, passes, pass);
+    EXPECT_EQ(state.end_sample, cuts[k + 1]);
+  }
+  EXPECT_TRUE(same_bits(one.resolve(), passes.resolve()));
+  EXPECT_TRUE(same_bits(one.resolve_spp(), passes.resolve_spp()));
+  EXPECT_TRUE(same_bits(one.resolve_variance(), passes.resolve_variance()));
+  // Pixels stopped early (or the test would show nothing), and the state counts those still on:
+  // the pixels whose spp AOV is the most.
+  const Image spp = one.resolve_spp();
+  const size_t on = static_cast<size_t>(std::count_if(
+      spp.pixels().begin(), spp.pixels().end(), [](const glm::vec3& p) { return p.x == 200.0f; }));
+  EXPECT_LT(on, spp.pixels().size());
+  // A pixel still on at 200 was not stopped by the check at 128; the state says active for it
+  // and for no other pixel.
+  EXPECT_EQ(state.active_pixels(), on);
+  // A pass that does not continue the state's end is refused.
+  RenderOptions wrong = whole;
+  wrong.first_sample = 200;
+  wrong.spp = 8;
+  AdaptiveState other;
+  wrong.adaptive_state = &other;
+  EXPECT_THROW(render_to_film(scene_, *accel_, integrator_, passes, wrong), Error);
+}
+
+TEST(AdaptiveError, StandardErrorOverTheSquareRootOfTheMeanWithADarkFloor) {
   PixelMoments m;
   // Samples 1 and 3, unit weights: mean 2, sample variance 2, variance of the mean 1.
   m.add(1.0, 1.0);
   m.add(1.0, 3.0);
-  EXPECT_NEAR(adaptive_error(m, 2), 0.5, 1e-12);
+  EXPECT_NEAR(adaptive_error(m, 2), 1.0 / std::sqrt(2.0), 1e-12);
+  // Samples 4 and 12: mean 8, standard error 4; relative to sqrt(8), not to 8.
+  PixelMoments bright;
+  bright.add(1.0, 4.0);
+  bright.add(1.0, 12.0);
+  EXPECT_NEAR(adaptive_error(bright, 2), 4.0 / std::sqrt(8.0), 1e-12);
+  // Weights: samples 2 (weight 1) and 6 (weight 3) make x_i = 2, 18, mean 20 / 4 = 5; the ratio
+  // estimator's variance ((2 - 5)^2 + (18 - 15)^2) / 4^2 x 2 / 1 = 2.25.
+  PixelMoments weighted;
+  weighted.add(1.0, 2.0);
+  weighted.add(3.0, 6.0);
+  EXPECT_NEAR(adaptive_error(weighted, 2), 1.5 / std::sqrt(5.0), 1e-12);
   // Constant samples: no error.
   PixelMoments flat;
   for (int i = 0; i < 4; ++i) flat.add(1.0, 0.7);
   EXPECT_NEAR(adaptive_error(flat, 4), 0.0, 1e-9);
-  // A dark pixel's error is relative to the floor: samples 0 and 0.002, standard error 0.001.
+  // A dark pixel's error is relative to the floor's root: samples 0 and 0.002, standard error
+  // 0.001.
   PixelMoments dark;
   dark.add(1.0, 0.0);
   dark.add(1.0, 0.002);
-  EXPECT_NEAR(adaptive_error(dark, 2), 0.001 / kAdaptiveDarkFloor, 1e-9);
+  EXPECT_NEAR(adaptive_error(dark, 2), 0.001 / std::sqrt(kAdaptiveDarkFloor), 1e-9);
   EXPECT_TRUE(std::isinf(adaptive_error(PixelMoments{}, 0)));
 }
 

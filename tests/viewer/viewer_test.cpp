@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -656,9 +657,10 @@ TEST_F(ViewerTest, PathScreenshotsAreTheCliImageAtTheirSamples) {
 // With --noise-threshold the resting view is refined in whole adaptive images of 128, 256, ...
 // spp, each a few tiles a frame, until a level stops every pixel before its end: the title says
 // "stopped: converged", and the screenshot's command (with --noise-threshold and the level's spp)
-// renders the same file byte for byte. (At 64 x 48 with T 0.3 no pixel takes more than 512
-// samples, measured with `tritrace render --aovs spp`; so the level of 1024 is the last.) The
-// same with the denoiser on: each level's film denoised as `render --denoise` denoises it.
+// renders the same file byte for byte. The last level is the first that is more than every
+// pixel's samples in the CLI's adaptive render of the same view (its spp layer): there every pixel
+// stopped before the level's end. The same with the denoiser on: each level's film denoised as
+// `render --denoise` denoises it.
 TEST_F(ViewerTest, NoiseThresholdRefinesInAdaptiveLevelsUntilConverged) {
   ASSERT_NO_FATAL_FAILURE(StartViewer({"--scene", "cornell-area", "--width", "64", "--height", "48",
                                        "--spp", "4096", "--noise-threshold", "0.3", "-q"}));
@@ -666,12 +668,27 @@ TEST_F(ViewerTest, NoiseThresholdRefinesInAdaptiveLevelsUntilConverged) {
     return t.find("stopped: converged") != std::string::npos;
   })) << Title()
       << "; stderr: " << Err();
+  const RunResult cli = RunCommand(
+      {TRITRACE_CLI_PATH, "render", "--scene", "cornell-area", "--width", "64", "--height", "48",
+       "--spp", "4096", "--noise-threshold", "0.3", "--aovs", "spp", "-o", "spp.exr", "-q"},
+      env_, work_.path());
+  ASSERT_EQ(cli.exit_code, 0) << cli.err;
+  const std::array<std::string, 3> spp_layer{"spp", "spp", "spp"};
+  const std::vector<tritrace::Image> spp =
+      tritrace::read_exr_layers((work_.path() / "spp.exr").string(), {&spp_layer, 1});
+  ASSERT_EQ(spp.size(), 1u);
+  float most = 0.0f;
+  for (const glm::vec3& s : spp[0].pixels()) most = std::max(most, s.x);
+  int level = 128;
+  while (static_cast<float>(level) <= most) level *= 2;
+  ASSERT_LT(level, 4096) << "the view must converge before --spp for this test";
+  const std::string level_text = std::to_string(level);
   const std::string title = Title();
-  EXPECT_NE(title.find(", 1024/4096 spp, "), std::string::npos) << title;
+  EXPECT_NE(title.find(", " + level_text + "/4096 spp, "), std::string::npos) << title;
   EXPECT_NE(title.find("noise threshold 0.3"), std::string::npos) << title;
   const Shot shot = Screenshot(1);
   ASSERT_FALSE(shot.command.empty());
-  EXPECT_EQ(Value(shot, "--spp"), "1024");
+  EXPECT_EQ(Value(shot, "--spp"), level_text);
   EXPECT_EQ(Value(shot, "--noise-threshold"), "0.3");
   RenderWithCli(shot.command, "cli.png");
   EXPECT_EQ(ReadFile(shot.path), ReadFile(work_.path() / "cli.png"));
@@ -680,18 +697,18 @@ TEST_F(ViewerTest, NoiseThresholdRefinesInAdaptiveLevelsUntilConverged) {
   const double cpu_before = CpuSeconds();
   std::this_thread::sleep_for(1s);
   EXPECT_LT(CpuSeconds() - cpu_before, 0.1);
-  EXPECT_EQ(TitleSpp()->first, 1024);
+  EXPECT_EQ(TitleSpp()->first, level);
   EXPECT_FALSE(HasFlag(shot, "--denoise"));
 
   // N: the film starts over with the denoiser's features and is refined to the same level.
   Key("n");
-  EXPECT_TRUE(WaitForTitle([](const std::string& t) {
-    return t.find("denoised at 1024 spp, stopped: converged") != std::string::npos;
+  EXPECT_TRUE(WaitForTitle([&](const std::string& t) {
+    return t.find("denoised at " + level_text + " spp, stopped: converged") != std::string::npos;
   })) << Title();
   const Shot denoised = Screenshot(2);
   ASSERT_FALSE(denoised.command.empty());
   EXPECT_TRUE(HasFlag(denoised, "--denoise"));
-  EXPECT_EQ(Value(denoised, "--spp"), "1024");
+  EXPECT_EQ(Value(denoised, "--spp"), level_text);
   RenderWithCli(denoised.command, "cli_denoised.png");
   EXPECT_EQ(ReadFile(denoised.path), ReadFile(work_.path() / "cli_denoised.png"));
   EXPECT_NE(ReadFile(denoised.path), ReadFile(shot.path));

@@ -25,7 +25,8 @@ struct DenoiseOptions {
   int patch_radius = 3;
   // k of Rousselle et al. 2012: the colour distance is the squared difference in units of
   // k^2 (var_p + var_q); larger k smooths more. 0 leaves the colour term out (features only).
-  float colour_strength = 0.45f;
+  // Tuned on cornell-area at 16 spp with the variance of the mean (docs/DENOISING.md).
+  float colour_strength = 0.7f;
   // The feature distances: squared differences in units of these. A feature with scale 0 (or
   // less) is left out. Albedo is compared per channel, both in absolute terms and relative to
   // the larger of the two (albedo + kAlbedoEpsilon, so that black compares with black): among
@@ -41,6 +42,20 @@ struct DenoiseOptions {
   float depth_scale = 0.02f;
   // Divide colour by (albedo + kAlbedoEpsilon) before filtering and multiply back after.
   bool demodulate_albedo = true;
+  // A second pass whose colour distance compares the first pass's result instead of the noisy
+  // colour, with this k, in units of the first result's variance (the input's times
+  // sum(w^2) / (sum w)^2 of the first pass's weights); it averages the noisy colour again with
+  // the new weights. The first result's errors are correlated between neighbours (they share
+  // inputs), so its distances need a larger k than the noisy colour's (docs/DENOISING.md).
+  bool guided_pass = true;
+  float guided_colour_strength = 4.0f;
+  // Blend the two passes per pixel, each weighted by the other's estimated error (Stein's
+  // unbiased risk estimate, averaged over the (2 sure_radius + 1)^2 pixels around); negative:
+  // the guided pass's result alone (docs/DENOISING.md).
+  int sure_radius = 3;
+  // Scale each channel of the result so that its sum is the input's (where both are positive):
+  // the weighted means do not keep the total exactly around fireflies.
+  bool keep_mean = true;
 };
 
 // The amount added to the albedo when dividing colour by it, so that black and missing albedo (0
@@ -77,10 +92,25 @@ struct DenoiseFeatures {
 // single degree of freedom; the average makes it usable as a weight.
 [[nodiscard]] Image variance_from_halves(const Image& half_a, const Image& half_b, int radius = 2);
 
-// A per-pixel variance of the mean (the renderer's variance AOV, one degree of freedom per pixel)
-// averaged over the (2 radius + 1)^2 pixels around each (clamped at the border), as
-// variance_from_halves averages its estimates.
-[[nodiscard]] Image smooth_variance(const Image& variance, int radius = 2);
+// How much larger than the variance of a pixel's mean the renderer's half-buffer variance AOV
+// is with its default Sobol sampler, measured on cornell-area against the sample variance of
+// independent seeds (median per-pixel ratio 1.58, 1.95, 2.26 at 4, 16, 64 spp; far more at the
+// light's edge; docs/DENOISING.md). The halves, split by sample index parity, each hold one point
+// of every pair (2i, 2i + 1) of the shuffled Owen-scrambled Sobol sequence, and the two points of
+// a pair lie in opposite halves of every dimension: the halves' errors are negatively
+// correlated, so (a - b)^2 / 4 sees about the variance of independent samples, not the lower
+// variance of the stratified whole (test
+// HalfBufferVarianceOfTheSobolSamplerOverestimatesTheVariance). The factor depends on the scene; 2
+// is the middle of what cornell-area measured.
+inline constexpr float kSobolHalfBufferVarianceRatio = 2.0f;
+
+// The renderer's per-pixel variance AOV (one degree of freedom per pixel) averaged over the
+// (2 radius + 1)^2 pixels around each (clamped at the border), as variance_from_halves averages
+// its estimates, and divided by `overestimate` (kSobolHalfBufferVarianceRatio for the Sobol
+// sampler's halves, 1 for independent halves) to give the variance of the mean that denoise()
+// expects. `render --denoise` and `tritrace denoise` both call it with the defaults.
+[[nodiscard]] Image smooth_variance(const Image& variance, int radius = 2,
+                                    float overestimate = kSobolHalfBufferVarianceRatio);
 
 // For images without a variance layer: the variance of each pixel's value estimated from its
 // neighbourhood, (9/8) times the mean over 5 x 5 pixels of the squared residual from the 3 x 3

@@ -3,10 +3,13 @@
 #include "tritrace/image/exr.h"
 
 #include <ImfChannelList.h>
+#include <ImfFloatAttribute.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfIO.h>
+#include <ImfIntAttribute.h>
 #include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
 #include <OpenEXRConfig.h>
 #include <half.h>
 
@@ -76,13 +79,27 @@ std::string_view openexr_version() {
   return OPENEXR_VERSION_STRING;
 }
 
-std::vector<uint8_t> encode_exr(const Image& image, const AovImages& aovs, ExrPixelType type) {
+std::vector<uint8_t> encode_exr(const Image& image, const AovImages& aovs, ExrPixelType type,
+                                std::span<const ExrAttribute> attributes) {
   if (image.width() <= 0 || image.height() <= 0) throw Error("exr", "the image is empty");
   const std::vector<Channel> channels = channels_of(image, aovs, type);
 
   Imf::Header header(image.width(), image.height());
   header.compression() = Imf::ZIP_COMPRESSION;
   header.lineOrder() = Imf::INCREASING_Y;  // row 0 at the top, as Image and EXR both count
+  for (const ExrAttribute& a : attributes) {
+    // Replacing one of the header's own (channels, compression, ...) would corrupt the file.
+    if (a.name.empty() || header.find(a.name) != header.end()) {
+      throw Error("exr", "'" + a.name + "' cannot be a header attribute's name");
+    }
+    if (const int* i = std::get_if<int>(&a.value)) {
+      header.insert(a.name, Imf::IntAttribute(*i));
+    } else if (const float* f = std::get_if<float>(&a.value)) {
+      header.insert(a.name, Imf::FloatAttribute(*f));
+    } else {
+      header.insert(a.name, Imf::StringAttribute(std::get<std::string>(a.value)));
+    }
+  }
   Imf::FrameBuffer frame;
   const size_t width = static_cast<size_t>(image.width());
   const size_t pixels = width * static_cast<size_t>(image.height());

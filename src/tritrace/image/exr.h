@@ -5,6 +5,9 @@
 #include <string_view>
 
 #include <cstdint>
+#include <span>
+#include <string>
+#include <variant>
 #include <vector>
 
 #include "tritrace/image/image.h"
@@ -31,13 +34,24 @@ struct AovImages {
   Image spp;  // samples per pixel, in all three channels; written as the one channel "spp"
 };
 
-// The file's bytes: scanlines top row first, ZIP compression (lossless), values stored as they
-// are (no clamp, no curve, NaN and infinity kept). Throws Error("exr", reason) when the AOVs'
-// sizes differ from the image's or OpenEXR fails.
+// A header attribute beside OpenEXR's standard ones, for what made the image (tritrace writes
+// "tritrace.spp", "tritrace.renderSeconds", ...: see docs/PERFORMANCE.md's adaptive section):
+// an int, float or string value, stored as OpenEXR's IntAttribute, FloatAttribute or
+// StringAttribute, which any EXR reader (exrheader, OpenImageIO, Nuke) lists.
+struct ExrAttribute {
+  std::string name;
+  std::variant<int, float, std::string> value;
+};
+
 // The OpenEXR library this build uses ("3.1.5").
 std::string_view openexr_version();
 
+// The file's bytes: scanlines top row first, ZIP compression (lossless), values stored as they
+// are (no clamp, no curve, NaN and infinity kept), with `attributes` in the header. Throws
+// Error("exr", reason) when the AOVs' sizes differ from the image's, an attribute's name is empty
+// or one of OpenEXR's own, or OpenEXR fails.
 std::vector<uint8_t> encode_exr(const Image& image, const AovImages& aovs = {},
-                                ExrPixelType type = ExrPixelType::kFloat);
+                                ExrPixelType type = ExrPixelType::kFloat,
+                                std::span<const ExrAttribute> attributes = {});
 
 }  // namespace tritrace

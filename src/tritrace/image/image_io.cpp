@@ -114,10 +114,10 @@ void write_image(const Image& image, const std::string& path, const ImageEncodin
 }
 
 void write_exr(const Image& image, const std::string& path, const AovImages& aovs,
-               ExrPixelType type) {
+               ExrPixelType type, std::span<const ExrAttribute> attributes) {
   std::vector<uint8_t> bytes;
   try {
-    bytes = encode_exr(image, aovs, type);
+    bytes = encode_exr(image, aovs, type, attributes);
   } catch (const Error& e) {
     throw Error(path, e.reason(), e.exit_code());
   }

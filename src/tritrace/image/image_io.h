@@ -50,7 +50,8 @@ void write_image(const Image& image, const std::string& path,
 
 // encode_exr, written atomically to `path` whatever its extension. Throws Error(path, reason).
 void write_exr(const Image& image, const std::string& path, const AovImages& aovs = {},
-               ExrPixelType type = ExrPixelType::kFloat);
+               ExrPixelType type = ExrPixelType::kFloat,
+               std::span<const ExrAttribute> attributes = {});
 
 struct Rgb8Image {
   int width = 0;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <utility>
 
@@ -156,11 +157,57 @@ void check_exposure(const JobSettings& settings, bool path) {
   }
 }
 
+std::vector<ExrAttribute> render_attributes(const RenderRecord& record) {
+  // No render behind the image (tritrace denoise of a file): nothing to record.
+  if (record.spp == 0) return {};
+  std::vector<ExrAttribute> out = {
+      {"tritrace.spp", static_cast<int>(record.spp)},
+      {"tritrace.renderSeconds", static_cast<float>(record.render_seconds)},
+      {"tritrace.stoppedBy", std::string(record.stop == RenderStop::kConverged   ? "converged"
+                                         : record.stop == RenderStop::kTimeLimit ? "time limit"
+                                                                                 : "spp")}};
+  if (record.mean_spp > 0.0) {
+    out.push_back({"tritrace.meanSpp", static_cast<float>(record.mean_spp)});
+  }
+  if (record.denoise_seconds > 0.0) {
+    out.push_back({"tritrace.denoiseSeconds", static_cast<float>(record.denoise_seconds)});
+  }
+  if (record.time_limit > 0.0) {
+    out.push_back({"tritrace.timeLimit", static_cast<float>(record.time_limit)});
+  }
+  if (record.noise_threshold > 0.0f) {
+    out.push_back({"tritrace.noiseThreshold", record.noise_threshold});
+  }
+  return out;
+}
+
+double film_mean_spp(const Film& film) {
+  if (!film.aovs().spp) return 0.0;
+  const Image spp = film.resolve_spp();
+  // Whole numbers, summed exactly in double: the same mean as the renderer's sample count.
+  double sum = 0.0;
+  for (const glm::vec3& p : spp.pixels()) sum += p.x;
+  return spp.pixels().empty() ? 0.0 : sum / static_cast<double>(spp.pixels().size());
+}
+
+RenderRecord merged_record(const RenderIdentity& identity, const Film& film, double seconds) {
+  RenderRecord r;
+  r.spp = identity.spp;
+  r.render_seconds = seconds;
+  const std::string key = " noise_threshold=";
+  if (const size_t at = identity.settings.find(key); at != std::string::npos) {
+    r.noise_threshold = std::strtof(identity.settings.c_str() + at + key.size(), nullptr);
+    r.mean_spp = film_mean_spp(film);
+  }
+  return r;
+}
+
 void write_render(const RenderedImage& rendered, const std::string& file, bool path,
                   const JobSettings& settings) {
   if (image_format_for(file) == ImageFormat::kExr) {
     write_exr(rendered.image, file, rendered.aovs,
-              settings.exr_half ? ExrPixelType::kHalf : ExrPixelType::kFloat);
+              settings.exr_half ? ExrPixelType::kHalf : ExrPixelType::kFloat,
+              render_attributes(rendered.record));
   } else {
     write_image(
         rendered.image, file,
@@ -220,13 +267,8 @@ void RenderJob::set_up() {
                   "advance; it does not take --spp-range or --tile",
                   ExitCode::kUsage);
     }
-    if (!settings_.noise_threshold.empty()) {
-      throw Error("--time-limit",
-                  "does not take --noise-threshold yet (adaptive sampling renders each pixel's "
-                  "samples in one pass); give one or the other",
-                  ExitCode::kUsage);
-    }
-    // --spp is the most samples a pixel takes; without it, passes go on until the time is up.
+    // --spp is the most samples a pixel takes; without it, passes go on until the time is up
+    // (or, with --noise-threshold, until every pixel has stopped).
     if (settings_.spp.empty()) spec_.spp = kMaxSpp;
   }
   if (settings_.denoise && (!settings_.spp_range.empty() || !settings_.tile.empty())) {
@@ -330,19 +372,33 @@ void RenderJob::render_to_film(Film& film, const RenderOptions& options, RenderS
   tritrace::render_to_film(*scene_, *accel_, *integrator_, film, options, stats);
 }
 
+RenderRecord RenderJob::record(const RenderStats& stats, double seconds) const {
+  RenderRecord r;
+  r.spp = stats.spp;
+  if (adaptive() && path()) r.mean_spp = stats.mean_spp();
+  r.render_seconds = seconds;
+  r.time_limit = time_limit_seconds(settings_).value_or(0.0);
+  r.noise_threshold = path() ? options_.noise_threshold : 0.0f;
+  return r;
+}
+
 RenderedImage RenderJob::render(RenderStats* stats) const {
   if (const std::optional<double> seconds = time_limit_seconds(settings_)) {
     return render_for(*seconds, stats);
   }
   RenderedImage out;
+  RenderStats own;
   if (film_aovs_.any()) {
     Film film = make_film();
-    render_to_film(film, stats);
+    render_to_film(film, &own);
     out = resolve(film);
   } else {
     // The same bits as a film's resolve, without the film's memory.
-    out.image = tritrace::render(*scene_, *accel_, *integrator_, options_, stats);
+    out.image = tritrace::render(*scene_, *accel_, *integrator_, options_, &own);
   }
+  out.record = record(own, own.milliseconds * 1e-3);
+  out.record.denoise_seconds = out.denoise_ms * 1e-3;
+  if (stats) *stats = own;
   return out;
 }
 
@@ -354,16 +410,25 @@ RenderedImage RenderJob::render_for(double seconds, RenderStats* stats) const {
   RenderStats total;
   uint32_t taken = 0;
   const uint32_t cap = spec_.spp;
+  // With --noise-threshold, each pixel's sums and decisions carry from pass to pass, so the
+  // passes decide exactly as one render of the same spp would.
+  AdaptiveState state;
+  RenderStop stop = RenderStop::kSpp;
   // With --denoise the limit covers the denoiser too: its time, measured on the first pass's
   // image, is kept back from the passes.
   double reserve = 0.0;
   while (taken < cap) {
     // Passes of whole sample blocks, each at most as many samples as the film holds (so the time
     // per sample is measured again before a long pass), as many as the time left fits at the
-    // time per sample so far. The first pass is always rendered: an image needs samples.
+    // time per pixel sample so far times the pixels still taking samples (all of them without
+    // adaptive sampling). The first pass is always rendered: an image needs samples.
     uint32_t n = std::min(cap - taken, kSampleBlock);
     if (taken > 0) {
-      const double per_sample = (elapsed() - reserve) / taken;
+      const double pixels_on = adaptive() ? static_cast<double>(state.active_pixels())
+                                          : static_cast<double>(total.pixels);
+      const double per_sample = (elapsed() - reserve) /
+                                std::max(1.0, static_cast<double>(total.samples)) *
+                                std::max(1.0, pixels_on);
       const double fit = (seconds - reserve - elapsed()) / per_sample;
       if (cap - taken < kSampleBlock) {
         n = fit >= static_cast<double>(cap - taken) ? cap - taken : 0;
@@ -372,12 +437,16 @@ RenderedImage RenderJob::render_for(double seconds, RenderStats* stats) const {
             std::min({fit, static_cast<double>(taken), static_cast<double>(cap - taken)});
         n = most >= kSampleBlock ? static_cast<uint32_t>(most) / kSampleBlock * kSampleBlock : 0;
       }
-      if (n == 0) break;
+      if (n == 0) {
+        stop = RenderStop::kTimeLimit;
+        break;
+      }
     }
     RenderOptions options = options_;
     options.first_sample = taken;
     options.spp = n;
     options.progress = nullptr;
+    options.adaptive_state = &state;
     RenderStats pass;
     render_to_film(film, options, &pass);
     total.rays += pass.rays;
@@ -390,19 +459,31 @@ RenderedImage RenderJob::render_for(double seconds, RenderStats* stats) const {
       (void)resolve(film);
       reserve = elapsed() - before;
     }
+    // Every pixel has stopped: later passes would add nothing (before --spp was reached).
+    if (adaptive() && taken < cap && state.active_pixels() == 0) {
+      stop = RenderStop::kConverged;
+      break;
+    }
   }
   total.spp = taken;
   total.milliseconds = elapsed() * 1e3;
   if (stats) *stats = total;
-  return resolve(film);
+  RenderedImage out = resolve(film);
+  out.record = record(total, total.milliseconds * 1e-3);
+  out.record.denoise_seconds = out.denoise_ms * 1e-3;
+  out.record.stop = stop;
+  return out;
 }
 
 void RenderJob::write(const RenderedImage& rendered, const std::string& file) const {
   write_render(rendered, file, path(), settings_);
 }
 
-void RenderJob::write(const Film& film, const std::string& file) const {
-  write(resolve(film), file);
+void RenderJob::write(const Film& film, const std::string& file, const RenderStats& stats) const {
+  RenderedImage rendered = resolve(film);
+  rendered.record = record(stats, stats.milliseconds * 1e-3);
+  rendered.record.denoise_seconds = rendered.denoise_ms * 1e-3;
+  write(rendered, file);
 }
 
 void RenderJob::write_part(const Film& film, const std::string& file) const {

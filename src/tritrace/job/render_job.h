@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "tritrace/accel/accel.h"
 #include "tritrace/accel/make_accel.h"
@@ -23,11 +24,47 @@
 
 namespace tritrace {
 
+// Why a render stopped taking samples.
+enum class RenderStop {
+  kSpp,        // every pixel took --spp samples, or adaptive sampling stopped it before
+  kConverged,  // --time-limit with --noise-threshold: every pixel stopped before the time was up
+  kTimeLimit,  // --time-limit: the time was up
+};
+
+// What a render took and was asked for: the summary line says it, and an EXR output records it
+// in its header (render_attributes).
+struct RenderRecord {
+  uint32_t spp = 0;  // samples per pixel reached (adaptive: the most a pixel could take)
+  double mean_spp =
+      0.0;  // the samples a pixel took on average, with adaptive sampling (0: unknown)
+  double render_seconds = 0.0;   // sampling only: no loading, accel build, denoising or writing
+  double denoise_seconds = 0.0;  // with --denoise
+  double time_limit = 0.0;       // --time-limit's seconds; 0: none
+  float noise_threshold = 0.0f;  // --noise-threshold; 0: none
+  RenderStop stop = RenderStop::kSpp;
+};
+
+// The record as EXR header attributes: tritrace.spp (int), tritrace.meanSpp (float, adaptive),
+// tritrace.renderSeconds and tritrace.denoiseSeconds (float, the latter with --denoise),
+// tritrace.timeLimit and tritrace.noiseThreshold (float, when set), tritrace.stoppedBy (string:
+// "spp", "converged" or "time limit"). Only the two times differ between runs of the same render.
+// None for a record of no render (spp 0: tritrace denoise's).
+std::vector<ExrAttribute> render_attributes(const RenderRecord& record);
+
+// The mean of a film's spp AOV (the samples its pixels took); 0 when the film keeps no spp AOV.
+double film_mean_spp(const Film& film);
+
+// The record of a film merged from the parts of the render `identity` (tritrace merge's): the
+// render's spp and noise threshold, with adaptive sampling the mean spp when the film keeps the spp
+// AOV, and `seconds`, the merge's own time (parts do not carry theirs).
+RenderRecord merged_record(const RenderIdentity& identity, const Film& film, double seconds);
+
 // A whole render's image and the AOV images asked for (empty images for the others).
 struct RenderedImage {
   Image image;
   AovImages aovs;
   double denoise_ms = 0.0;  // the denoiser's time, with --denoise
+  RenderRecord record{};    // written to an EXR's header
 };
 
 // The denoiser as a render runs it on its film's image: the variance AOV (from the halves of the
@@ -105,19 +142,25 @@ class RenderJob {
   void render_to_film(Film& film, RenderStats* stats = nullptr) const;
   void render_to_film(Film& film, const RenderOptions& options, RenderStats* stats) const;
   // The whole render (not a part): the image and the AOVs asked for. With --time-limit, whole
-  // passes of samples until the time is up (stats->spp says how many each pixel took; the image is
-  // bit for bit the one --spp of that many makes).
+  // passes of samples until the time is up, or with --noise-threshold until every pixel has
+  // stopped (stats->spp says how many passes' samples a pixel could take; the image is bit for bit
+  // the one --spp of that many makes). The record says what it took and why it stopped.
   RenderedImage render(RenderStats* stats = nullptr) const;
   // Writes a whole render to `file` (write_render).
   void write(const RenderedImage& rendered, const std::string& file) const;
-  // Writes the film's image, denoised with --denoise, and the AOVs asked for.
-  void write(const Film& film, const std::string& file) const;
+  // Writes the film's image, denoised with --denoise, and the AOVs asked for, with this job's
+  // settings and `stats` (spp, samples and pixels for the mean spp, milliseconds) in the record:
+  // how render --mpi writes the image it gathered.
+  void write(const Film& film, const std::string& file, const RenderStats& stats) const;
+  // The record of this job's settings for a render of `seconds` (stats: spp and mean spp).
+  RenderRecord record(const RenderStats& stats, double seconds) const;
   // A part's film as a partial film for `tritrace merge`. Atomic.
   void write_part(const Film& film, const std::string& file) const;
 
  private:
   void set_up();
   RenderedImage render_for(double seconds, RenderStats* stats) const;
+  bool adaptive() const { return options_.noise_threshold > 0.0f; }
   // The image of `film` (denoised with --denoise) and the AOVs asked for.
   RenderedImage resolve(const Film& film) const;
 

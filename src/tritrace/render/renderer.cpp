@@ -35,6 +35,19 @@ void for_each_block(int x0, int y0, int x1, int y1, Fn&& fn) {
   }
 }
 
+// Visits the pixels of [x0, x1) x [y0, y1) in the batch's block order: fn(slot, film index).
+template <typename Fn>
+void for_each_slot(int x0, int y0, int x1, int y1, int width, Fn&& fn) {
+  size_t i = 0;
+  for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
+    for (int y = by; y < ey; ++y) {
+      for (int x = bx; x < ex; ++x, ++i) {
+        fn(i, static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x));
+      }
+    }
+  });
+}
+
 }  // namespace
 
 int default_thread_count() {
@@ -46,7 +59,11 @@ double adaptive_error(const PixelMoments& m, uint32_t n) {
   const double mean = m.x / m.w;
   const double spread = std::max(0.0, m.xx - 2.0 * mean * m.xw + mean * mean * m.ww);
   const double variance = spread / (m.w * m.w) * static_cast<double>(n) / (n - 1.0);
-  return std::sqrt(variance) / std::max(mean, kAdaptiveDarkFloor);
+  return std::sqrt(variance / std::max(mean, kAdaptiveDarkFloor));
+}
+
+size_t AdaptiveState::active_pixels() const {
+  return static_cast<size_t>(std::count(active.begin(), active.end(), uint8_t{1}));
 }
 
 namespace {
@@ -91,7 +108,8 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
   const uint32_t end = first + spp;
   const PixelFilter filter(options.filter);
   const bool adaptive = options.noise_threshold > 0.0f && !corner;
-  assert(!adaptive || first == 0);
+  AdaptiveState* const state = adaptive ? options.adaptive_state : nullptr;
+  assert(!adaptive || first == 0 || (state && state->end_sample == first));
   // A part renders tiles part, part + parts, ...: neighbouring tiles cost about the same, so
   // interleaving them balances the parts' work whatever the scene.
   const int part = tile_part ? options.tile_part : 0;
@@ -134,9 +152,17 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
       const size_t pixels = static_cast<size_t>((x1 - x0) * (y1 - y0));
       BlockCounter counter = nodes_before;
       target.load(x0, y0, x1, y1, slots);
-      std::fill_n(active.begin(), pixels, uint8_t{1});
-      std::fill_n(near.begin(), pixels, uint8_t{0});
-      if (adaptive) std::fill_n(moments.begin(), pixels, PixelMoments{});
+      if (adaptive && state && first > 0) {
+        for_each_slot(x0, y0, x1, y1, width, [&](size_t i, size_t p) {
+          moments[i] = state->moments[p];
+          active[i] = state->active[p];
+          near[i] = state->near[p];
+        });
+      } else {
+        std::fill_n(active.begin(), pixels, uint8_t{1});
+        std::fill_n(near.begin(), pixels, uint8_t{0});
+        if (adaptive) std::fill_n(moments.begin(), pixels, PixelMoments{});
+      }
       if (first % kSampleBlock == 0) {
         std::fill_n(slots.slot(counter.size()), pixels, glm::vec4(0.0f));
         if (aovs.any()) std::fill_n(slots.aov_slot(counter.size()), pixels, AovSums{});
@@ -239,7 +265,9 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
         // Adaptive sampling's checks, at kAdaptiveMinSpp x 2^k samples (before the last): each
         // pixel from its own samples [0, s + 1) only.
         const uint32_t taken_so_far = s + 1;
-        if (adaptive && taken_so_far >= kAdaptiveMinSpp && taken_so_far < end &&
+        // A check at the last sample changes nothing in this call's image, but a later pass
+        // continues from its decisions.
+        if (adaptive && taken_so_far >= kAdaptiveMinSpp && (taken_so_far < end || state) &&
             (taken_so_far & (taken_so_far - 1)) == 0) {
           for (size_t i = 0; i < pixels; ++i) {
             if (!active[i]) continue;
@@ -248,6 +276,13 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
             near[i] = error < kAdaptiveConfirm * options.noise_threshold;
           }
         }
+      }
+      if (adaptive && state) {
+        for_each_slot(x0, y0, x1, y1, width, [&](size_t i, size_t p) {
+          state->moments[p] = moments[i];
+          state->active[p] = active[i];
+          state->near[p] = near[i];
+        });
       }
       const size_t layers = counter.size() + (end % kSampleBlock != 0 ? 1 : 0);
       target.store(x0, y0, x1, y1, slots, layers);
@@ -305,19 +340,6 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
 }  // namespace
 
 namespace {
-
-// Visits the pixels of [x0, x1) x [y0, y1) in the batch's block order: fn(slot, film index).
-template <typename Fn>
-void for_each_slot(int x0, int y0, int x1, int y1, int width, Fn&& fn) {
-  size_t i = 0;
-  for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
-    for (int y = by; y < ey; ++y) {
-      for (int x = bx; x < ex; ++x, ++i) {
-        fn(i, static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x));
-      }
-    }
-  });
-}
 
 // Tiles whose sums continue a film's layers (read from the old layout) and replace them (written
 // in the new one, whose layers the film has already allocated).
@@ -384,9 +406,24 @@ void render_to_film(const Scene& scene, const Accel& accel, const Integrator& in
                             : "the film holds samples up to " + std::to_string(film.end_sample()) +
                                   ", not " + std::to_string(first));
   }
-  if (options.noise_threshold > 0.0f && !corner && (first != 0 || !empty)) {
-    throw Error("film", "adaptive sampling renders a pixel's samples from 0 in one go, not from " +
-                            std::to_string(first));
+  AdaptiveState* const state =
+      options.noise_threshold > 0.0f && !corner ? options.adaptive_state : nullptr;
+  if (options.noise_threshold > 0.0f && !corner) {
+    // A film continues only with the state its earlier passes left (its sums and decisions).
+    const size_t pixels = static_cast<size_t>(film.width()) * static_cast<size_t>(film.height());
+    const bool continues = state && !empty && first == film.end_sample() &&
+                           state->end_sample == first && film.first_sample() == 0 &&
+                           state->active.size() == pixels;
+    if (!continues && (first != 0 || !empty)) {
+      throw Error("film",
+                  "adaptive sampling renders a pixel's samples from 0, continued only with the "
+                  "state of the passes before, not from " +
+                      std::to_string(first));
+    }
+    if (state && first == 0) {
+      *state = AdaptiveState{0, std::vector<PixelMoments>(pixels), std::vector<uint8_t>(pixels, 1),
+                             std::vector<uint8_t>(pixels, 0)};
+    }
   }
   if (empty) film.set_layout(first, first, {});
   const BlockCounter start(film.nodes());
@@ -396,6 +433,7 @@ void render_to_film(const Scene& scene, const Accel& accel, const Integrator& in
   film.reserve_layers(after.size() + 1);
   FilmTarget target{film, old_layers};
   render_tiles(scene, accel, integrator, options, film.aovs(), start, first, spp, target, stats);
+  if (state) state->end_sample = first + spp;
   film.set_layout(film.first_sample(), first + spp,
                   std::vector<BlockNode>(after.nodes().begin(), after.nodes().end()));
 }
@@ -414,7 +452,9 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
   }
   Image image(scene.camera.width(), scene.camera.height());
   ImageTarget target{image};
-  render_tiles(scene, accel, integrator, options, AovSet{}, BlockCounter(), first,
+  RenderOptions one_go = options;
+  one_go.adaptive_state = nullptr;  // no film to continue
+  render_tiles(scene, accel, integrator, one_go, AovSet{}, BlockCounter(), first,
                corner ? 1 : options.spp, target, stats);
   return image;
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "tritrace/accel/accel.h"
 #include "tritrace/image/image.h"
@@ -22,6 +23,8 @@ class RenderProgress {
   virtual void tiles_done(int done, int total) noexcept = 0;
 };
 
+struct AdaptiveState;
+
 struct RenderOptions {
   int threads = 0;                     // 0: all cores
   int tile_size = 16;                  // tile_size^2 must not exceed kMaxBatch
@@ -39,14 +42,19 @@ struct RenderOptions {
   // same.
   int tile_part = 0;
   int tile_parts = 1;
-  // Adaptive sampling (--noise-threshold; 0: off): a pixel stops taking samples once the relative
-  // standard error of its mean (adaptive_error) is below this, checked only when it has taken
-  // kAdaptiveMinSpp, 2 kAdaptiveMinSpp, 4 kAdaptiveMinSpp, ... samples (fewer than spp) and
-  // confirmed by the check before (kAdaptiveConfirm); spp is the most it takes. The decision reads
-  // only the pixel's own samples, so the image is the same for any thread count, tile size and tile
-  // part. Needs first_sample 0 (throws Error otherwise); ignored by an integrator that takes one
-  // sample through the pixel corner (the lab's).
+  // Adaptive sampling (--noise-threshold; 0: off): a pixel stops taking samples once the standard
+  // error of its mean over the square root of its luminance (adaptive_error) is below this, checked
+  // only when it has taken kAdaptiveMinSpp, 2 kAdaptiveMinSpp, 4 kAdaptiveMinSpp, ... samples
+  // (fewer than spp) and confirmed by the check before (kAdaptiveConfirm); spp is the most it
+  // takes. The decision reads only the pixel's own samples, so the image is the same for any thread
+  // count, tile size and tile part. Needs first_sample 0 (throws Error otherwise); ignored by an
+  // integrator that takes one sample through the pixel corner (the lab's).
   float noise_threshold = 0.0f;
+  // Adaptive sampling over several calls (--noise-threshold with --time-limit): each pixel's
+  // running sums and stopping state, read at the start and written at the end, so that a film
+  // continued pass after pass at its end_sample() makes every decision a single call of the same
+  // total spp makes, bit for bit. Not owned; nullptr: one call renders samples [0, spp).
+  AdaptiveState* adaptive_state = nullptr;
 };
 
 // The tile size of --tile parts.
@@ -61,11 +69,9 @@ inline constexpr uint32_t kAdaptiveMinSpp = 32;
 // estimates must agree, since one from few samples of a skewed distribution often errs low. So the
 // first stop is at 2 kAdaptiveMinSpp.
 inline constexpr double kAdaptiveConfirm = 1.4142135623730951;
-// Below this mean luminance, a pixel's error is taken relative to this instead (as Cycles guards
-// its denominator): dark pixels are judged by absolute error, so that a nearly black pixel's few
-// bright samples do not keep it sampling to the end. 0.1 rather than 0.01: with 0.01 the dark
-// corners took most of the samples and RMSE at equal time was worse on both benchmark scenes
-// (docs/PERFORMANCE.md).
+// Below this mean luminance, a pixel's error is divided by sqrt(this) instead of sqrt(mean) (as
+// Cycles guards its denominator), so that a nearly black pixel's few bright samples do not keep
+// it sampling to the end. 0.1 and 0.01 measured alike at equal time (docs/PERFORMANCE.md).
 inline constexpr double kAdaptiveDarkFloor = 0.1;
 
 // A pixel's running sums for adaptive sampling, over its samples' luminance x_i = w_i Y(L_i) and
@@ -81,10 +87,31 @@ struct PixelMoments {
     ww += weight * weight;
   }
 };
-// The estimated relative standard error of the pixel's mean m = x / w after n samples: the ratio
-// estimator's variance sum_i (x_i - m w_i)^2 / w^2 times n / (n - 1), its square root divided by
-// max(m, kAdaptiveDarkFloor). Infinity when it cannot say (n < 2, no weight).
+// The pixel's error after n samples: the estimated standard error of its mean luminance m = x / w
+// (the ratio estimator's variance sum_i (x_i - m w_i)^2 / w^2 times n / (n - 1), square-rooted)
+// divided by sqrt(max(m, kAdaptiveDarkFloor)), so T is a relative error at luminance 1, T /
+// sqrt(m) at m. The square root, not m itself, as in Dammertz et al. 2010 ("A hierarchical
+// automatic stopping condition for Monte Carlo global illumination"), whose |I - A| / sqrt(I)
+// Cycles' noise threshold follows: spending a budget of samples to least total squared error
+// gives each pixel samples in proportion to its standard deviation s (minimise sum s^2 / n
+// subject to sum n fixed), so it stops at a standard error proportional to sqrt(s), which is
+// sqrt(m) where noise is proportional to brightness. Dividing by m instead stopped bright pixels
+// (a light's edge) too early and kept dark ones too long: cornell-area's RMSE at equal time went
+// from 0.83-1.29 of uniform's to 0.67-0.94 (docs/PERFORMANCE.md). Infinity when it cannot say
+// (n < 2, no weight).
 double adaptive_error(const PixelMoments& m, uint32_t n);
+
+// Adaptive sampling's state of every pixel of an image between passes: the pixel's sums, whether
+// it still takes samples, and whether its error was below kAdaptiveConfirm x T at the last check.
+// render_to_film fills it on a film's first pass and continues it on later ones.
+struct AdaptiveState {
+  uint32_t end_sample = 0;  // the samples [0, end_sample) the sums hold
+  std::vector<PixelMoments> moments;
+  std::vector<uint8_t> active;
+  std::vector<uint8_t> near;
+  // Pixels still taking samples (of the pixels rendered: a tile part's others stay active).
+  size_t active_pixels() const;
+};
 
 struct RenderStats {
   double milliseconds = 0.0;
