@@ -680,7 +680,7 @@ RuntimeWarning); hits still report indices into `triangles`.)")
       .def_property_readonly(
           "integrator",
           [](const SceneData& s) { return std::string(integrator_name(s.loaded.integrator.kind)); },
-          "The integrator the scene asks for when render() is given none: 'lab' or 'path'.")
+          "The integrator the scene asks for when render() is given none: 'lab', 'path' or 'bdpt'.")
       .def_property_readonly("camera", &camera_dict,
                              "The scene's own camera: width, height, position, look_at, up, "
                              "forward, focal_length (pixels), vertical_fov (degrees or None), "
@@ -837,7 +837,7 @@ the argument, wrong types TypeError.)");
 
 The image is bit for bit the one `tritrace render ... -o out.pfm` writes with the same
 settings. Every argument left None is the scene's own (or the CLI's default): integrator
-("lab" or "path"), spp, width, height, seed, sampler ("sobol" or "independent"),
+("lab", "path" or "bdpt"), spp, width, height, seed, sampler ("sobol" or "independent"),
 max_depth, filter ("box", "gaussian", "blackman-harris"), accel (a name, or an Accel built
 over this scene, to reuse it across renders), kernel, threads (default all cores), yaw
 (radians, orbiting look_at), distance (to look_at), light (the first point light's position),

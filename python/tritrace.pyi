@@ -76,7 +76,7 @@ class Scene:
     def bounds(self) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
         """(lo, hi): the corners of the scene's bounding box, float32 arrays of shape (3,)."""
     @property
-    def integrator(self) -> Literal["lab", "path"]:
+    def integrator(self) -> Literal["lab", "path", "bdpt"]:
         """The integrator the scene asks for when render() is given none."""
     @property
     def camera(self) -> CameraInfo:
@@ -200,7 +200,7 @@ class Frame:
     @property
     def variance(self) -> Optional[npt.NDArray[np.float32]]: ...
     @property
-    def integrator(self) -> Literal["lab", "path"]: ...
+    def integrator(self) -> Literal["lab", "path", "bdpt"]: ...
     @property
     def spp(self) -> int: ...
     @property
@@ -217,7 +217,7 @@ class Frame:
 def render(
     scene: Scene,
     *,
-    integrator: Optional[Literal["lab", "path"]] = None,
+    integrator: Optional[Literal["lab", "path", "bdpt"]] = None,
     spp: Optional[int] = None,
     width: Optional[int] = None,
     height: Optional[int] = None,

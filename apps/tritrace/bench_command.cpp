@@ -47,7 +47,7 @@ struct Record {
   double copy_bytes_per_tri = 0.0;
   double frame_ms_median = 0.0, frame_ms_min = 0.0, frame_ms_max = 0.0;
   double mrays_per_s = 0.0;
-  std::string integrator;  // "lab" or "path"
+  std::string integrator;  // "lab", "path" or "bdpt"
   uint32_t spp = 1;
   double mpaths_per_s = 0.0;                     // camera samples (paths) per second, in millions
   std::optional<double> ratio_to_embree;         // the fastest non-robust Embree mode
@@ -125,8 +125,9 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
       ->type_name("NAME")
       ->check(checked(setting_check("--scene")));
   sub->add_option("--integrator", args.integrator,
-                  "lab (one primary and one shadow ray per pixel) or path (the path tracer: "
-                  "paths/s and Mrays/s over camera, bounce and shadow rays)")
+                  "lab (one primary and one shadow ray per pixel), path (the path tracer: "
+                  "paths/s and Mrays/s over camera, bounce and shadow rays) or bdpt (the "
+                  "bidirectional path tracer, the same figures)")
       ->type_name("NAME")
       ->capture_default_str()
       ->check(checked(setting_check("--integrator")));
@@ -174,14 +175,16 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
 int run_bench(const BenchArgs& args) {
   if (!args.json.empty()) check_writable_path(args.json);
   for (const std::string& file : args.files) check_input_file(file);  // before any output
-  const bool path = args.integrator == "path";
+  const bool path = args.integrator != "lab";                         // path or bdpt
   if (args.denoise && !path) {
     throw Error("--denoise",
                 "times the denoiser on the path tracer's frames; use --integrator path",
                 ExitCode::kUsage);
   }
   IntegratorSpec spec;
-  spec.kind = path ? IntegratorSpec::Kind::kPath : IntegratorSpec::Kind::kLab;
+  spec.kind = args.integrator == "bdpt" ? IntegratorSpec::Kind::kBdpt
+              : path                    ? IntegratorSpec::Kind::kPath
+                                        : IntegratorSpec::Kind::kLab;
   spec.spp =
       path ? static_cast<uint32_t>(args.spp.empty() ? kDefaultBenchSpp : *parse_integer(args.spp))
            : 1;
@@ -383,8 +386,9 @@ int run_bench(const BenchArgs& args) {
     std::printf(
         "/embree: Mpaths/s over the fastest non-robust Embree mode's (embree, embree8, "
         "embree-single); /robust: over embree-robust's (RTC_SCENE_FLAG_ROBUST)\n");
-    std::printf("integrator path, %u spp, max depth %d, %s sampler, seed %llu, box filter\n",
-                spec.spp, spec.max_depth, std::string(sampler_name(spec.sampler)).c_str(),
+    std::printf("integrator %s, %u spp, max depth %d, %s sampler, seed %llu, box filter\n",
+                std::string(integrator_name(spec.kind)).c_str(), spec.spp, spec.max_depth,
+                std::string(sampler_name(spec.sampler)).c_str(),
                 static_cast<unsigned long long>(spec.seed));
   } else if (!args.quiet) {
     std::printf(

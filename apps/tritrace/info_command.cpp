@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "tritrace/distributed/partial_film_codec.h"
+#include "tritrace/render/make_integrator.h"
 #include "tritrace/scene/io/scene_loader.h"
 
 namespace tritrace::cli {
@@ -70,8 +71,9 @@ int run_info(const InfoArgs& args) {
   if (spec.kind == IntegratorSpec::Kind::kLab) {
     std::printf("integrator: lab\n");
   } else {
-    std::printf("integrator: path, %u spp, max depth %d, %s sampler, seed %llu\n", spec.spp,
-                spec.max_depth, std::string(sampler_name(spec.sampler)).c_str(),
+    std::printf("integrator: %s, %u spp, max depth %d, %s sampler, seed %llu\n",
+                std::string(integrator_name(spec.kind)).c_str(), spec.spp, spec.max_depth,
+                std::string(sampler_name(spec.sampler)).c_str(),
                 static_cast<unsigned long long>(spec.seed));
   }
   std::printf("camera: %dx%d at %s, focal length %g px\n", s.camera.width(), s.camera.height(),

@@ -40,7 +40,7 @@ int run_merge(const MergeArgs& args) {
   const JobSettings settings = image_output_settings(args.output, args.exposure);
   const auto start = std::chrono::steady_clock::now();
   const PartInfo info = read_part_info(args.parts.front());
-  const bool path = info.render.integrator == "path";
+  const bool path = info.render.integrator != "lab";  // path or bdpt: sRGB output
   check_exposure(settings, path);
   const Film film = merge_parts(args.parts);
   RenderedImage rendered{film.resolve(), film.resolve_aovs()};

@@ -5,6 +5,7 @@
 #include <glm/geometric.hpp>
 
 #include "tritrace/job/setting_values.h"
+#include "tritrace/render/make_integrator.h"
 
 namespace tritrace::view {
 
@@ -89,7 +90,8 @@ std::string render_command_line(const JobSettings& flags, const ViewState& state
   }
   // Everything the path tracer's pixels depend on besides the scene and the view. The seed is
   // printed even when it is the scene's own, so that the command says which image it is.
-  line += " --integrator path --spp " + std::to_string(rendered.spp);
+  line += " --integrator " + std::string(integrator_name(rendered.kind)) + " --spp " +
+          std::to_string(rendered.spp);
   line += " --seed " + std::to_string(rendered.seed);
   if (!flags.sampler.empty()) line += " --sampler " + flags.sampler;
   if (!flags.max_depth.empty()) line += " --max-depth " + std::to_string(rendered.max_depth);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "tritrace/accel/make_accel.h"
+#include "tritrace/render/bdpt_integrator.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/path_integrator.h"
 #include "tritrace/render/renderer.h"
@@ -94,6 +95,22 @@ TEST_P(HotPath, PathTracerTileLoopAllocatesNothing) {
   const uint64_t traced = trace_all_tiles(scene, *accel, integrator, rays, samplers, radiance);
   EXPECT_EQ(g_allocations.load() - before, 0);
   EXPECT_GT(traced, 3u * 128u * 128u);  // camera rays, shadow rays and bounces
+}
+
+// The bidirectional path tracer keeps its subpaths in per-thread arrays that grow only when a
+// longer subpath than any before needs it: after the first tiles, none of its work allocates.
+TEST_P(HotPath, BdptTileLoopAllocatesNothing) {
+  const Scene scene = make_builtin_scene("cornell-area", {.width = 32, .height = 32});
+  const std::unique_ptr<Accel> accel = make_accel(GetParam(), scene.mesh, kDefaultKernel);
+  const BdptIntegrator integrator(scene);
+  std::vector<Ray> rays(kMaxBatch);
+  std::vector<Sampler> samplers(kMaxBatch);
+  std::vector<glm::vec3> radiance(kMaxBatch);
+  trace_all_tiles(scene, *accel, integrator, rays, samplers, radiance);  // thread-locals first
+  const long before = g_allocations.load();
+  const uint64_t traced = trace_all_tiles(scene, *accel, integrator, rays, samplers, radiance);
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_GT(traced, 3u * 32u * 32u);
 }
 
 TEST_P(HotPath, WholeRenderAllocationsDoNotGrowWithTheImage) {

@@ -778,6 +778,20 @@ TEST_F(CliTest, BenchDenoiseTimesTheDenoiserOnEachPathFrame) {
   EXPECT_NE(lab.err.find("--denoise"), std::string::npos) << lab.err;
 }
 
+TEST_F(CliTest, BenchTimesTheBidirectionalPathTracer) {
+  const RunResult r = Run({"bench", "--integrator", "bdpt", "--width", "16", "--height", "16",
+                           "--spp", "2", "--reps", "1", "--accel", "bvh", "--json", "b.json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("integrator bdpt, 2 spp"), std::string::npos) << r.out;
+  const nlohmann::json records = nlohmann::json::parse(ReadFile(work_ / "b.json"));
+  ASSERT_TRUE(records.is_array());
+  ASSERT_FALSE(records.empty());
+  for (const nlohmann::json& rec : records) {
+    EXPECT_EQ(rec["scene"], "cornell-area");
+    EXPECT_EQ(rec["integrator"], "bdpt");
+  }
+}
+
 TEST_F(CliTest, BenchWithThePathTracerReportsPathsPerSecond) {
   const RunResult r = Run({"bench", "--integrator", "path", "--width", "32", "--height", "24",
                            "--spp", "2", "--reps", "2", "--json", "p.json"});
@@ -2014,6 +2028,22 @@ TEST_F(DistributedCliTest, InfoPrintsAPartsMetadata) {
   }
   EXPECT_TRUE(std::regex_search(r.out, std::regex("render: [0-9a-f]{16}\n"))) << r.out;
   EXPECT_NE(r.out.find("settings: integrator=path spp=20 "), std::string::npos) << r.out;
+}
+
+// bdpt's samples stay in their pixels (no light tracing yet, docs/BDPT.md), so its sample ranges
+// and tile parts merge into the one-process image byte for byte as the path tracer's do.
+TEST_F(DistributedCliTest, BdptPartsMergeBitForBit) {
+  const std::string whole = Whole("whole.pfm", {"--integrator", "bdpt"});
+  ASSERT_FALSE(whole.empty());
+  RenderPart("a.exr", {"--integrator", "bdpt", "--spp-range", "0:8", "--tile", "0/2"});
+  RenderPart("b.exr", {"--integrator", "bdpt", "--spp-range", "8:20", "--tile", "0/2"});
+  RenderPart("c.exr", {"--integrator", "bdpt", "--tile", "1/2"});
+  const RunResult r = Merge({"a.exr", "b.exr", "c.exr"}, "merged.pfm");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(ReadFile(work_ / "merged.pfm") == whole);
+  // A part of the path tracer's render is foreign to bdpt's.
+  RenderPart("p.exr", {"--spp-range", "0:8", "--tile", "0/2"});
+  EXPECT_NE(Merge({"p.exr", "b.exr", "c.exr"}, "mixed.pfm").exit_code, 0);
 }
 
 // ---- denoise -------------------------------------------------------------------------------

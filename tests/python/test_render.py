@@ -92,6 +92,15 @@ def test_integrator_and_kernel_choices_are_the_clis(tmp_path, cornell):
                                             "moller-trumbore", "--accel", "bvh-single"))
 
 
+def test_bdpt_is_the_clis(tmp_path, cornell):
+    frame = tritrace.render(cornell, integrator="bdpt", spp=2, width=32, height=24)
+    assert frame.integrator == "bdpt"
+    assert_same_bits(frame.image, cli_image(tmp_path, "--integrator", "bdpt", "--spp", 2,
+                                            "--width", 32, "--height", 24))
+    with pytest.raises(ValueError, match="clamp: "):
+        tritrace.render(cornell, integrator="bdpt", spp=2, clamp=1.0)
+
+
 def test_aovs_are_the_clis_exr_layers(tmp_path):
     scene = tritrace.Scene.builtin("cornell-area")
     frame = tritrace.render(scene, width=36, height=28, spp=3, aovs=("albedo", "normal", "depth"))

@@ -167,6 +167,19 @@ TEST(CommandLine, ThePathTracersSamplesSeedAndChoicesGiven) {
             "--integrator path --spp 37 --seed 5 --max-depth 9 --clamp 2.5 --filter gaussian");
 }
 
+TEST(CommandLine, NamesTheBidirectionalPathTracer) {
+  JobSettings flags;
+  flags.scene = "cornell-area";
+  ViewState s;
+  IntegratorSpec bdpt;
+  bdpt.kind = IntegratorSpec::Kind::kBdpt;
+  bdpt.spp = 12;
+  bdpt.seed = 5;
+  EXPECT_EQ(render_command_line(flags, s, 64, 48, bdpt),
+            "tritrace render --scene cornell-area --yaw 0 --distance 3 --width 64 --height 48 "
+            "--integrator bdpt --spp 12 --seed 5");
+}
+
 TEST(CommandLine, TheNoiseThresholdAndTheDenoiserChangeThePixels) {
   JobSettings flags;
   flags.scene = "cornell-area";

@@ -11,6 +11,7 @@
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/build_info.h"
 #include "tritrace/math/random.h"
+#include "tritrace/render/make_integrator.h"
 
 namespace tritrace {
 namespace {
@@ -120,8 +121,8 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
                                const RenderOptions& options, std::string_view accel,
                                std::string_view kernel, const AovSet& aovs) {
   RenderIdentity id;
-  const bool path = spec.kind == IntegratorSpec::Kind::kPath;
-  id.integrator = path ? "path" : "lab";
+  const bool path = spec.kind != IntegratorSpec::Kind::kLab;  // path or bdpt
+  id.integrator = std::string(integrator_name(spec.kind));
   id.seed = path ? options.seed : 0;
   id.spp = path ? options.spp : 1;
   id.width = scene.camera.width();

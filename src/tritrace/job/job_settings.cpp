@@ -33,8 +33,9 @@ std::string check_bvh_build_or_auto(const std::string& s) {
              : "unknown BVH build '" + s + "' (use auto, sah or morton)";
 }
 std::string check_integrator(const std::string& s) {
-  return s == "lab" || s == "path" ? std::string()
-                                   : "unknown integrator '" + s + "' (use lab or path)";
+  return s == "lab" || s == "path" || s == "bdpt"
+             ? std::string()
+             : "unknown integrator '" + s + "' (use lab, path or bdpt)";
 }
 std::string check_sampler(const std::string& s) {
   return parse_sampler(s) ? std::string()
@@ -187,8 +188,9 @@ int thread_count(const JobSettings& settings) {
 IntegratorSpec integrator_spec(const JobSettings& settings, const IntegratorSpec& scene_spec) {
   IntegratorSpec spec = scene_spec;
   if (!settings.integrator.empty()) {
-    spec.kind =
-        settings.integrator == "lab" ? IntegratorSpec::Kind::kLab : IntegratorSpec::Kind::kPath;
+    spec.kind = settings.integrator == "lab"    ? IntegratorSpec::Kind::kLab
+                : settings.integrator == "bdpt" ? IntegratorSpec::Kind::kBdpt
+                                                : IntegratorSpec::Kind::kPath;
   }
   if (!settings.spp.empty()) spec.spp = static_cast<uint32_t>(*parse_integer(settings.spp));
   if (!settings.seed.empty()) spec.seed = static_cast<uint64_t>(*parse_integer(settings.seed));

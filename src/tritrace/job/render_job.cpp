@@ -13,6 +13,7 @@
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/job/setting_values.h"
+#include "tritrace/render/bdpt_integrator.h"
 #include "tritrace/render/make_integrator.h"
 
 namespace tritrace {
@@ -26,6 +27,20 @@ std::optional<std::pair<long long, long long>> parse_two(const std::string& text
   const std::optional<long long> b = parse_integer(text.substr(at + 1));
   if (!a || !b || *a < 0 || *b < 0) return std::nullopt;
   return std::pair{*a, *b};
+}
+
+// What the first bidirectional path tracer cannot do yet, refused rather than rendered wrong
+// (docs/BDPT.md).
+void check_bdpt(const Scene& scene, const IntegratorSpec& spec) {
+  if (spec.clamp > 0.0f) {
+    throw Error("--clamp",
+                "applies to the path tracer; bdpt has no clamp (its connections have no "
+                "direct/indirect split)",
+                ExitCode::kUsage);
+  }
+  if (const std::string why = bdpt_unsupported(scene); !why.empty()) {
+    throw Error("--integrator", why, ExitCode::kUsage);
+  }
 }
 
 // The part --spp-range and --tile ask for, checked against the render's spp and image size.
@@ -268,6 +283,7 @@ void RenderJob::set_up() {
                 "rendered apart; split the image with --tile instead of --spp-range",
                 ExitCode::kUsage);
   }
+  if (spec_.kind == IntegratorSpec::Kind::kBdpt) check_bdpt(*scene_, spec_);
   accel_kind_ = tritrace::accel_kind(settings_);
   kernel_ = kernel_choice(settings_);
   aovs_ = aov_set(settings_);

@@ -106,7 +106,8 @@ class RenderJob {
   // The loaded scene's facts (dropped triangles, the file's output); nullopt for a borrowed scene.
   const LoadedScene* loaded() const { return loaded_ ? &*loaded_ : nullptr; }
   const IntegratorSpec& spec() const { return spec_; }
-  bool path() const { return spec_.kind == IntegratorSpec::Kind::kPath; }
+  // Physically based (path or bdpt): many samples per pixel, sRGB output; false for the lab's.
+  bool path() const { return spec_.kind != IntegratorSpec::Kind::kLab; }
   AccelKind accel_kind() const { return accel_kind_; }
   Kernel kernel() const { return kernel_; }
   // The AOVs asked for (written with the image); the film also keeps the ones the denoiser needs.

@@ -12,7 +12,7 @@
 
 namespace tritrace {
 
-std::string_view integrator_name(IntegratorSpec::Kind kind);  // "lab", "path"
+std::string_view integrator_name(IntegratorSpec::Kind kind);  // "lab", "path", "bdpt"
 
 // The integrator `spec` names for `scene`, which must outlive it (the path tracer keeps the
 // scene's emitters).

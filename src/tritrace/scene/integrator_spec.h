@@ -15,7 +15,8 @@ inline constexpr int kDefaultMaxDepth = 1024;
 inline constexpr int kMaxMaxDepth = 1 << 16;
 
 struct IntegratorSpec {
-  enum class Kind { kLab, kPath };
+  // kBdpt: the bidirectional path tracer (render/bdpt_integrator.h), physically based like kPath.
+  enum class Kind { kLab, kPath, kBdpt };
   Kind kind = Kind::kPath;
   uint32_t spp = kDefaultSpp;
   int max_depth = kDefaultMaxDepth;

@@ -749,8 +749,11 @@ class Parser {
         spec.kind = IntegratorSpec::Kind::kLab;
       } else if (type == "path") {
         spec.kind = IntegratorSpec::Kind::kPath;
+      } else if (type == "bdpt") {
+        spec.kind = IntegratorSpec::Kind::kBdpt;
       } else {
-        fail("/integrator/type", "must be \"lab\" or \"path\", got '" + shown(type) + "'");
+        fail("/integrator/type",
+             "must be \"lab\", \"path\" or \"bdpt\", got '" + shown(type) + "'");
       }
     }
     if (j.contains("spp")) {

@@ -1,0 +1,94 @@
+// BdptIntegrator: bidirectional path tracing (Veach 1997, chapter 10; Lafortune and Willems 1993):
+// per camera sample one camera subpath and one light subpath, every connection strategy (s, t)
+// with t >= 2 evaluated and combined by multiple importance sampling (power heuristic). Light
+// tracing to the camera (t = 1) is not done yet, so every contribution lands in the sample's own
+// pixel and the image is deterministic like the path tracer's. Point lights, emissive triangles
+// and the environment (a constant colour or a map). docs/BDPT.md has the design.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tritrace/math/offset_ray.h"
+#include "tritrace/math/sampling.h"
+#include "tritrace/render/environment_light.h"
+#include "tritrace/render/integrator.h"
+
+namespace tritrace {
+
+struct BdptSettings {
+  // Bounces, as PathSettings::max_depth: paths of at most max_depth + 1 edges (s + t <=
+  // max_depth + 2 vertices).
+  int max_depth = 1024;
+  // Bounces of a subpath before Russian roulette may end it (the path tracer's rule: survival
+  // min(1, sqrt(max component of the subpath's throughput))).
+  int roulette_depth = 3;
+  // For tests: evaluate only strategy (only_s, only_t) when both are >= 0, and with
+  // `unweighted` without its MIS weight (each strategy alone is then an unbiased estimate of the
+  // paths it can sample).
+  int only_s = -1;
+  int only_t = -1;
+  bool unweighted = false;
+  // The balance heuristic instead of the power heuristic (for tests: both are unbiased).
+  bool balance = false;
+};
+
+// Why bdpt cannot render `scene` correctly yet (empty when it can): the caller refuses it.
+std::string bdpt_unsupported(const Scene& scene);
+
+class BdptIntegrator final : public Integrator {
+ public:
+  // Keeps the scene's emitters (built here): the scene must outlive it. Throws Error when
+  // bdpt_unsupported(scene) is not empty.
+  BdptIntegrator(const Scene& scene, const BdptSettings& settings = {},
+                 const RayOffsetParams& offset = {});
+
+  uint64_t radiance(const SampleBatch& batch, const SampleOutput& out, const Scene& scene,
+                    const Accel& accel) const override;
+
+  const BdptSettings& settings() const { return settings_; }
+
+  // An emitter for light subpaths: a point light, an emissive triangle or the environment.
+  struct Emitter {
+    bool point = false;
+    bool environment = false;
+    uint32_t prim = 0;          // the triangle (scene numbering), or the index into scene.lights
+    glm::vec3 position{0.0f};   // a point light's
+    glm::vec3 intensity{0.0f};  // a point light's, P / (4 pi)
+    float pmf = 0.0f;           // the probability of choosing it
+    float area = 0.0f;          // a triangle's
+  };
+
+ private:
+  BdptSettings settings_;
+  RayOffsetParams offset_;
+  std::vector<Emitter> emitters_;
+  AliasTable table_;
+  std::vector<uint32_t> emissive_prims_;  // sorted, for the density of choosing a hit emitter
+  std::vector<uint32_t> emissive_index_;  // parallel: the emitter's index in emitters_
+
+  // The area density with which a light subpath starts at point of triangle `prim` (pmf / area);
+  // 0 for a triangle that is not an emitter.
+  float origin_pdf(uint32_t prim) const;
+
+  // The environment (a map, or a constant colour that is not black): its radiance from direction
+  // w (pointing away from the scene), the solid-angle density with which light subpaths choose w,
+  // and that choice. Light subpaths from it start on the disk of radius environment_radius_ about
+  // environment_centre_ across w (the scene's bounding sphere), density environment_pdf_pos_.
+  glm::vec3 environment_radiance(glm::vec3 w) const;
+  float environment_dir_pdf(glm::vec3 w) const;
+  glm::vec3 sample_environment(glm::vec2 u, float& pdf) const;
+  bool has_environment_ = false;
+  bool environment_map_ = false;
+  EnvironmentLight environment_;
+  glm::vec3 environment_colour_{0.0f};
+  float environment_pmf_ = 0.0f;
+  float environment_pdf_pos_ = 0.0f;
+  glm::vec3 environment_centre_{0.0f};
+  float environment_radius_ = 0.0f;
+
+  friend class BdptTracer;
+};
+
+}  // namespace tritrace
