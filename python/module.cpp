@@ -524,7 +524,8 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
                    const py::object& focal_length, const py::object& yaw,
                    const py::object& distance, const py::object& light,
                    const py::object& time_limit, const py::object& denoise, const py::object& clamp,
-                   const py::object& noise_threshold) {
+                   const py::object& noise_threshold, const py::object& aperture,
+                   const py::object& focus) {
   // The CLI's flags, parsed and checked by the CLI's own code.
   FlagTexts texts;
   texts.add_string("--integrator", integrator);
@@ -542,6 +543,8 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   texts.add_number("--time-limit", time_limit);
   texts.add_number("--clamp", clamp);
   texts.add_number("--noise-threshold", noise_threshold);
+  texts.add_number("--aperture", aperture);
+  texts.add_number("--focus", focus);
   std::shared_ptr<PyAccel> prebuilt;
   if (!accel.is_none() && !py::isinstance<py::str>(accel)) {
     if (!py::isinstance<PyAccel>(accel)) {
@@ -832,7 +835,7 @@ the argument, wrong types TypeError.)");
         "kernel"_a = none, "threads"_a = none, "position"_a = none, "look_at"_a = none,
         "up"_a = none, "vertical_fov"_a = none, "focal_length"_a = none, "yaw"_a = none,
         "distance"_a = none, "light"_a = none, "time_limit"_a = none, "denoise"_a = none,
-        "clamp"_a = none, "noise_threshold"_a = none,
+        "clamp"_a = none, "noise_threshold"_a = none, "aperture"_a = none, "focus"_a = none,
         R"(Renders the scene as `tritrace render` does, returning a tritrace.Frame.
 
 The image is bit for bit the one `tritrace render ... -o out.pfm` writes with the same
@@ -847,7 +850,9 @@ the path tracer's image through the built-in denoiser, as `tritrace render --den
 (the most one sample's indirect light adds to a pixel, per channel: biased, as
 `tritrace render --clamp`), noise_threshold (adaptive sampling: a pixel stops once the relative
 error of its mean is below it at a check and below sqrt(2) times it at the check before, checks
-at 32, 64, 128, ... samples, spp the most; Frame.mean_spp says how many it took).
+at 32, 64, 128, ... samples, spp the most; Frame.mean_spp says how many it took), aperture
+(a thin lens's radius in world units, as `tritrace render --aperture`; path and bdpt), focus
+(the distance of the plane in focus, as --focus).
 aovs: any of "albedo", "normal", "depth", "variance", "spp". Camera settings beyond the CLI's
 flags, as a scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
 focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a

@@ -179,6 +179,7 @@ View make_view(const SceneData& data, const CameraPose& pose, const SceneOverrid
     }
     c.vertical_fov_degrees = fov;
     c.focal_length_px.reset();
+    c.ortho_half_height.reset();  // a field of view makes a perspective camera
   }
   if (pose.focal_length_px) {
     const float f = *pose.focal_length_px;
@@ -187,6 +188,7 @@ View make_view(const SceneData& data, const CameraPose& pose, const SceneOverrid
     }
     c.focal_length_px = f;
     c.vertical_fov_degrees.reset();
+    c.ortho_half_height.reset();
   }
   if (pose.any() && !Camera::is_valid_look_at(c.position, c.look_at, c.up)) {
     fail(pose.position  ? "position"

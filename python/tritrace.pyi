@@ -241,6 +241,8 @@ def render(
     denoise: Optional[bool] = None,
     clamp: Optional[float] = None,
     noise_threshold: Optional[float] = None,
+    aperture: Optional[float] = None,
+    focus: Optional[float] = None,
 ) -> Frame:
     """Renders the scene as `tritrace render` does: the image is bit for bit the one
     `tritrace render ... -o out.pfm` writes with the same settings.
@@ -255,7 +257,8 @@ def render(
     adds to a pixel (biased, as `tritrace render --clamp`). noise_threshold: adaptive sampling,
     each pixel stops once the relative error of its mean is below it (checked at 32, 64, 128, ...
     samples, and confirmed by the check before; spp the most); Frame.mean_spp says how many a
-    pixel took on average, aovs "spp" gives Frame.spp_map. Bad values raise ValueError with the
+    pixel took on average, aovs "spp" gives Frame.spp_map. aperture and focus: a thin lens's
+    radius and the distance of the plane in focus, as --aperture and --focus. Bad values raise ValueError with the
     CLI's message, wrong types TypeError.
     """
 

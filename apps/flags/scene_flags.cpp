@@ -72,6 +72,22 @@ void add_scene_flags(CLI::App& app, JobSettings& flags) {
                  "0,-0.5,-0.7)")
       ->type_name("X,Y,Z")
       ->check(rule("--light"));
+  app.add_option("--aperture", flags.aperture,
+                 "Thin-lens depth of field for path and bdpt: the lens radius in world units "
+                 "(default: the scene's, 0, a pinhole)")
+      ->type_name("R")
+      ->check(rule("--aperture"));
+  app.add_option("--focus", flags.focus,
+                 "Distance of the plane in focus, along the view direction, with a lens "
+                 "(default: the scene's, else the distance to the point the camera looks at)")
+      ->type_name("D")
+      ->check(rule("--focus"));
+  app.add_option("--camera", flags.camera,
+                 "Which of a glTF file's cameras to render from: an index in scene-graph order "
+                 "(tritrace info lists them) or a node or camera name (default: the first; a "
+                 "file without cameras is framed on its bounds)")
+      ->type_name("N|NAME")
+      ->check(rule("--camera"));
   app.add_option("--threads", flags.threads, "Worker threads (default: all cores)")
       ->type_name("N")
       ->check(rule("--threads"));

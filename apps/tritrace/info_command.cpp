@@ -76,8 +76,25 @@ int run_info(const InfoArgs& args) {
                 std::string(sampler_name(spec.sampler)).c_str(),
                 static_cast<unsigned long long>(spec.seed));
   }
-  std::printf("camera: %dx%d at %s, focal length %g px\n", s.camera.width(), s.camera.height(),
-              vec(s.camera.position()).c_str(), s.camera.focal_px());
+  const Camera& c = s.camera;
+  if (c.is_orthographic()) {
+    std::printf("camera: %dx%d at %s, orthographic, %g units per pixel", c.width(), c.height(),
+                vec(c.position()).c_str(), c.ortho_scale());
+  } else {
+    std::printf("camera: %dx%d at %s, focal length %g px", c.width(), c.height(),
+                vec(c.position()).c_str(), c.focal_px());
+  }
+  if (c.has_lens()) {
+    std::printf(", lens radius %g focused at %g", c.lens_radius(), c.focus_distance());
+  }
+  std::printf("\n");
+  // A glTF file's own cameras, the one rendered by default marked.
+  for (size_t i = 0; i < loaded.cameras.size(); ++i) {
+    const FileCamera& fc = loaded.cameras[i];
+    std::printf("camera %zu%s%s%s: %s%s\n", i, fc.name.empty() ? "" : " '", fc.name.c_str(),
+                fc.name.empty() ? "" : "'", fc.description.c_str(),
+                static_cast<int>(i) == loaded.camera_index ? " (rendered)" : "");
+  }
   std::printf("dropped: %zu degenerate, %zu non-finite triangles\n",
               loaded.stats.dropped_degenerate, loaded.stats.dropped_non_finite);
   if (!loaded.output.empty()) std::printf("output: %s\n", loaded.output.c_str());

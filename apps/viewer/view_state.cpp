@@ -80,6 +80,7 @@ std::string render_command_line(const JobSettings& flags, const ViewState& state
   if (!flags.scene.empty()) line += " --scene " + shell_quote(flags.scene);
   if (flags.accel != "bvh") line += " --accel " + shell_quote(flags.accel);
   if (!flags.kernel.empty()) line += " --kernel " + shell_quote(flags.kernel);
+  if (!flags.camera.empty()) line += " --camera " + shell_quote(flags.camera);
   line += " --yaw " + format_double(state.yaw);
   line += " --distance " + format_float(state.distance);
   if (state.light) line += " --light " + format_vec3(*state.light);
@@ -94,6 +95,8 @@ std::string render_command_line(const JobSettings& flags, const ViewState& state
           std::to_string(rendered.spp);
   line += " --seed " + std::to_string(rendered.seed);
   if (!flags.sampler.empty()) line += " --sampler " + flags.sampler;
+  if (!flags.aperture.empty()) line += " --aperture " + shell_quote(flags.aperture);
+  if (!flags.focus.empty()) line += " --focus " + shell_quote(flags.focus);
   if (!flags.max_depth.empty()) line += " --max-depth " + std::to_string(rendered.max_depth);
   if (rendered.clamp > 0.0f) line += " --clamp " + format_float(rendered.clamp);
   const FilterKind filter = filter_choice(flags);

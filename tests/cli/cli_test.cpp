@@ -397,6 +397,33 @@ TEST_F(CliTest, HelpListsEveryFlagAndExitsZero) {
   ExpectOnlyFiles(work_, {});
 }
 
+// The lens and camera flags: one-line usage errors naming the flag, and info's camera list.
+TEST_F(CliTest, LensAndCameraFlagsAreCheckedAndInfoListsGltfCameras) {
+  const auto one_line_usage = [](const RunResult& r, const std::string& start) {
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(r.err.rfind(start, 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  };
+  one_line_usage(Run({"render", "--aperture", "-1"}),
+                 "tritrace: --aperture: must be a lens radius");
+  one_line_usage(Run({"render", "--focus", "0"}), "tritrace: --focus: must be a finite number");
+  one_line_usage(Run({"render", "--aperture", "0.1"}),
+                 "tritrace: --aperture: applies to the path tracer");
+  const std::string cameras = "/usr/share/assimp/models/glTF2/cameras/Cameras.gltf";
+  if (!fs::exists(cameras)) GTEST_SKIP() << cameras << " not installed";
+  one_line_usage(Run({"render", cameras, "--camera", "7", "--width", "8", "--height", "8"}),
+                 "tritrace: --camera: no camera '7' in " + cameras + " (it has 0, 1)");
+  const RunResult info = Run({"info", cameras});
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("camera 0: perspective, yfov 0.7 rad"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("(rendered)"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("camera 1: orthographic, xmag 1, ymag 1"), std::string::npos) << info.out;
+  const RunResult ortho = Run({"render", cameras, "--camera", "1", "--width", "16", "--height",
+                               "16", "--spp", "1", "--aperture", "0.01", "-o", "o.png", "-q"});
+  EXPECT_EQ(ortho.exit_code, 0) << ortho.err;
+  EXPECT_TRUE(fs::exists(work_ / "o.png"));
+}
+
 TEST_F(CliTest, TopLevelHelpNamesTheRenderCommand) {
   const RunResult r = Run({"--help"});
   EXPECT_EQ(r.exit_code, 0);

@@ -62,6 +62,8 @@ TEST(JobSettings, EveryRuleRefusesWhatItShould) {
       {"--filter", "mitchell"}, {"--aovs", "albedo,,"},    {"--exposure", "nan"},
       {"--clamp", "0"},         {"--clamp", "-1"},         {"--clamp", "inf"},
       {"--clamp", "1e39"},      {"--time-limit", "0"},     {"--noise-threshold", "0"},
+      {"--aperture", "-0.1"},   {"--aperture", "inf"},     {"--aperture", "0.1mm"},
+      {"--focus", "0"},         {"--focus", "-2"},
   };
   for (const auto& [flag, text] : bad) {
     JobSettings s;
@@ -322,6 +324,56 @@ TEST(RenderJob, TimeLimitWithNoiseThresholdStopsAtTheTimeOrWhenEveryPixelHasStop
   EXPECT_EQ(tiny.record.spp, 8u);
   JobSettings uniform = small("cornell-area", "8");
   EXPECT_TRUE(same_pixels(tiny.image, run(uniform).image));
+}
+
+TEST(RenderJob, LensIsForPathAndBdptAndReachesTheCamera) {
+  // The lab integrator's one corner ray per pixel has no lens: refused from the same table as the
+  // other path-only settings, whether the flag or the scene asks for it.
+  JobSettings s = small("cornell");
+  s.aperture = "0.05";
+  Error e = error_of([&] { RenderJob(s, load_job_scene(s)); });
+  EXPECT_EQ(e.subject(), "--aperture");
+  EXPECT_EQ(e.exit_code(), ExitCode::kUsage);
+  s.aperture.clear();
+  s.focus = "3";
+  EXPECT_EQ(error_of([&] { RenderJob(s, load_job_scene(s)); }).subject(), "--focus");
+  // --focus without a lens anywhere has nothing to focus.
+  s = small("cornell-area", "1");
+  s.focus = "3";
+  e = error_of([&] { load_job_scene(s); });
+  EXPECT_EQ(e.subject(), "--focus");
+  EXPECT_EQ(e.exit_code(), ExitCode::kUsage);
+  // With a lens: the built-in orbit camera keeps its pose and focuses at its distance, 3, unless
+  // --focus says otherwise.
+  s.focus.clear();
+  s.aperture = "0.05";
+  const RenderJob job(s, load_job_scene(s));
+  EXPECT_EQ(job.scene().camera.lens_radius(), 0.05f);
+  EXPECT_EQ(job.scene().camera.focus_distance(), 3.0f);
+  EXPECT_EQ(job.scene().camera.position(), glm::vec3(0.0f, 0.0f, -3.0f));
+  s.focus = "2.5";
+  s.integrator = "bdpt";
+  EXPECT_EQ(RenderJob(s, load_job_scene(s)).scene().camera.focus_distance(), 2.5f);
+  // A lensed scene under the lab integrator.
+  s.integrator = "lab";
+  s.focus.clear();
+  e = error_of([&] { RenderJob(s, load_job_scene(s)); });
+  EXPECT_EQ(e.subject(), "--aperture");
+  LoadedScene lensed = load_job_scene(s);
+  JobSettings lab = small("cornell-area");
+  lab.integrator = "lab";
+  e = error_of([&] { RenderJob(lab, lensed.scene, lensed.integrator); });
+  EXPECT_EQ(e.subject(), "--integrator");
+  EXPECT_EQ(e.exit_code(), ExitCode::kUsage);
+}
+
+TEST(RenderJob, LensIsPartOfTheIdentityOnlyWhenThere) {
+  JobSettings s = small("cornell-area", "8");
+  const std::string pinhole = RenderJob(s, load_job_scene(s)).identity().hash;
+  s.aperture = "0";
+  EXPECT_EQ(RenderJob(s, load_job_scene(s)).identity().hash, pinhole);
+  s.aperture = "0.05";
+  EXPECT_NE(RenderJob(s, load_job_scene(s)).identity().hash, pinhole);
 }
 
 TEST(RenderJob, DenoiseIsForWholePathRenders) {

@@ -120,5 +120,60 @@ TEST(Camera, BlockRaysEqualPrimaryRayBitForBit) {
   }
 }
 
+TEST(Camera, LensRayWithoutALensIsThePinholeRayBitForBit) {
+  const Camera cam = Camera(333, 97, -2.5, 7.25f, 123.5f).with_lens(0.0f, 3.0f);
+  for (const glm::vec2 u : {glm::vec2(0.0f), glm::vec2(0.25f, 0.9f), glm::vec2(0.999f)}) {
+    const Ray a = cam.lens_ray(17.25f, 40.5f, u), b = cam.ray_through(17.25f, 40.5f);
+    EXPECT_EQ(a.origin, b.origin);
+    EXPECT_EQ(a.dir, b.dir);
+  }
+}
+
+TEST(Camera, LensRaysLeaveTheLensDiskAndMeetInThePlaneOfFocus) {
+  // Camera at (0, 0, -3) looking along +z, right +x, down +y; lens radius 0.2, focus at 5. The
+  // pinhole ray through image position (400, 100) of a 500 x 500 image (f = 500) has direction
+  // (150, -150, 500): it meets the plane z = -3 + 5 at (1.5, -1.5, 2).
+  const Camera cam = Camera(500, 500).with_lens(0.2f, 5.0f);
+  const glm::vec3 focus_point(1.5f, -1.5f, 2.0f);
+  for (const glm::vec2 u : {glm::vec2(0.5f), glm::vec2(0.0f), glm::vec2(0.99f, 0.1f),
+                            glm::vec2(0.3f, 0.7f), glm::vec2(1.0f, 0.5f)}) {
+    const Ray r = cam.lens_ray(400.0f, 100.0f, u);
+    // On the lens: the plane z = -3, within the radius.
+    EXPECT_FLOAT_EQ(r.origin.z, -3.0f);
+    EXPECT_LE(std::hypot(r.origin.x, r.origin.y), 0.2f * (1.0f + 1e-6f));
+    EXPECT_NEAR(glm::length(r.dir), 1.0f, 1e-6f);
+    const float t = (focus_point.z - r.origin.z) / r.dir.z;
+    const glm::vec3 at = r.origin + t * r.dir;
+    EXPECT_NEAR(at.x, focus_point.x, 1e-5f);
+    EXPECT_NEAR(at.y, focus_point.y, 1e-5f);
+  }
+  // u = (1, 1/2) is the disk's rightmost point (the concentric map's +x axis).
+  const Ray edge = cam.lens_ray(400.0f, 100.0f, glm::vec2(1.0f, 0.5f));
+  EXPECT_NEAR(edge.origin.x, 0.2f, 1e-6f);
+  EXPECT_NEAR(edge.origin.y, 0.0f, 1e-6f);
+}
+
+TEST(Camera, OrthographicRaysAreParallelFromTheImagePlane) {
+  // 200 x 100 pixels, 0.01 units per pixel: the view is 2 x 1 units about the camera's axis.
+  const Camera cam =
+      Camera::look_at(200, 100, {1.0f, 2.0f, 3.0f}, {1.0f, 2.0f, 10.0f}, {0.0f, -1.0f, 0.0f}, 0.0f)
+          .orthographic(0.01f);
+  EXPECT_TRUE(cam.is_orthographic());
+  const Ray corner = cam.ray_through(0.0f, 0.0f);
+  EXPECT_EQ(corner.dir, glm::vec3(0.0f, 0.0f, 1.0f));
+  EXPECT_NEAR(corner.origin.x, 1.0f - 1.0f, 1e-6f);
+  EXPECT_NEAR(corner.origin.y, 2.0f - 0.5f, 1e-6f);
+  EXPECT_EQ(corner.origin.z, 3.0f);
+  const Ray r = cam.primary_ray(150, 75);  // 50 right, 25 down of the centre
+  EXPECT_NEAR(r.origin.x, 1.5f, 1e-6f);
+  EXPECT_NEAR(r.origin.y, 2.25f, 1e-6f);
+  EXPECT_EQ(r.dir, glm::vec3(0.0f, 0.0f, 1.0f));
+  // The batch form gives the same rays.
+  std::vector<Ray> rays(16);
+  cam.primary_rays(148, 74, 152, 78, rays.data());
+  EXPECT_EQ(rays[4 + 2].origin, r.origin);
+  EXPECT_EQ(rays[4 + 2].dir, r.dir);
+}
+
 }  // namespace
 }  // namespace tritrace

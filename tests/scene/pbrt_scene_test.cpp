@@ -170,6 +170,25 @@ TEST(PbrtScene, FieldOfViewSpansTheShorterSide) {
   EXPECT_EQ(defaults.integrator.max_depth, 5);
 }
 
+TEST(PbrtScene, LensRadiusAndFocalDistanceMakeTheThinLens) {
+  const LoadedScene lens = parse(
+      "Camera \"perspective\" \"float lensradius\" 0.25 \"float focaldistance\" 7\n"
+      "WorldBegin\n");
+  EXPECT_TRUE(lens.warnings.empty()) << lens.warnings.front();
+  EXPECT_EQ(lens.scene.camera.lens_radius(), 0.25f);
+  EXPECT_EQ(lens.scene.camera.focus_distance(), 7.0f);
+  // pbrt's default focaldistance is 1e6; a camera transform scaling z by 2 doubles both lengths.
+  const LoadedScene far =
+      parse("Scale 2 2 2\nCamera \"perspective\" \"float lensradius\" 0.5\nWorldBegin\n");
+  EXPECT_FLOAT_EQ(far.scene.camera.lens_radius(), 0.25f);
+  EXPECT_FLOAT_EQ(far.scene.camera.focus_distance(), 5e5f);
+  // No lensradius, or 0: the pinhole.
+  EXPECT_FALSE(parse("Camera \"perspective\"\nWorldBegin\n").scene.camera.has_lens());
+  EXPECT_EQ(
+      error_of([] { parse("Camera \"perspective\" \"float focaldistance\" 0\nWorldBegin\n"); }),
+      "s.pbrt:1:1: \"float focaldistance\" must be a finite number greater than 0");
+}
+
 TEST(PbrtScene, TheLastTransformWrittenAppliesFirst) {
   // Rotate 90 about z takes (1, 0, 0) to (0, 1, 0), then Translate to (2, 1, 0).
   const LoadedScene loaded = parse(

@@ -199,6 +199,12 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
   const Camera& c = scene.camera;
   for (glm::vec3 v : {c.position(), c.right(), c.down(), c.forward()}) h.add_value(v);
   h.add_value(c.focal_px());
+  // Only when set, so that a pinhole render's identity is what it was before lenses existed.
+  if (c.has_lens()) {
+    h.add_value(c.lens_radius());
+    h.add_value(c.focus_distance());
+  }
+  if (c.is_orthographic()) h.add_value(c.ortho_scale());
   id.hash = hex(h.value());
   return id;
 }

@@ -62,6 +62,15 @@ std::string check_time_limit(const std::string& s) {
          format_double(kMaxTimeLimitSeconds) + ", got '" + s + "'";
 }
 
+std::string check_aperture(const std::string& s) {
+  const std::optional<float> v = parse_float(s);
+  return v && *v >= 0.0f ? std::string()
+                         : "must be a lens radius, a finite number of at least 0, got '" + s + "'";
+}
+std::string check_camera(const std::string& s) {
+  return s.empty() ? "must be a camera's index or name" : std::string();
+}
+
 std::string check_clamp(const std::string& s) {
   const std::optional<float> v = parse_float(s);
   return v && *v > 0.0f ? std::string() : "must be a finite number greater than 0, got '" + s + "'";
@@ -83,6 +92,9 @@ constexpr SettingRule kRules[] = {
     {"--yaw", &JobSettings::yaw, check_finite},
     {"--distance", &JobSettings::distance, check_distance},
     {"--light", &JobSettings::light, check_vec3},
+    {"--aperture", &JobSettings::aperture, check_aperture},
+    {"--focus", &JobSettings::focus, check_distance},
+    {"--camera", &JobSettings::camera, check_camera},
     {"--accel", &JobSettings::accel, check_accel},
     {"--kernel", &JobSettings::kernel, check_kernel},
     {"--bvh-build", &JobSettings::bvh_build, check_bvh_build_or_auto},
@@ -164,6 +176,9 @@ SceneOverrides scene_overrides(const JobSettings& settings) {
   if (!settings.yaw.empty()) o.yaw = *parse_finite(settings.yaw);
   if (!settings.distance.empty()) o.distance = *parse_float(settings.distance);
   if (!settings.light.empty()) o.light = *parse_vec3(settings.light);
+  if (!settings.aperture.empty()) o.aperture = *parse_float(settings.aperture);
+  if (!settings.focus.empty()) o.focus = *parse_float(settings.focus);
+  o.camera = settings.camera;
   return o;
 }
 

@@ -28,6 +28,9 @@ struct JobSettings {
   std::string yaw;
   std::string distance;
   std::string light;
+  std::string aperture;  // the thin lens's radius in world units; empty: the scene's (a pinhole)
+  std::string focus;     // the distance of the plane in focus; empty: the scene's, else look_at's
+  std::string camera;    // which of a glTF file's cameras: an index or a name; empty: the first
   // How to trace.
   std::string accel = "bvh";
   std::string kernel;  // empty: the accel's default kernel

@@ -252,12 +252,23 @@ void RenderJob::set_up() {
         {"--denoise", settings_.denoise, "the lab integrator's image has no noise"},
         {"--noise-threshold", !settings_.noise_threshold.empty(),
          "the lab integrator takes one sample per pixel"},
+        {"--aperture", !settings_.aperture.empty(),
+         "the lab integrator traces one ray through each pixel's corner, without a lens"},
+        {"--focus", !settings_.focus.empty(),
+         "the lab integrator traces one ray through each pixel's corner, without a lens"},
     };
     for (const auto& setting : path_only) {
       if (setting.given) {
         throw Error(setting.flag, std::string("applies to the path tracer; ") + setting.why,
                     ExitCode::kUsage);
       }
+    }
+    // A lens the scene file gives: the lab's corner rays would ignore it without a word.
+    if (scene_->camera.has_lens()) {
+      throw Error("--integrator",
+                  "the scene's camera has a lens (aperture_radius > 0), which the lab integrator "
+                  "ignores (one ray through each pixel's corner); use path or bdpt",
+                  ExitCode::kUsage);
     }
   }
   if (!settings_.time_limit.empty()) {

@@ -105,6 +105,7 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
   const int tiles_y = (height + tile - 1) / tile;
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
   const bool corner = integrator.pixel_corner_only();
+  const bool lens = camera.has_lens();
   const uint32_t end = first + spp;
   const PixelFilter filter(options.filter);
   const bool adaptive = options.noise_threshold > 0.0f && !corner;
@@ -188,8 +189,9 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
                 sampler.start_pixel_sample(x, y, s);
                 const glm::vec2 u = sampler.get_pixel_2d();
                 const PixelFilter::Sample f = filter.sample(u.x, u.y);
-                batch[n] =
-                    camera.ray_through(static_cast<float>(x) + f.x, static_cast<float>(y) + f.y);
+                const float px = static_cast<float>(x) + f.x, py = static_cast<float>(y) + f.y;
+                batch[n] = lens ? camera.lens_ray(px, py, sampler.get_lens_2d())
+                                : camera.ray_through(px, py);
                 weight[n] = f.weight;
                 ++n;
               }

@@ -96,6 +96,12 @@ class Sampler {
   glm::vec2 get_pixel_2d() {
     return get_2d();
   }
+  // The point on a thin lens: by convention the next two dimensions (2 and 3), one 2-D group, drawn
+  // right after get_pixel_2d and only when the camera has a lens, so that pinhole renders keep the
+  // layout (and the images) they had; the integrator's dimensions follow.
+  glm::vec2 get_lens_2d() {
+    return get_2d();
+  }
 
   uint64_t seed() const {
     return seed_;

@@ -70,7 +70,7 @@ void Camera::primary_rays(int x0, int y0, int x1, int y1, Ray* out) const {
   // Rows 4 wide (the renderer's blocks) fill whole vectors of W / 4 rows; other shapes go pixel by
   // pixel below. The offsets are integers, converted once, as primary_ray does.
   static_assert(W % 4 == 0);
-  for (; row == 4 && i + W <= count; i += W) {
+  for (; row == 4 && ortho_scale_ == 0.0f && i + W <= count; i += W) {
     const VI column = simd::splat_i(x0 - half_width) + simd::quad_column();
     const VI line = simd::splat_i(y0 + i / 4 - half_height) + simd::quad_row();
     const VF dx = simd::to_float(column), dy = simd::to_float(line);

@@ -34,6 +34,21 @@ struct CameraSpec {
   // The image's x axis runs opposite to Camera::look_at's cross(forward, up): pbrt's camera, whose
   // +x is cross(up, forward) (scene/io/pbrt_scene.h). The camera is built mirrored.
   bool mirror_x = false;
+  // A thin lens (Camera::with_lens): the aperture's radius in world units (0: a pinhole) and the
+  // distance along the view direction of the plane in focus; without one, the distance from
+  // position to look_at.
+  float aperture_radius = 0.0f;
+  std::optional<float> focus_distance;
+  // An orthographic camera that shows 2 * ortho_half_height world units from the image's top to
+  // its bottom (glTF's ymag); the field of view settings then do not apply.
+  std::optional<float> ortho_half_height;
+};
+
+// A camera a file holds (glTF's), for `tritrace info` and --camera: its index in scene-graph
+// order, its name (the node's, else the camera's, else empty) and what it is.
+struct FileCamera {
+  std::string name;
+  std::string description;  // "perspective, yfov 0.7 rad (40.1 degrees), aspect 1.5" ...
 };
 
 // Command-line values that replace the scene's own (see docs/SCENE_FORMAT.md).
@@ -43,6 +58,11 @@ struct SceneOverrides {
   std::optional<double> yaw;       // orbit about the vertical through look_at, radians
   std::optional<float> distance;   // from the camera to look_at, along its line of sight; > 0
   std::optional<glm::vec3> light;  // position of the first light
+  std::optional<float> aperture;   // the lens radius, >= 0 (0: a pinhole)
+  std::optional<float> focus;      // the distance of the plane in focus, > 0
+  // Which of a file's cameras (FileCamera): an index in scene-graph order or a name; read when
+  // the file is loaded, not by apply_overrides. Empty: the first.
+  std::string camera;
 };
 
 struct LoadStats {
@@ -60,6 +80,10 @@ struct LoadedScene {
   // What the loader skipped or approximated, one line per kind ("FILE:LINE: warning: what"), for
   // the front ends to print after "tritrace: " (pbrt-v4 files; empty for the others).
   std::vector<std::string> warnings;
+  // The file's own cameras in scene-graph order (glTF's; empty for other files), and the one
+  // `camera` was made from (-1: none of them, the framing on the bounds).
+  std::vector<FileCamera> cameras;
+  int camera_index = -1;
 };
 
 }  // namespace tritrace

@@ -46,6 +46,8 @@ constexpr int kPbrtWidth = 1280, kPbrtHeight = 720;
 constexpr uint32_t kPbrtSpp = 16;
 constexpr int kPbrtMaxDepth = 5;
 constexpr double kPbrtFov = 90.0;
+// pbrt-v4's default focaldistance (cameras.cpp): far enough that a lens focuses at infinity.
+constexpr double kPbrtFocalDistance = 1e6;
 constexpr float kMaxIndex = 10.0f;  // the scene file's range for ior and eta
 constexpr int kMaxIncludeDepth = 32;
 
@@ -474,10 +476,14 @@ class Interpreter {
     fov_ = p.get_float("fov", kPbrtFov);
     if (!(fov_ > 0.0 && fov_ < 180.0))
       fail(d.at, "\"float fov\" must be between 0 and 180 degrees");
-    if (p.get_float("lensradius", 0.0) > 0.0) {
-      warn(d.at, "depth of field (lensradius) ignored: tritrace's cameras are pinholes");
+    lens_radius_ = p.get_float("lensradius", 0.0);
+    focal_distance_ = p.get_float("focaldistance", kPbrtFocalDistance);
+    if (!(lens_radius_ >= 0.0) || !std::isfinite(lens_radius_)) {
+      fail(d.at, "\"float lensradius\" must be a finite number of at least 0");
     }
-    p.find("focaldistance");
+    if (!(focal_distance_ > 0.0) || !std::isfinite(focal_distance_)) {
+      fail(d.at, "\"float focaldistance\" must be a finite number greater than 0");
+    }
     warn_unused(p, "Camera");
   }
 
@@ -1142,6 +1148,17 @@ class Interpreter {
     if (!Camera::is_valid_look_at(c.position, c.look_at, c.up)) {
       fail(camera_at_, "the camera transform is degenerate");
     }
+    // The lens: pbrt's lensradius and focaldistance are camera-space lengths, which a scaling
+    // camera transform stretches as it stretches camera-space z.
+    if (lens_radius_ > 0.0) {
+      const double scale = glm::length(dvec3(world_from_camera * glm::dvec4(0, 0, 1, 0)));
+      c.aperture_radius = static_cast<float>(lens_radius_ * scale);
+      c.focus_distance = static_cast<float>(focal_distance_ * scale);
+      if (!std::isfinite(*c.focus_distance) || !(*c.focus_distance > 0.0f) ||
+          !std::isfinite(c.aperture_radius)) {
+        fail(camera_at_, "the lens (lensradius, focaldistance) is beyond float range");
+      }
+    }
     // Camera::look_at's right is cross(forward, up); pbrt's is the camera's +x.
     c.mirror_x = glm::dot(glm::cross(forward, up), right) < 0.0;
     // The field of view spans the shorter side; tritrace takes the vertical one.
@@ -1193,6 +1210,8 @@ class Interpreter {
   dmat4 camera_from_world_{1.0};
   PbrtLocation camera_at_;
   double fov_ = kPbrtFov;
+  double lens_radius_ = 0.0;
+  double focal_distance_ = kPbrtFocalDistance;
   std::map<std::string, uint32_t> named_materials_;
   std::map<std::string, SpectrumTexture> spectrum_textures_;
   std::map<std::string, double> float_textures_;

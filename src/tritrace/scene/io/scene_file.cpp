@@ -281,7 +281,8 @@ class Parser {
   void parse_camera(const Json& j) {
     object(j, "/camera");
     check_keys(j, "/camera",
-               {"position", "look_at", "up", "vertical_fov", "focal_length", "width", "height"});
+               {"position", "look_at", "up", "vertical_fov", "focal_length", "width", "height",
+                "aperture_radius", "focus_distance"});
     CameraSpec& c = out_.camera;
     if (j.contains("width"))
       c.width = static_cast<int>(integer_in(j["width"], "/camera/width", 1, kMaxImageSide));
@@ -308,6 +309,21 @@ class Parser {
         fail("/camera/focal_length", "must be positive, got " + describe(j["focal_length"]));
       }
       c.focal_length_px = f;
+    }
+    if (j.contains("aperture_radius")) {
+      const float r = single(j["aperture_radius"], "/camera/aperture_radius");
+      if (!(r >= 0.0f)) {
+        fail("/camera/aperture_radius",
+             "must be at least 0 (0: a pinhole), got " + describe(j["aperture_radius"]));
+      }
+      c.aperture_radius = r;
+    }
+    if (j.contains("focus_distance")) {
+      const float d = single(j["focus_distance"], "/camera/focus_distance");
+      if (!(d > 0.0f)) {
+        fail("/camera/focus_distance", "must be positive, got " + describe(j["focus_distance"]));
+      }
+      c.focus_distance = d;
     }
     if (!Camera::is_valid_look_at(c.position, c.look_at, c.up)) {
       fail("/camera",

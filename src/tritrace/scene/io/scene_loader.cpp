@@ -10,6 +10,7 @@
 #include "tritrace/error.h"
 #include "tritrace/math/rotation.h"
 #include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/io/gltf_cameras.h"
 #include "tritrace/scene/io/input_file.h"
 #include "tritrace/scene/io/pbrt_scene.h"
 #include "tritrace/scene/io/scene_file.h"
@@ -22,6 +23,13 @@ namespace {
 bool finite(glm::dvec3 v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::abs(v.x) <= 3e38 &&
          std::abs(v.y) <= 3e38 && std::abs(v.z) <= 3e38;
+}
+
+// --camera for a file that has one camera of its own (a scene file, a pbrt file) or none.
+[[noreturn]] void no_cameras(const std::string& path) {
+  throw Error("--camera",
+              "picks one of a glTF file's cameras; " + path + " has no cameras to choose from",
+              ExitCode::kUsage);
 }
 
 }  // namespace
@@ -37,9 +45,23 @@ void apply_overrides(LoadedScene& loaded, const SceneOverrides& overrides) {
       loaded.scene.lights.front().position = *overrides.light;
     }
   }
+  if (overrides.aperture) c.aperture_radius = *overrides.aperture;
+  if (overrides.focus) {
+    if (!(c.aperture_radius > 0.0f)) {
+      throw Error("--focus",
+                  "sets the distance a lens focuses at, and the camera has none (give --aperture)",
+                  ExitCode::kUsage);
+    }
+    c.focus_distance = *overrides.focus;
+  }
   if (c.lab_orbit) {
     const float distance = overrides.distance.value_or(glm::length(c.position - c.look_at));
     loaded.scene.camera = Camera(c.width, c.height, overrides.yaw.value_or(0.0), distance);
+    // The orbit camera looks at the origin from `distance` away.
+    if (c.aperture_radius > 0.0f) {
+      loaded.scene.camera =
+          loaded.scene.camera.with_lens(c.aperture_radius, c.focus_distance.value_or(distance));
+    }
     return;
   }
   // Distance first, then the orbit: both keep the camera on a sphere about look_at.
@@ -67,8 +89,14 @@ void apply_overrides(LoadedScene& loaded, const SceneOverrides& overrides) {
   if (c.vertical_fov_degrees)
     focal = Camera::focal_for_vertical_fov(c.height, *c.vertical_fov_degrees);
   if (c.focal_length_px) focal = *c.focal_length_px;
-  loaded.scene.camera = Camera::look_at(c.width, c.height, c.position, c.look_at, c.up, focal);
-  if (c.mirror_x) loaded.scene.camera = loaded.scene.camera.mirrored_x();
+  Camera& camera = loaded.scene.camera;
+  camera = Camera::look_at(c.width, c.height, c.position, c.look_at, c.up, focal);
+  if (c.mirror_x) camera = camera.mirrored_x();
+  if (c.ortho_half_height) camera = camera.orthographic(2.0f * *c.ortho_half_height / c.height);
+  if (c.aperture_radius > 0.0f) {
+    camera = camera.with_lens(c.aperture_radius,
+                              c.focus_distance.value_or(glm::length(c.look_at - c.position)));
+  }
 }
 
 bool is_scene_file(const std::string& path) {
@@ -79,6 +107,10 @@ bool is_scene_file(const std::string& path) {
 }
 
 LoadedScene load_builtin_scene(const std::string& name, const SceneOverrides& overrides) {
+  if (!overrides.camera.empty()) {
+    throw Error("--camera", "picks one of a glTF file's cameras; the built-in scenes have one",
+                ExitCode::kUsage);
+  }
   LoadedScene loaded;
   // The geometry does not depend on the view; apply_overrides sets camera and light.
   loaded.scene = make_builtin_scene(name, CornellOptions{});
@@ -135,22 +167,38 @@ LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& over
 
 LoadedScene load_scene(const std::string& path, const SceneOverrides& overrides) {
   if (is_scene_file(path)) {
+    if (!overrides.camera.empty()) no_cameras(path);
     LoadedScene loaded = parse_scene_json(read_input_file(path), path);
     apply_overrides(loaded, overrides);
     return loaded;
   }
   if (is_pbrt_file(path)) {
+    if (!overrides.camera.empty()) no_cameras(path);
     LoadedScene loaded = load_pbrt_scene(path);
     apply_overrides(loaded, overrides);
     return loaded;
   }
   const ImportedMesh mesh = import_mesh_file(path);
+  LoadedScene loaded;
   try {
-    return scene_from_mesh(mesh, overrides);
+    loaded = scene_from_mesh(mesh, overrides);
   } catch (const Error& e) {
     if (!e.subject().empty()) throw;
     throw Error(path, e.reason(), e.exit_code());
   }
+  const std::vector<GltfCamera> cameras =
+      is_gltf_file(path) ? read_gltf_cameras(path) : std::vector<GltfCamera>{};
+  if (cameras.empty()) {
+    if (!overrides.camera.empty()) no_cameras(path);
+    return loaded;
+  }
+  // The file's camera replaces the framing (its light stays: lights are the file's own business).
+  const size_t chosen = choose_camera(cameras, overrides.camera, path);
+  for (const GltfCamera& c : cameras) loaded.cameras.push_back({c.name, describe(c)});
+  loaded.camera_index = static_cast<int>(chosen);
+  set_gltf_view(cameras[chosen], loaded.scene.mesh.bounds(), &loaded.camera);
+  apply_overrides(loaded, overrides);
+  return loaded;
 }
 
 }  // namespace tritrace
