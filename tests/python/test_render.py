@@ -147,6 +147,23 @@ def test_camera_keywords_are_a_scene_files_camera(tmp_path):
     assert scene.camera["position"] == (0.0, 0.0, -3.0)
 
 
+def test_lens_keywords_are_the_lens_flags(tmp_path):
+    # aperture and focus render what --aperture and --focus render, bit for bit, and the lab
+    # integrator refuses a lens as the CLI does.
+    scene = tritrace.load(REPO / "scenes" / "tetrahedron_in_box.json")
+    frame = tritrace.render(scene, integrator="path", width=40, height=30, spp=2, aperture=0.05,
+                            focus=2.5)
+    assert_same_bits(frame.image, cli_image(tmp_path, REPO / "scenes" / "tetrahedron_in_box.json",
+                                            "--integrator", "path", "--width", 40, "--height", 30,
+                                            "--spp", 2, "--aperture", 0.05, "--focus", 2.5))
+    pinhole = tritrace.render(scene, integrator="path", width=40, height=30, spp=2)
+    assert not np.array_equal(frame.image, pinhole.image)
+    with pytest.raises(ValueError, match="^aperture: applies to the path tracer"):
+        tritrace.render(scene, width=8, height=8, integrator="lab", aperture=0.05)
+    with pytest.raises(ValueError, match="^aperture: must be a lens radius"):
+        tritrace.render(scene, integrator="path", width=8, height=8, aperture=-1)
+
+
 def test_scene_files_render_as_the_cli_renders_them(tmp_path):
     path = REPO / "scenes" / "tetrahedron_in_box.json"
     scene = tritrace.load(path)

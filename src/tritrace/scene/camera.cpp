@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "tritrace/math/rotation.h"
+#include "tritrace/math/sampling.h"
 #include "tritrace/math/simd_lanes.h"
 
 namespace tritrace {
@@ -49,6 +50,16 @@ Camera Camera::look_at(int width, int height, glm::vec3 position, glm::vec3 targ
 float Camera::focal_for_vertical_fov(int height, double degrees) {
   const double half = degrees * std::numbers::pi / 360.0;
   return static_cast<float>(0.5 * height / std::tan(half));
+}
+
+Ray Camera::lens_ray(float px, float py, glm::vec2 u) const {
+  Ray ray = ray_through(px, py);
+  if (!(lens_radius_ > 0.0f)) return ray;
+  const glm::vec3 in_focus = ray.origin + ray.dir * (focus_distance_ / glm::dot(ray.dir, forward_));
+  const glm::vec2 lens = lens_radius_ * sample_uniform_disk_concentric(u);
+  ray.origin += right_ * lens.x + down_ * lens.y;
+  ray.dir = glm::normalize(in_focus - ray.origin);
+  return ray;
 }
 
 void Camera::primary_rays(int x0, int y0, int x1, int y1, Ray* out) const {

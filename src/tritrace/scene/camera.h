@@ -10,7 +10,6 @@
 #include <glm/vec3.hpp>
 
 #include "tritrace/math/ray.h"
-#include "tritrace/math/sampling.h"
 
 namespace tritrace {
 
@@ -122,17 +121,8 @@ class Camera {
   // the disk) towards where the pinhole ray through (px, py) meets the plane in focus (pbrt-v4's
   // PerspectiveCamera and OrthographicCamera do the same). Points on that plane stay sharp; a
   // point at depth d is spread over a disk of diameter 2 R |d - focus| / d in the focus plane.
-  // Without a lens, ray_through(px, py) exactly.
-  Ray lens_ray(float px, float py, glm::vec2 u) const {
-    Ray ray = ray_through(px, py);
-    if (!(lens_radius_ > 0.0f)) return ray;
-    const glm::vec3 in_focus =
-        ray.origin + ray.dir * (focus_distance_ / glm::dot(ray.dir, forward_));
-    const glm::vec2 lens = lens_radius_ * sample_uniform_disk_concentric(u);
-    ray.origin += right_ * lens.x + down_ * lens.y;
-    ray.dir = glm::normalize(in_focus - ray.origin);
-    return ray;
-  }
+  // Without a lens, ray_through(px, py) exactly. Out of line: only lensed renders call it.
+  Ray lens_ray(float px, float py, glm::vec2 u) const;
 
  private:
   // The orthographic ray at offsets (dx, dy) pixels from the image centre.

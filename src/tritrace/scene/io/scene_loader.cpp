@@ -192,7 +192,8 @@ LoadedScene load_scene(const std::string& path, const SceneOverrides& overrides)
     if (!overrides.camera.empty()) no_cameras(path);
     return loaded;
   }
-  // The file's camera replaces the framing (its light stays: lights are the file's own business).
+  // The file's camera replaces the framing's; the default key light placed with the framing stays
+  // (a file without lights gets it either way).
   const size_t chosen = choose_camera(cameras, overrides.camera, path);
   for (const GltfCamera& c : cameras) loaded.cameras.push_back({c.name, describe(c)});
   loaded.camera_index = static_cast<int>(chosen);
