@@ -115,6 +115,7 @@ TEST(DepthOfField, EdgeOffFocusBlursByTheCircleOfConfusion) {
   const double depth = 8.0, focus = 4.0, radius = 0.5;
   const double blur_radius_px = radius * std::abs(depth - focus) / depth * (kFocalPx / focus);
   ASSERT_DOUBLE_EQ(blur_radius_px, 4.0);
+  // Measured over seeds 1-8: the largest column error is 0.005.
   const Image image = render_edge(edge_scene(depth, radius, focus), 256);
   int partial = 0;
   for (int x = 0; x < kWidth; ++x) {
@@ -131,9 +132,10 @@ TEST(DepthOfField, EdgeOffFocusBlursByTheCircleOfConfusion) {
 
 TEST(DepthOfField, BdptBlursAsThePathTracerDoes) {
   // bdpt's camera rays come from the same lens: the same profile within noise.
-  const Image image = render_edge(edge_scene(8.0, 0.5, 4.0), 64, true);
+  // At 64 spp its largest column error over seeds 1-8 was 0.018; 256 spp about halves that.
+  const Image image = render_edge(edge_scene(8.0, 0.5, 4.0), 256, true);
   for (int x = 24; x < 40; ++x) {
-    EXPECT_NEAR(column_mean(image, x), expected_column(x, 4.0), 0.02) << "column " << x;
+    EXPECT_NEAR(column_mean(image, x), expected_column(x, 4.0), 0.015) << "column " << x;
   }
 }
 
