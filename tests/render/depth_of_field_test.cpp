@@ -55,14 +55,16 @@ Scene edge_scene(double depth, double aperture, double focus, bool whole_plane =
   return std::move(loaded.scene);
 }
 
-Image render_edge(const Scene& scene, uint32_t spp, bool bdpt = false) {
+Image render_edge(const Scene& scene, uint32_t spp, bool bdpt = false,
+                  SamplerKind sampler = SamplerKind::kSobol) {
   const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const RenderOptions options{.spp = spp, .seed = 3, .sampler = sampler};
   if (bdpt) {
     const BdptIntegrator integrator(scene, BdptSettings{.max_depth = 0});
-    return render(scene, accel, integrator, {.spp = spp, .seed = 3});
+    return render(scene, accel, integrator, options);
   }
   const PathIntegrator integrator(scene, PathSettings{.max_depth = 0});
-  return render(scene, accel, integrator, {.spp = spp, .seed = 3});
+  return render(scene, accel, integrator, options);
 }
 
 // Column x's mean over the image's rows (the edge is vertical, so every row sees the same).
@@ -128,6 +130,25 @@ TEST(DepthOfField, EdgeOffFocusBlursByTheCircleOfConfusion) {
   EXPECT_EQ(partial, 9);
   EXPECT_EQ(column_mean(image, 27), 0.0);
   EXPECT_EQ(column_mean(image, 37), 1.0);
+}
+
+TEST(DepthOfField, SobolStratifiesTheLens) {
+  // The lens point is one 2-D group of the Sobol sampler (dimensions 2 and 3), so over a wide blur
+  // (radius 4 pixels, where the lens, not the position in the pixel, decides what a sample sees)
+  // its error is well below plain Monte Carlo's at the same spp (measured: RMS 0.0020 against
+  // 0.0044, a ratio of 0.45; a lens drawn from unstratified numbers would be near 1).
+  const Scene scene = edge_scene(8.0, 0.5, 4.0);
+  const auto rms = [](const Image& image) {
+    double sum = 0.0;
+    for (int x = 26; x < 39; ++x) {
+      const double e = column_mean(image, x) - expected_column(x, 4.0);
+      sum += e * e;
+    }
+    return std::sqrt(sum / 13.0);
+  };
+  const double sobol = rms(render_edge(scene, 256));
+  const double independent = rms(render_edge(scene, 256, false, SamplerKind::kIndependent));
+  EXPECT_LT(sobol, 0.7 * independent) << sobol << " vs " << independent;
 }
 
 TEST(DepthOfField, BdptBlursAsThePathTracerDoes) {
