@@ -51,6 +51,28 @@ TEST(GltfCameras, ReadsBothCamerasOfAssimpsTestModelInSceneGraphOrder) {
   EXPECT_EQ(glm::dvec3(cameras[0].world[3]), glm::dvec3(0.5, 0.5, 3.0));
 }
 
+TEST(GltfCameras, ReadsTheJsonChunkOfABinaryGltf) {
+  // Khronos' 2CylinderEngine sample as a .glb: one perspective camera on root node 81, whose
+  // matrix's columns are the camera's axes and position (numbers from the file's JSON chunk).
+  const std::string engine =
+      "/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
+  if (!fs::exists(engine)) GTEST_SKIP() << engine << " not installed";
+  const std::vector<GltfCamera> cameras = read_gltf_cameras(engine);
+  ASSERT_EQ(cameras.size(), 1u);
+  EXPECT_DOUBLE_EQ(cameras[0].yfov, 0.3143463730812073);
+  EXPECT_NEAR(cameras[0].world[3][0], 1005.9874267578125, 1e-9);
+  EXPECT_NEAR(cameras[0].world[3][1], 766.3170776367188, 1e-9);
+  EXPECT_NEAR(cameras[0].world[3][2], 953.3455810546875, 1e-9);
+  CameraSpec spec;
+  set_gltf_view(cameras[0], Bounds3{glm::vec3(-1.0f), glm::vec3(1.0f)}, &spec);
+  // The view direction is minus the matrix's third column, normalised.
+  const glm::vec3 forward = glm::normalize(spec.look_at - spec.position);
+  EXPECT_NEAR(forward.x, -0.6246951818466187, 1e-5);
+  EXPECT_NEAR(forward.y, -0.4685211479663849, 1e-5);
+  EXPECT_NEAR(forward.z, -0.6246950030326843, 1e-5);
+  EXPECT_NEAR(spec.up.y, 0.883452296257019, 1e-6);
+}
+
 TEST(GltfCameras, PerspectiveCameraSeesTheCornerWhereTheFileSaysItIs) {
   if (!fs::exists(kCameras)) GTEST_SKIP() << kCameras << " not installed";
   const LoadedScene loaded = load_scene(kCameras);
@@ -189,6 +211,27 @@ TEST_F(HandWrittenGltf, CameraIsChosenByIndexOrName) {
   const Error e = error_of([&] { choose_camera(cameras, "unused", path); });
   EXPECT_EQ(e.subject(), "--camera");
   EXPECT_NE(e.reason().find("(it has 0 'ortho cam', 1 'front')"), std::string::npos) << e.reason();
+}
+
+TEST_F(HandWrittenGltf, MalformedCamerasAreOneLineErrorsNamingTheFile) {
+  const std::pair<const char*, const char*> cases[] = {
+      {R"({"type": "perspective", "perspective": {"yfov": -1}})",
+       "cameras[0].perspective: \"yfov\" must be between 0 and pi radians"},
+      {R"({"type": "orthographic", "orthographic": {"xmag": 1}})",
+       "cameras[0].orthographic: \"ymag\" must be a number"},
+      {R"({"type": "fisheye"})",
+       "cameras[0]: \"type\" must be \"perspective\" or \"orthographic\""},
+  };
+  const std::string path = (dir_ / "bad.gltf").string();
+  for (const auto& [camera, reason] : cases) {
+    std::ofstream(path) << R"({"asset": {"version": "2.0"}, "nodes": [{"camera": 0}],
+        "cameras": [)" << camera
+                        << "]}";
+    const Error e = error_of([&] { read_gltf_cameras(path); });
+    EXPECT_EQ(e.subject(), path);
+    EXPECT_EQ(e.reason(), reason);
+    EXPECT_EQ(e.reason().find('\n'), std::string::npos);
+  }
 }
 
 }  // namespace
