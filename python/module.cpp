@@ -173,6 +173,12 @@ py::dict camera_dict(const SceneData& data) {
   d["vertical_fov"] = c.vertical_fov_degrees ? py::object(py::float_(*c.vertical_fov_degrees))
                                              : py::object(py::none());
   d["lab_orbit"] = c.lab_orbit;
+  // The lens and projection of the camera as loaded (a glTF file's first camera may be
+  // orthographic; scene and pbrt files may give a lens).
+  d["aperture_radius"] = cam.lens_radius();
+  d["focus_distance"] =
+      cam.has_lens() ? py::object(py::float_(cam.focus_distance())) : py::object(py::none());
+  d["orthographic"] = cam.is_orthographic();
   return d;
 }
 
@@ -687,7 +693,8 @@ RuntimeWarning); hits still report indices into `triangles`.)")
       .def_property_readonly("camera", &camera_dict,
                              "The scene's own camera: width, height, position, look_at, up, "
                              "forward, focal_length (pixels), vertical_fov (degrees or None), "
-                             "lab_orbit.")
+                             "lab_orbit, aperture_radius (0: a pinhole), focus_distance (None "
+                             "without a lens), orthographic.")
       .def_property_readonly(
           "lights",
           [](const SceneData& s) {

@@ -30,6 +30,9 @@ class CameraInfo(TypedDict):
     focal_length: float
     vertical_fov: Optional[float]
     lab_orbit: bool
+    aperture_radius: float
+    focus_distance: Optional[float]
+    orthographic: bool
 
 class LightInfo(TypedDict):
     position: Tuple[float, float, float]

@@ -156,6 +156,8 @@ def test_lens_keywords_are_the_lens_flags(tmp_path):
     assert_same_bits(frame.image, cli_image(tmp_path, REPO / "scenes" / "tetrahedron_in_box.json",
                                             "--integrator", "path", "--width", 40, "--height", 30,
                                             "--spp", 2, "--aperture", 0.05, "--focus", 2.5))
+    assert scene.camera["aperture_radius"] == 0.0 and scene.camera["focus_distance"] is None
+    assert not scene.camera["orthographic"]
     pinhole = tritrace.render(scene, integrator="path", width=40, height=30, spp=2)
     assert not np.array_equal(frame.image, pinhole.image)
     with pytest.raises(ValueError, match="^aperture: applies to the path tracer"):
