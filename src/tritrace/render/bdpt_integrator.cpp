@@ -713,8 +713,10 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
       total += term;
     }
   }
-  if (settings.light_tracing) {
-    assert(splats != nullptr);
+  // The renderer always gives an integrator that splats its film's light image
+  // (SampleOutput::splats); without one the light image is missing, never written out of bounds.
+  assert(!settings.light_tracing || splats != nullptr);
+  if (settings.light_tracing && splats != nullptr) {
     splat_light_subpath(light, camera, nl, sampler, *splats);
   }
   return total;
