@@ -1,7 +1,8 @@
 // `--integrator bdpt` through the render job (every front end's set-up): the job's image is the
 // renderer's with BdptIntegrator called directly, sample-range parts add up to the whole film
-// bit for bit, scene files ask for it by name, and what bdpt cannot do (--clamp) is refused as a
-// usage error rather than rendered wrong.
+// bit for bit (light tracing's splats included, through partial films and the merge), scene
+// files ask for it by name, and what bdpt cannot do (--clamp; with light tracing --tile,
+// --noise-threshold, other filters) is refused as a usage error rather than rendered wrong.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -79,8 +80,8 @@ TEST(BdptJob, IdentityNamesBdpt) {
   EXPECT_FALSE(bdpt.identity() == path.identity());  // parts of the two never merge
 }
 
-// Each sample stays in its pixel, so films of sample ranges rendered apart continue into the film
-// of one render, bit for bit.
+// Films of sample ranges rendered apart continue into the film of one render, bit for bit (the
+// light image's integer sums included).
 TEST(BdptJob, SampleRangesAddUpToTheWholeFilm) {
   SceneOverrides size;
   size.width = 20;

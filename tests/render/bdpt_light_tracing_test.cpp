@@ -149,6 +149,14 @@ TEST(BdptLightTracing, ImageIsTheSameForThreadsTilesPassesAndFilms) {
                    {.threads = 3, .spp = std::min(8u, 19 - at), .first_sample = at});
   }
   EXPECT_TRUE(same_bits(want, passes.resolve()));
+  // The viewer's frames: passes of any size, continued at the film's end.
+  Film frames(24, 20);
+  uint32_t taken = 0;
+  for (uint32_t n : {1u, 2u, 5u, 11u}) {
+    render_to_film(scene, accel, bdpt, frames, {.threads = 2, .spp = n, .first_sample = taken});
+    taken += n;
+  }
+  EXPECT_TRUE(same_bits(want, frames.resolve()));
   // Light tracing added something: without it the image differs.
   const BdptIntegrator without(scene, {.light_tracing = false});
   EXPECT_FALSE(same_bits(want, render(scene, accel, without, {.spp = 19})));

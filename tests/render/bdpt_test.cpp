@@ -148,8 +148,9 @@ bool same_bits(const Image& a, const Image& b) {
              0;
 }
 
-// Every contribution lands in its own sample's pixel, a function of (seed, pixel, sample index):
-// the image is the same bit for bit for any thread count and tile size.
+// Each sample is a function of (seed, pixel, sample index), and light tracing's splats are
+// integer sums that no order of addition changes: the image is the same bit for bit for any
+// thread count and tile size.
 TEST(Bdpt, BitIdenticalForAnyThreadCountAndTileSize) {
   const Scene scene = make_cornell_box({.width = 24, .height = 20});
   const BvhAccel accel(scene.mesh, kDefaultKernel);
