@@ -43,6 +43,27 @@ void check_bdpt(const Scene& scene, const IntegratorSpec& spec) {
   }
 }
 
+// Light tracing (bdpt's t = 1) splats onto any pixel, and estimates each pixel from all pixels'
+// samples together (Integrator::splats): refused where that cannot hold (docs/BDPT.md).
+void check_light_tracing(const JobSettings& settings) {
+  if (!settings.tile.empty()) {
+    throw Error("--tile",
+                "bdpt's light tracing lands on pixels of every tile, so a tile part cannot hold "
+                "its image; split a bdpt render with --spp-range",
+                ExitCode::kUsage);
+  }
+  if (!settings.noise_threshold.empty()) {
+    throw Error("--noise-threshold",
+                "bdpt's light tracing estimates every pixel from all pixels' samples, so pixels "
+                "cannot stop apart",
+                ExitCode::kUsage);
+  }
+  if (filter_choice(settings) != FilterKind::kBox) {
+    throw Error("--filter", "bdpt's light tracing has the camera's density for the box filter only",
+                ExitCode::kUsage);
+  }
+}
+
 // The part --spp-range and --tile ask for, checked against the render's spp and image size.
 PartRange part_range(const JobSettings& settings, bool path, uint32_t spp, int width, int height) {
   PartRange range{0, path ? spp : 1, 0, 1};
@@ -283,7 +304,10 @@ void RenderJob::set_up() {
                 "rendered apart; split the image with --tile instead of --spp-range",
                 ExitCode::kUsage);
   }
-  if (spec_.kind == IntegratorSpec::Kind::kBdpt) check_bdpt(*scene_, spec_);
+  if (spec_.kind == IntegratorSpec::Kind::kBdpt) {
+    check_bdpt(*scene_, spec_);
+    check_light_tracing(settings_);
+  }
   accel_kind_ = tritrace::accel_kind(settings_);
   kernel_ = kernel_choice(settings_);
   aovs_ = aov_set(settings_);
