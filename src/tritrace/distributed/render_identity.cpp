@@ -187,6 +187,19 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
     h.add_value(l.position);
     h.add_value(l.power);
   }
+  // Only where present, so that the identities of scenes without them stay as they were.
+  for (const SpotLight& l : scene.spot_lights) {
+    h.add_value(l.position);
+    h.add_value(l.direction);
+    h.add_value(l.intensity);
+    h.add_value(l.cos_inner);
+    h.add_value(l.cos_outer);
+    h.add_value(static_cast<uint8_t>(l.falloff));
+  }
+  for (const DirectionalLight& l : scene.directional_lights) {
+    h.add_value(l.direction);
+    h.add_value(l.irradiance);
+  }
   h.add_value(scene.ambient);
   h.add_value(scene.environment);
   if (const EnvironmentMap* env = scene.environment_map.get()) {
