@@ -108,7 +108,9 @@ TEST_P(SpotOnPlane, RadianceIsAlbedoOverPiTimesIcosOverR2TimesFalloff) {
     const double want = kAlbedo / kPi * kIntensity[ch] * e_over_i;
     EXPECT_NEAR(l[ch], want, 1e-5 * kIntensity[ch]) << "channel " << ch;
   }
-  if (c.theta_degrees > kOuter) EXPECT_EQ(l, glm::vec3(0.0f));
+  if (c.theta_degrees > kOuter) {
+    EXPECT_EQ(l, glm::vec3(0.0f));
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -319,8 +321,8 @@ TEST(SceneFileLights, BadFieldsAreOneLineErrorsNamingTheField) {
             "/lights/0/inner_angle: must be at least 0 and less than outer_angle (30) degrees, "
             "got 30");
   EXPECT_EQ(lights_error(R"([{"type": "spot", "position": [0,0,0], "direction": [0,1,0],
-                              "intensity": [1,1,1], "outer_angle": 30, "power": [1,1,1]}])"),
-            "/lights/0: unknown key 'power' (did you mean 'position'?)");
+                              "intensity": [1,1,1], "outer_angle": 30, "inner_angel": 5}])"),
+            "/lights/0: unknown key 'inner_angel' (did you mean 'inner_angle'?)");
   EXPECT_EQ(lights_error(R"([{"type": "directional", "direction": [0,1,0]}])"),
             "/lights/0: missing \"irradiance\"");
   EXPECT_EQ(lights_error(R"([{"type": "directional", "direction": [0,1,0], "irradiance": [1,1,1],

@@ -201,8 +201,8 @@ TEST(GltfLights, AreReadFromAGlbsJsonChunk) {
   };
   const std::string glb = "glTF" + u32(2) + u32(static_cast<uint32_t>(20 + json.size())) +
                           u32(static_cast<uint32_t>(json.size())) + "JSON" + json;
-  const std::filesystem::path path =
-      std::filesystem::temp_directory_path() / ("tritrace_lights_" + std::to_string(::getpid()) + ".glb");
+  const std::filesystem::path path = std::filesystem::temp_directory_path() /
+                                     ("tritrace_lights_" + std::to_string(::getpid()) + ".glb");
   std::ofstream(path, std::ios::binary) << glb;
   const PunctualLights l = read_gltf_lights(path.string());
   std::filesystem::remove(path);
@@ -248,8 +248,9 @@ TEST(GltfLights, BadFieldsAreOneLineErrorsNamingTheField) {
             at + "/color: must be an array of 3 numbers");
   EXPECT_EQ(gltf_error(R"({"type": "spot", "spot": {"outerConeAngle": 2}})"),
             at + "/spot/outerConeAngle: must be more than 0 and at most pi/2");
-  EXPECT_EQ(gltf_error(R"({"type": "spot", "spot": {"innerConeAngle": 0.5, "outerConeAngle": 0.5}})"),
-            at + "/spot/innerConeAngle: must be at least 0 and less than outerConeAngle");
+  EXPECT_EQ(
+      gltf_error(R"({"type": "spot", "spot": {"innerConeAngle": 0.5, "outerConeAngle": 0.5}})"),
+      at + "/spot/innerConeAngle: must be at least 0 and less than outerConeAngle");
   EXPECT_EQ(gltf_error(R"({"type": "point"})", R"({"light": 3})"),
             "t.gltf: /nodes/0/extensions/KHR_lights_punctual/light: must be an index below 1");
 }

@@ -24,6 +24,12 @@ namespace {
 
 using Json = nlohmann::json;
 
+// Whether each coordinate survives rounding to float.
+bool finite(glm::dvec3 v) {
+  return std::isfinite(static_cast<float>(v.x)) && std::isfinite(static_cast<float>(v.y)) &&
+         std::isfinite(static_cast<float>(v.z));
+}
+
 // One light of the extension's table, in its own units and space (at the origin, along -z).
 struct LightDef {
   enum class Type { kPoint, kSpot, kDirectional } type = Type::kPoint;
@@ -226,6 +232,9 @@ class Reader {
     glm::dvec3 direction = glm::dmat3(world) * glm::dvec3(0.0, 0.0, -1.0);
     const double len = glm::length(direction);
     const glm::vec3 rgb(def.rgb / kGltfLumensPerWatt);
+    if (!std::isfinite(rgb.x + rgb.y + rgb.z) || !finite(position)) {
+      fail(where, "places a light beyond float range (its position or colour times intensity)");
+    }
     if (def.type == LightDef::Type::kPoint) {
       out.points.push_back({glm::vec3(position), rgb * static_cast<float>(4.0 * std::numbers::pi)});
       return;

@@ -801,6 +801,11 @@ class Interpreter {
     return rgb * static_cast<float>(p.get_float("scale", 1.0));
   }
 
+  // Whether a light's value survived the scale and the CTM (non-finite inputs are refused).
+  static bool finite_light(glm::vec3 v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+  }
+
   // A direction given in the light's space, moved to world space by the CTM's linear part (not its
   // inverse transpose: it is a direction of travel, not a normal) and normalised; zero when it
   // vanishes.
@@ -853,6 +858,9 @@ class Interpreter {
       l.position = place.point(glm::vec3(from));
       l.direction = moved_direction(place, to - from);
       if (l.direction == glm::vec3(0.0f)) fail(d.at, "spot light \"from\" and \"to\" coincide");
+      if (!finite_light(l.intensity) || !finite_light(l.position)) {
+        fail(d.at, "spot light beyond float range");
+      }
       out_.scene.spot_lights.push_back(l);
     } else if (type == "distant") {
       // pbrt-v4's DistantLight: radiance L scale arriving from direction from - to, which is the
@@ -864,6 +872,7 @@ class Interpreter {
       const dvec3 to = p.get_point("to").value_or(dvec3(0.0, 0.0, 1.0));
       const glm::vec3 travel = moved_direction(place, to - from);
       if (travel == glm::vec3(0.0f)) fail(d.at, "distant light \"from\" and \"to\" coincide");
+      if (!finite_light(irradiance)) fail(d.at, "distant light beyond float range");
       out_.scene.directional_lights.push_back({travel, irradiance});
     } else if (type == "infinite") {
       const std::string file = p.get_string("filename", "");
