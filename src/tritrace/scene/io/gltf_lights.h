@@ -16,8 +16,8 @@ namespace tritrace {
 // Standard, PBR_WATTS_TO_LUMENS = 683, the luminous efficacy of 555 nm light): a point or spot
 // light of I candela gets Blender power 4 pi I / 683 W, a directional light of E lux a strength
 // of E / 683 W/m^2. In tritrace's units: intensity I / 683 W/sr (a point light's power
-// 4 pi I / 683, a spot light's on-axis intensity, Blender's spot being a point light masked by its
-// cone) and irradiance E / 683 W/m^2.
+// 4 pi I / 683; a spot light's on-axis intensity, as Blender converts spots by the point light's
+// factor) and irradiance E / 683 W/m^2 (docs/SCENE_FORMAT.md, "glTF lights").
 inline constexpr double kGltfLumensPerWatt = 683.0;
 
 struct PunctualLights {
