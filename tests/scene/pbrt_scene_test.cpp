@@ -367,7 +367,8 @@ TEST(PbrtScene, UnsupportedThingsWarnOncePerKindWithTheirFirstLine) {
   ASSERT_EQ(loaded.warnings.size(), 3u);
   EXPECT_EQ(loaded.warnings[0],
             "s.pbrt:2: warning: Shape \"curve\" not supported: skipped (2 times)");
-  EXPECT_EQ(loaded.warnings[1], "s.pbrt:3: warning: LightSource \"goniometric\" not supported: skipped");
+  EXPECT_EQ(loaded.warnings[1],
+            "s.pbrt:3: warning: LightSource \"goniometric\" not supported: skipped");
   EXPECT_EQ(loaded.warnings[2], "s.pbrt:5: warning: participating media (MakeNamedMedium) skipped");
 }
 
