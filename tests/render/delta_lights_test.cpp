@@ -21,6 +21,7 @@
 #include "tritrace/render/path_integrator.h"
 #include "tritrace/scene/io/scene_file.h"
 #include "tritrace/scene/io/scene_loader.h"
+#include "tritrace/scene/transform.h"
 
 namespace tritrace {
 namespace {
@@ -230,6 +231,44 @@ TEST(DeltaLights, OnAGlossySurfaceTheyMatchTheEquivalentPointLight) {
     const glm::vec3 a = radiance_at(sun, p.x, p.y), b = radiance_at(far, p.x, p.y);
     ASSERT_GT(b.x, 0.0f);
     for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(a[ch], b[ch], 2e-3f * b[ch]) << p.x << "," << p.y;
+  }
+}
+
+// transformed() (a uniform scale s and a translation) moves a spot light with the scene and
+// multiplies its intensity by s^2, so the radiance at corresponding points stays (I s^2 / (s r)^2);
+// a directional light stays as it is. Every light's power (the directional one's E pi r^2 over the
+// scene's bounds included) scales by s^2, so the light sampler chooses alike and one sample is
+// comparable point for point.
+TEST(DeltaLights, ASimilarityKeepsTheirLightAtCorrespondingPoints) {
+  Scene scene = plane_scene();
+  scene.spot_lights.push_back(down_spot(SpotFalloff::kGltf));
+  scene.directional_lights.push_back(
+      {.direction = glm::normalize(glm::vec3(0.2f, 1.0f, 0.1f)), .irradiance = glm::vec3(0.5f)});
+  const Similarity xf{.scale = 2.0f, .translation = {1.0f, -3.0f, 0.5f}};
+  const Scene moved = transformed(scene, xf);
+  ASSERT_EQ(moved.spot_lights.size(), 1u);
+  EXPECT_EQ(moved.spot_lights[0].position, xf.apply(scene.spot_lights[0].position));
+  EXPECT_EQ(moved.spot_lights[0].direction, scene.spot_lights[0].direction);
+  EXPECT_EQ(moved.spot_lights[0].intensity, kIntensity * 4.0f);
+  ASSERT_EQ(moved.directional_lights.size(), 1u);
+  EXPECT_EQ(moved.directional_lights[0].irradiance, glm::vec3(0.5f));
+  for (const glm::vec2 p : {glm::vec2(0.3f, 0.1f), glm::vec2(-0.6f, 0.9f)}) {
+    const glm::vec3 q = xf.apply(glm::vec3(p.x, 0.0f, p.y));
+    // radiance_at looks at the plane y = 0; the moved plane is y = -3: aim at it directly.
+    const BruteForceAccel accel(moved.mesh, kDefaultKernel);
+    const PathIntegrator pt(moved, PathSettings{.max_depth = 1});
+    Ray ray;
+    ray.origin = q + glm::vec3(0.1f, -1.0f, -0.2f);
+    ray.dir = glm::normalize(q - ray.origin);
+    ray.tmin = 0.0f;
+    ray.tmax = kRayTMax;
+    Sampler sampler(5);
+    sampler.start_pixel_sample(0, 0, 0);
+    glm::vec3 l;
+    pt.radiance(SampleBatch{std::span<const Ray>(&ray, 1), std::span<Sampler>(&sampler, 1)},
+                SampleOutput{std::span<glm::vec3>(&l, 1)}, moved, accel);
+    const glm::vec3 want = radiance_at(scene, p.x, p.y);
+    for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(l[ch], want[ch], 1e-4f * want[ch]) << ch;
   }
 }
 
