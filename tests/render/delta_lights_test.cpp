@@ -272,6 +272,44 @@ TEST(DeltaLights, ASimilarityKeepsTheirLightAtCorrespondingPoints) {
   }
 }
 
+// With several lights each sample takes one, chosen by power, and divides by its probability: the
+// mean over samples is the sum of the lights' radiance (hand-computed as above), within four
+// standard errors of the two-point estimator (its variance sum v_i^2 / p_i - (sum v_i)^2 computed
+// from the sampler's own probabilities), with a fixed seed.
+TEST(DeltaLights, SeveralLightsChosenByPowerAverageToTheirSum) {
+  Scene scene = plane_scene();
+  scene.spot_lights.push_back(down_spot(SpotFalloff::kGltf));
+  scene.directional_lights.push_back({.direction = {0.6f, 0.8f, 0.0f}, .irradiance = {1, 1, 1}});
+  const LightSampler lights(scene);
+  ASSERT_EQ(lights.size(), 2u);
+  const double theta = radians(12.0), d = kHeight * std::tan(theta);
+  const double v[2] = {kAlbedo / kPi * kIntensity.y * std::cos(theta) * std::cos(theta) *
+                           std::cos(theta) / (kHeight * kHeight),
+                       kAlbedo / kPi * 1.0 * 0.8};
+  const double p[2] = {lights.pmf(0), lights.pmf(1)};
+  const double mean = v[0] + v[1];
+  const double var = v[0] * v[0] / p[0] + v[1] * v[1] / p[1] - mean * mean;
+  const BruteForceAccel accel(scene.mesh, kDefaultKernel);
+  const PathIntegrator pt(scene, PathSettings{.max_depth = 1});
+  const glm::vec3 target(static_cast<float>(d), 0.0f, 0.0f);
+  Ray ray;
+  ray.origin = target + glm::vec3(0.1f, -1.0f, -0.2f);
+  ray.dir = glm::normalize(target - ray.origin);
+  ray.tmin = 0.0f;
+  ray.tmax = kRayTMax;
+  constexpr int kN = 4000;
+  Sampler sampler(17, SamplerKind::kIndependent);
+  double sum = 0.0;
+  for (int i = 0; i < kN; ++i) {
+    sampler.start_pixel_sample(0, 0, static_cast<uint32_t>(i));
+    glm::vec3 l;
+    pt.radiance(SampleBatch{std::span<const Ray>(&ray, 1), std::span<Sampler>(&sampler, 1)},
+                SampleOutput{std::span<glm::vec3>(&l, 1)}, scene, accel);
+    sum += l.y;
+  }
+  EXPECT_NEAR(sum / kN, mean, 4.0 * std::sqrt(var / kN));
+}
+
 // Each light is chosen in proportion to its power: a point light of power 4 pi, a spot light of
 // intensity I (power I 2 pi (1 - cos_i + (cos_i - cos_o) / 3), the integral of the glTF falloff
 // t^2 over the cosine), and a directional light of irradiance E over the scene's bounding sphere
