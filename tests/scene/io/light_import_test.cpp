@@ -228,6 +228,37 @@ TEST(GltfLights, SpecificationDefaults) {
   EXPECT_NEAR(l.spots[0].cos_outer, std::cos(kPi / 4.0), 1e-7);
 }
 
+// Lights come in the scene graph's order (depth first, children in their listed order), so that
+// the first point light, which --light moves, is the file's first.
+TEST(GltfLights, ComeInSceneGraphOrder) {
+  const PunctualLights l = parse_gltf_lights(
+      R"({"extensions": {"KHR_lights_punctual": {"lights": [{"type": "point"}]}},
+          "scenes": [{"nodes": [0, 3]}],
+          "nodes": [{"translation": [1, 0, 0], "children": [1, 2],
+                     "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                    {"translation": [0, 1, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                    {"translation": [0, 2, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                    {"translation": [0, 0, 3], "extensions": {"KHR_lights_punctual": {"light": 0}}}]})",
+      "t.gltf");
+  ASSERT_EQ(l.points.size(), 4u);
+  EXPECT_EQ(l.points[0].position, glm::vec3(1, 0, 0));
+  EXPECT_EQ(l.points[1].position, glm::vec3(1, 1, 0));
+  EXPECT_EQ(l.points[2].position, glm::vec3(1, 2, 0));
+  EXPECT_EQ(l.points[3].position, glm::vec3(0, 0, 3));
+}
+
+// A node that is its own ancestor is an error, not an endless walk.
+TEST(GltfLights, ACycleInTheNodeGraphIsAnError) {
+  EXPECT_EQ(error_of([] {
+              parse_gltf_lights(
+                  R"({"extensions": {"KHR_lights_punctual": {"lights": [{"type": "point"}]}},
+                      "scenes": [{"nodes": [0]}],
+                      "nodes": [{"children": [1]}, {"children": [0]}]})",
+                  "t.gltf");
+            }),
+            "t.gltf: /nodes/0: is its own ancestor (the node graph has a cycle)");
+}
+
 std::string gltf_error(const std::string& light, const std::string& node_ext = "{\"light\": 0}") {
   return error_of([&] {
     parse_gltf_lights(R"({"extensions": {"KHR_lights_punctual": {"lights": [)" + light +

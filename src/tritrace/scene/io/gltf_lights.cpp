@@ -57,11 +57,15 @@ class Reader {
     const Json& roots = scenes[scene].value("nodes", Json::array());
     if (!roots.is_array()) fail("/scenes/" + std::to_string(scene) + "/nodes", "must be an array");
     PunctualLights out;
-    // Depth-first, each entry a node with its parent's world matrix; a tree never holds more
-    // levels than nodes, so a deeper walk means a cycle.
+    // Depth-first in the file's order (children pushed last first), each entry a node with its
+    // parent's world matrix. A tree never holds more levels than nodes, so a deeper walk means a
+    // cycle; a node listed as the child of several (which glTF forbids) is walked once per path,
+    // up to a bound that keeps a malicious file from taking exponential time.
+    constexpr size_t kMaxVisits = size_t{1} << 20;
+    size_t visits = 0;
     std::vector<std::pair<size_t, glm::dmat4>> stack;
     std::vector<size_t> depth;
-    for (size_t r = 0; r < roots.size(); ++r) {
+    for (size_t r = roots.size(); r-- > 0;) {
       stack.emplace_back(
           index(roots[r], "/scenes/" + std::to_string(scene) + "/nodes/" + std::to_string(r),
                 nodes.size()),
@@ -69,6 +73,10 @@ class Reader {
       depth.push_back(1);
     }
     while (!stack.empty()) {
+      if (++visits > kMaxVisits) {
+        fail("/nodes", "reach more than " + std::to_string(kMaxVisits) +
+                           " placements (nodes listed as children of several)");
+      }
       const auto [n, parent] = stack.back();
       const size_t level = depth.back();
       stack.pop_back();
@@ -82,7 +90,7 @@ class Reader {
       if (node.contains("children")) {
         const Json& children = node["children"];
         if (!children.is_array()) fail(where + "/children", "must be an array");
-        for (size_t c = 0; c < children.size(); ++c) {
+        for (size_t c = children.size(); c-- > 0;) {
           stack.emplace_back(
               index(children[c], where + "/children/" + std::to_string(c), nodes.size()), world);
           depth.push_back(level + 1);
