@@ -282,6 +282,9 @@ bool is_gltf_file(const std::string& path) {
 }
 
 PunctualLights parse_gltf_lights(std::string_view json, const std::string& subject) {
+  // Most files have no lights; a .gltf with its buffers inline can be hundreds of MB of base64,
+  // not worth parsing a second time (assimp has read it) to find none.
+  if (json.find("KHR_lights_punctual") == std::string_view::npos) return {};
   Json doc;
   try {
     doc = Json::parse(json);
