@@ -573,6 +573,19 @@ INSTANTIATE_TEST_SUITE_P(
         ErrorCase{"ExposureNaN", {"--exposure", "nan"}, 2, "--exposure", kFinite},
         ErrorCase{"ExposureBeyondFloat", {"--exposure", "1e39"}, 2, "--exposure", kFinite},
         ErrorCase{"ExposureNotANumber", {"--exposure", "bright"}, 2, "--exposure", kFinite},
+        // A glTF sun (a directional light) is the path tracer's only.
+        ErrorCase{"LabRefusesADirectionalLight",
+                  {std::string(TRITRACE_SOURCE_DIR) + "/tests/data/gltf/plane_sun.gltf",
+                   "--integrator", "lab"},
+                  2,
+                  "--integrator",
+                  "shades point lights only"},
+        ErrorCase{"BdptRefusesADirectionalLight",
+                  {std::string(TRITRACE_SOURCE_DIR) + "/tests/data/gltf/plane_sun.gltf",
+                   "--integrator", "bdpt"},
+                  2,
+                  "--integrator",
+                  "spot or directional lights"},
         // Runtime errors.
         ErrorCase{
             "OutputFolderMissing", {"-o", "nodir/x.png"}, 1, "nodir/x.png", "does not exist"}),

@@ -14,6 +14,7 @@
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/job/setting_values.h"
 #include "tritrace/render/bdpt_integrator.h"
+#include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/make_integrator.h"
 
 namespace tritrace {
@@ -307,6 +308,11 @@ void RenderJob::set_up() {
   if (spec_.kind == IntegratorSpec::Kind::kBdpt) {
     check_bdpt(*scene_, spec_);
     check_light_tracing(settings_);
+  }
+  if (spec_.kind == IntegratorSpec::Kind::kLab) {
+    if (const std::string why = lab_unsupported(*scene_); !why.empty()) {
+      throw Error("--integrator", why, ExitCode::kUsage);
+    }
   }
   accel_kind_ = tritrace::accel_kind(settings_);
   kernel_ = kernel_choice(settings_);

@@ -723,6 +723,11 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
 }
 
 std::string bdpt_unsupported(const Scene& scene) {
+  // Light subpaths start on the lights, and emission sampling exists for point lights only.
+  if (!scene.spot_lights.empty() || !scene.directional_lights.empty()) {
+    return "bdpt does not yet start light subpaths on spot or directional lights; render this "
+           "scene with --integrator path";
+  }
   uint64_t instanced = 0;
   for (const Instance& inst : scene.instances) {
     const TriangleMesh& proto = scene.prototypes[inst.prototype];
