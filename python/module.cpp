@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -706,6 +707,36 @@ RuntimeWarning); hits still report indices into `triangles`.)")
             return out;
           },
           "The point lights: a list of {'position': (x, y, z), 'power': (r, g, b)}.")
+      .def_property_readonly(
+          "spot_lights",
+          [](const SceneData& s) {
+            py::list out;
+            for (const SpotLight& l : s.loaded.scene.spot_lights) {
+              const double to_degrees = 180.0 / std::numbers::pi;
+              out.append(py::dict(
+                  "position"_a = vec3_tuple(l.position), "direction"_a = vec3_tuple(l.direction),
+                  "intensity"_a = vec3_tuple(l.intensity),
+                  "inner_angle"_a = std::acos(static_cast<double>(l.cos_inner)) * to_degrees,
+                  "outer_angle"_a = std::acos(static_cast<double>(l.cos_outer)) * to_degrees,
+                  "falloff"_a = l.falloff == SpotFalloff::kGltf ? "gltf" : "smoothstep"));
+            }
+            return out;
+          },
+          "The spot lights: a list of {'position', 'direction' (unit), 'intensity' (W/sr on the "
+          "axis), 'inner_angle', 'outer_angle' (degrees from the axis), 'falloff' ('gltf' or "
+          "'smoothstep')}.")
+      .def_property_readonly(
+          "directional_lights",
+          [](const SceneData& s) {
+            py::list out;
+            for (const DirectionalLight& l : s.loaded.scene.directional_lights) {
+              out.append(py::dict("direction"_a = vec3_tuple(l.direction),
+                                  "irradiance"_a = vec3_tuple(l.irradiance)));
+            }
+            return out;
+          },
+          "The directional lights: a list of {'direction': the way the light travels (unit), "
+          "'irradiance': (r, g, b) W/m^2}.")
       .def("camera_rays", &camera_rays, py::kw_only(), "width"_a = none, "height"_a = none,
            "yaw"_a = none, "distance"_a = none, "position"_a = none, "look_at"_a = none,
            "up"_a = none, "vertical_fov"_a = none, "focal_length"_a = none,
@@ -858,7 +889,7 @@ the path tracer's image through the built-in denoiser, as `tritrace render --den
 `tritrace render --clamp`), noise_threshold (adaptive sampling: a pixel stops once the relative
 error of its mean is below it at a check and below sqrt(2) times it at the check before, checks
 at 32, 64, 128, ... samples, spp the most; Frame.mean_spp says how many it took), aperture
-(a thin lens's radius in world units, as `tritrace render --aperture`; path and bdpt), focus
+(a thin lens's radius in world units, as `tritrace render --aperture`; path only), focus
 (the distance of the plane in focus, as --focus).
 aovs: any of "albedo", "normal", "depth", "variance", "spp". Camera settings beyond the CLI's
 flags, as a scene file's camera has them: position, look_at, up, vertical_fov (degrees) or

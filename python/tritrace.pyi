@@ -38,6 +38,18 @@ class LightInfo(TypedDict):
     position: Tuple[float, float, float]
     power: Tuple[float, float, float]
 
+class SpotLightInfo(TypedDict):
+    position: Tuple[float, float, float]
+    direction: Tuple[float, float, float]
+    intensity: Tuple[float, float, float]
+    inner_angle: float
+    outer_angle: float
+    falloff: str
+
+class DirectionalLightInfo(TypedDict):
+    direction: Tuple[float, float, float]
+    irradiance: Tuple[float, float, float]
+
 class Scene:
     """A triangle scene: geometry, materials, lights and a camera. Read-only once made.
 
@@ -87,6 +99,12 @@ class Scene:
     @property
     def lights(self) -> list[LightInfo]:
         """The point lights."""
+    @property
+    def spot_lights(self) -> list[SpotLightInfo]:
+        """The spot lights (intensity in W/sr on the axis, cone angles in degrees)."""
+    @property
+    def directional_lights(self) -> list[DirectionalLightInfo]:
+        """The directional lights (the way the light travels, irradiance in W/m^2)."""
     def camera_rays(
         self,
         *,

@@ -1,7 +1,9 @@
 // The info subcommand: one "key: value" line per fact, so that people and scripts can read it.
 #include "info_command.h"
 
+#include <cmath>
 #include <cstdio>
+#include <numbers>
 
 #include "tritrace/distributed/partial_film_codec.h"
 #include "tritrace/render/make_integrator.h"
@@ -54,9 +56,20 @@ int run_info(const InfoArgs& args) {
   std::printf("meshes: %zu\n", loaded.stats.meshes);
   std::printf("materials: %zu\n", s.materials.size());
   std::printf("bounds: %s to %s\n", vec(b.lo).c_str(), vec(b.hi).c_str());
-  std::printf("lights: %zu\n", s.lights.size());
+  std::printf("lights: %zu\n",
+              s.lights.size() + s.spot_lights.size() + s.directional_lights.size());
   for (const PointLight& l : s.lights) {
     std::printf("  light at %s, power %s\n", vec(l.position).c_str(), vec(l.power).c_str());
+  }
+  for (const SpotLight& l : s.spot_lights) {
+    std::printf("  spot light at %s towards %s, intensity %s, cone %g to %g degrees\n",
+                vec(l.position).c_str(), vec(l.direction).c_str(), vec(l.intensity).c_str(),
+                std::acos(static_cast<double>(l.cos_inner)) * 180.0 / std::numbers::pi,
+                std::acos(static_cast<double>(l.cos_outer)) * 180.0 / std::numbers::pi);
+  }
+  for (const DirectionalLight& l : s.directional_lights) {
+    std::printf("  directional light towards %s, irradiance %s\n", vec(l.direction).c_str(),
+                vec(l.irradiance).c_str());
   }
   auto emissive_in = [&](const TriangleMesh& m) {
     unsigned long long n = 0;

@@ -44,9 +44,11 @@ enum Tag : int { kReady = 1, kWork = 2, kStop = 3, kResult = 4, kPiece = 5 };
 
 // Units: tile part t of `tiles` x sample range [first, end). Ranges are whole blocks of 8 (the
 // last may end at the spp), so the merge is exact. With adaptive sampling (`whole`) a pixel decides
-// from all its samples, so every unit is a tile part's whole range [0, spp).
+// from all its samples, so every unit is a tile part's whole range [0, spp). With light tracing
+// (`splats`, bdpt) a unit's splats land anywhere in the image, so every unit is the whole image
+// (one tile part) and the units are sample ranges only.
 std::vector<PartRange> make_units(int ranks, uint32_t spp, int width, int height, bool path,
-                                  bool whole) {
+                                  bool whole, bool splats) {
   const int tile_count = ((width + kPartTileSize - 1) / kPartTileSize) *
                          ((height + kPartTileSize - 1) / kPartTileSize);
   // About four units per worker and at most four sample ranges: small enough to balance, large
@@ -54,7 +56,7 @@ std::vector<PartRange> make_units(int ranks, uint32_t spp, int width, int height
   const int workers = std::max(1, ranks - 1);
   const uint32_t chunks =
       path && !whole ? std::min<uint32_t>(4, (spp + kSampleBlock - 1) / kSampleBlock) : 1;
-  const int tiles = std::clamp(4 * workers / static_cast<int>(chunks), 1, tile_count);
+  const int tiles = splats ? 1 : std::clamp(4 * workers / static_cast<int>(chunks), 1, tile_count);
   uint32_t chunk = (spp + chunks - 1) / chunks;
   chunk = (chunk + kSampleBlock - 1) / kSampleBlock * kSampleBlock;
   std::vector<PartRange> units;
@@ -92,7 +94,20 @@ std::vector<float> pack(const Film& packed, size_t pixels) {
       }
     }
   }
+  if (packed.has_splats()) {
+    // The light image's 64-bit integers, word for word in the floats' bytes (a whole-image unit:
+    // no padding).
+    const std::vector<uint64_t>& words = packed.splats().data();
+    const size_t at = out.size();
+    out.resize(at + 2 * words.size());
+    std::memcpy(out.data() + at, words.data(), words.size() * sizeof(uint64_t));
+  }
   return out;
+}
+
+// The floats a unit's light image takes (6 per pixel) when the render splats.
+size_t splat_floats(bool splats, size_t pixels) {
+  return splats ? 6 * pixels : 0;
 }
 
 // The layers a unit of samples [first, end) sends.
@@ -102,7 +117,8 @@ size_t unit_layers(const PartRange& unit) {
   return counter.size() + (unit.end % kSampleBlock != 0 ? 1 : 0);
 }
 
-Film unpack(const std::vector<float>& data, const RenderIdentity& r, const PartRange& unit) {
+Film unpack(const std::vector<float>& data, const RenderIdentity& r, const PartRange& unit,
+            bool splats) {
   const PackedShape shape = packed_shape(r.width, r.height, unit.tile, unit.tiles);
   Film film(shape.width, shape.height, r.aovs);
   BlockCounter counter;
@@ -131,6 +147,11 @@ Film unpack(const std::vector<float>& data, const RenderIdentity& r, const PartR
         }
       }
     }
+  }
+  if (splats) {
+    film.enable_splats();
+    std::vector<uint64_t>& words = film.splats().data();
+    std::memcpy(words.data(), data.data() + i, words.size() * sizeof(uint64_t));
   }
   return film;
 }
@@ -317,7 +338,7 @@ int run_render_mpi(const RenderArgs& args) {
   const bool path = s.job->path();
   const std::vector<PartRange> units =
       make_units(ranks, path ? s.job->spec().spp : 1, s.identity.width, s.identity.height, path,
-                 s.job->options().noise_threshold > 0.0f);
+                 s.job->options().noise_threshold > 0.0f, s.job->integrator().splats());
 
   // Every rank's start-up time, for the summary (rank 0 prints the slowest).
   double slowest_startup = 0.0;
@@ -369,7 +390,9 @@ int run_render_mpi(const RenderArgs& args) {
       if (u >= units.size() || received[u]) abort_job(0, sender + " sent an unknown unit");
       const PackedShape shape =
           packed_shape(s.identity.width, s.identity.height, units[u].tile, units[u].tiles);
-      if (head[1] != unit_layers(units[u]) * shape.pixels * floats_per_pixel(s.identity.aovs)) {
+      const bool splats = s.job->integrator().splats();
+      if (head[1] != unit_layers(units[u]) * shape.pixels * floats_per_pixel(s.identity.aovs) +
+                         splat_floats(splats, shape.pixels)) {
         abort_job(0, sender + " sent a unit of the wrong size");
       }
       std::vector<float> data(head[1]);
@@ -377,7 +400,7 @@ int run_render_mpi(const RenderArgs& args) {
       received[u] = true;
       samples += head[2];
       try {
-        merger.add(units[u], unpack(data, s.identity, units[u]));
+        merger.add(units[u], unpack(data, s.identity, units[u], splats));
       } catch (const Error& e) {
         abort_job(0, sender + ": " + e.what());
       }

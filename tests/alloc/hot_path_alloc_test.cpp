@@ -51,7 +51,7 @@ class HotPath : public ::testing::TestWithParam<AccelKind> {};
 // Every 16 x 16 tile of the image, as the renderer runs them, through `integrator`.
 uint64_t trace_all_tiles(const Scene& scene, const Accel& accel, const Integrator& integrator,
                          std::vector<Ray>& rays, std::vector<Sampler>& samplers,
-                         std::vector<glm::vec3>& radiance) {
+                         std::vector<glm::vec3>& radiance, SplatBuffer* splats = nullptr) {
   uint64_t traced = 0;
   for (int ty = 0; ty < 128; ty += 16) {
     for (int tx = 0; tx < 128; tx += 16) {
@@ -64,7 +64,8 @@ uint64_t trace_all_tiles(const Scene& scene, const Accel& accel, const Integrato
       }
       const SampleBatch batch{rays, integrator.pixel_corner_only() ? std::span<Sampler>()
                                                                    : std::span<Sampler>(samplers)};
-      traced += integrator.radiance(batch, SampleOutput{radiance}, scene, accel);
+      traced += integrator.radiance(batch, SampleOutput{.radiance = radiance, .splats = splats},
+                                    scene, accel);
     }
   }
   return traced;
@@ -106,9 +107,12 @@ TEST_P(HotPath, BdptTileLoopAllocatesNothing) {
   std::vector<Ray> rays(kMaxBatch);
   std::vector<Sampler> samplers(kMaxBatch);
   std::vector<glm::vec3> radiance(kMaxBatch);
-  trace_all_tiles(scene, *accel, integrator, rays, samplers, radiance);  // thread-locals first
+  // Light tracing's splats go to the film's light image, allocated with the film.
+  SplatBuffer splats(32, 32);
+  trace_all_tiles(scene, *accel, integrator, rays, samplers, radiance, &splats);  // thread-locals
   const long before = g_allocations.load();
-  const uint64_t traced = trace_all_tiles(scene, *accel, integrator, rays, samplers, radiance);
+  const uint64_t traced =
+      trace_all_tiles(scene, *accel, integrator, rays, samplers, radiance, &splats);
   EXPECT_EQ(g_allocations.load() - before, 0);
   EXPECT_GT(traced, 3u * 32u * 32u);
 }

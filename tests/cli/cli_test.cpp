@@ -600,6 +600,19 @@ INSTANTIATE_TEST_SUITE_P(
         ErrorCase{"ExposureNaN", {"--exposure", "nan"}, 2, "--exposure", kFinite},
         ErrorCase{"ExposureBeyondFloat", {"--exposure", "1e39"}, 2, "--exposure", kFinite},
         ErrorCase{"ExposureNotANumber", {"--exposure", "bright"}, 2, "--exposure", kFinite},
+        // A glTF sun (a directional light) is the path tracer's only.
+        ErrorCase{"LabRefusesADirectionalLight",
+                  {std::string(TRITRACE_SOURCE_DIR) + "/tests/data/gltf/plane_sun.gltf",
+                   "--integrator", "lab"},
+                  2,
+                  "--integrator",
+                  "shades point lights only"},
+        ErrorCase{"BdptRefusesADirectionalLight",
+                  {std::string(TRITRACE_SOURCE_DIR) + "/tests/data/gltf/plane_sun.gltf",
+                   "--integrator", "bdpt"},
+                  2,
+                  "--integrator",
+                  "spot or directional lights"},
         // Runtime errors.
         ErrorCase{
             "OutputFolderMissing", {"-o", "nodir/x.png"}, 1, "nodir/x.png", "does not exist"}),
@@ -2057,20 +2070,23 @@ TEST_F(DistributedCliTest, InfoPrintsAPartsMetadata) {
   EXPECT_NE(r.out.find("settings: integrator=path spp=20 "), std::string::npos) << r.out;
 }
 
-// bdpt's samples stay in their pixels (no light tracing yet, docs/BDPT.md), so its sample ranges
-// and tile parts merge into the one-process image byte for byte as the path tracer's do.
+// bdpt's light tracing splats onto any pixel; its light image is an integer sum carried by the
+// partial film, so sample ranges merge into the one-process image byte for byte, in any order.
+// A tile part cannot hold splats that land outside it: --tile with bdpt is a usage error.
 TEST_F(DistributedCliTest, BdptPartsMergeBitForBit) {
   const std::string whole = Whole("whole.pfm", {"--integrator", "bdpt"});
   ASSERT_FALSE(whole.empty());
-  RenderPart("a.exr", {"--integrator", "bdpt", "--spp-range", "0:8", "--tile", "0/2"});
-  RenderPart("b.exr", {"--integrator", "bdpt", "--spp-range", "8:20", "--tile", "0/2"});
-  RenderPart("c.exr", {"--integrator", "bdpt", "--tile", "1/2"});
-  const RunResult r = Merge({"a.exr", "b.exr", "c.exr"}, "merged.pfm");
+  RenderPart("b.exr", {"--integrator", "bdpt", "--spp-range", "8:20"});
+  RenderPart("a.exr", {"--integrator", "bdpt", "--spp-range", "0:8"});
+  const RunResult r = Merge({"b.exr", "a.exr"}, "merged.pfm");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(ReadFile(work_ / "merged.pfm") == whole);
   // A part of the path tracer's render is foreign to bdpt's.
-  RenderPart("p.exr", {"--spp-range", "0:8", "--tile", "0/2"});
-  EXPECT_NE(Merge({"p.exr", "b.exr", "c.exr"}, "mixed.pfm").exit_code, 0);
+  RenderPart("p.exr", {"--spp-range", "0:8"});
+  EXPECT_NE(Merge({"p.exr", "b.exr"}, "mixed.pfm").exit_code, 0);
+  const RunResult tile = Run(Scene({"--integrator", "bdpt", "--tile", "0/2", "-o", "t.exr"}));
+  EXPECT_EQ(tile.exit_code, 2);
+  EXPECT_NE(tile.err.find("--tile"), std::string::npos) << tile.err;
 }
 
 // ---- denoise -------------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # `tritrace render --mpi` under a real mpirun (Open MPI): 1, 2 and 3 ranks (oversubscribed on this
-# machine) give the one-process image byte for byte, with AOVs and adaptive sampling too, also when results travel in
+# machine) give the one-process image byte for byte, with AOVs, adaptive sampling and bdpt's light
+# tracing too, also when results travel in
 # pieces of 1001 bytes; a rank that dies, or one that loaded another scene file, ends the job with
 # a message naming it and no output file. Usage: mpi_test.sh TRITRACE
 set -euo pipefail
@@ -52,6 +53,14 @@ same_exr "$dir/adaptive.exr" "$dir/adaptive_mpi.exr" || fail "adaptive sampling:
 grep -q "tritrace.meanSpp" "$dir/adaptive_plain_mpi.exr" || fail "adaptive sampling: no mean spp"
 same_exr "$dir/adaptive_plain.exr" "$dir/adaptive_plain_mpi.exr" ||
   fail "adaptive sampling without the spp layer: the EXR differs"
+# bdpt: light tracing's splats (an integer light image, units of sample ranges over the whole
+# image) merge into the one process's image too.
+bdpt=(--scene cornell --integrator bdpt --spp 37 --width 33 --height 21 --threads 1 -q)
+"$cli" render "${bdpt[@]}" -o "$dir/bdpt.pfm"
+for np in 2 4; do
+  "${run_mpi[@]}" -np "$np" "$cli" render "${bdpt[@]}" --mpi -o "$dir/bdpt_mpi$np.pfm"
+  cmp "$dir/bdpt.pfm" "$dir/bdpt_mpi$np.pfm" || fail "bdpt on $np ranks: the image differs"
+done
 # The lab image too (one sample per pixel, tile parts only).
 "$cli" render --width 48 --height 40 -q -o "$dir/lab.png"
 "${run_mpi[@]}" -np 3 "$cli" render --width 48 --height 40 -q --mpi -o "$dir/lab_mpi.png"

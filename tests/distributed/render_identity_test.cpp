@@ -44,6 +44,35 @@ TEST(RenderIdentity, MaterialFieldsChangeIt) {
   expect_changes_identity([](Scene& s) { s.materials[0].transmission = 0.5f; });
 }
 
+TEST(RenderIdentity, SpotAndDirectionalLightsChangeIt) {
+  const SpotLight spot{.position = {0.0f, -0.9f, 0.0f},
+                       .direction = {0.0f, 1.0f, 0.0f},
+                       .intensity = glm::vec3(2.0f),
+                       .cos_inner = 0.95f,
+                       .cos_outer = 0.9f};
+  expect_changes_identity([&](Scene& s) { s.spot_lights.push_back(spot); });
+  Scene with_spot = make_cornell_area();
+  with_spot.spot_lights.push_back(spot);
+  for (auto edit : std::initializer_list<std::function<void(SpotLight&)>>{
+           [](SpotLight& l) { l.position.x = 0.1f; }, [](SpotLight& l) { l.direction.x = 0.1f; },
+           [](SpotLight& l) { l.intensity.z = 3.0f; }, [](SpotLight& l) { l.cos_inner = 0.96f; },
+           [](SpotLight& l) { l.cos_outer = 0.8f; },
+           [](SpotLight& l) { l.falloff = SpotFalloff::kSmoothstep; }}) {
+    Scene changed = with_spot;
+    edit(changed.spot_lights[0]);
+    EXPECT_NE(identity_of(with_spot), identity_of(changed));
+  }
+  const DirectionalLight sun{.direction = {0.0f, 1.0f, 0.0f}, .irradiance = glm::vec3(1.0f)};
+  expect_changes_identity([&](Scene& s) { s.directional_lights.push_back(sun); });
+  Scene with_sun = make_cornell_area();
+  with_sun.directional_lights.push_back(sun);
+  Scene brighter = with_sun, turned = with_sun;
+  brighter.directional_lights[0].irradiance.y = 2.0f;
+  turned.directional_lights[0].direction = {0.0f, 0.0f, 1.0f};
+  EXPECT_NE(identity_of(with_sun), identity_of(brighter));
+  EXPECT_NE(identity_of(with_sun), identity_of(turned));
+}
+
 TEST(RenderIdentity, EnvironmentChangesIt) {
   expect_changes_identity([](Scene& s) { s.environment = glm::vec3(0.5f); });
   auto map = std::make_shared<EnvironmentMap>();

@@ -1,14 +1,20 @@
 // `--integrator bdpt` through the render job (every front end's set-up): the job's image is the
 // renderer's with BdptIntegrator called directly, sample-range parts add up to the whole film
-// bit for bit, scene files ask for it by name, and what bdpt cannot do (--clamp) is refused as a
-// usage error rather than rendered wrong.
+// bit for bit (light tracing's splats included, through partial films and the merge), scene
+// files ask for it by name, and what bdpt cannot do (--clamp; with light tracing --tile,
+// --noise-threshold, other filters) is refused as a usage error rather than rendered wrong.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstring>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 #include "tritrace/accel/make_accel.h"
+#include "tritrace/distributed/film_merger.h"
+#include "tritrace/distributed/partial_film_codec.h"
 #include "tritrace/error.h"
 #include "tritrace/job/render_job.h"
 #include "tritrace/render/bdpt_integrator.h"
@@ -74,8 +80,8 @@ TEST(BdptJob, IdentityNamesBdpt) {
   EXPECT_FALSE(bdpt.identity() == path.identity());  // parts of the two never merge
 }
 
-// Each sample stays in its pixel, so films of sample ranges rendered apart continue into the film
-// of one render, bit for bit.
+// Films of sample ranges rendered apart continue into the film of one render, bit for bit (the
+// light image's integer sums included).
 TEST(BdptJob, SampleRangesAddUpToTheWholeFilm) {
   SceneOverrides size;
   size.width = 20;
@@ -104,6 +110,65 @@ TEST(BdptJob, RefusesClampAsAUsageError) {
   RenderJob job(sky, load_job_scene(sky));
   job.prepare();
   EXPECT_EQ(job.render().image.width(), 24);
+}
+
+// Light tracing's splats land on any pixel: --tile parts, adaptive sampling and filters other
+// than the box are usage errors with bdpt rather than images estimated wrong.
+TEST(BdptJob, RefusesTilePartsAdaptiveSamplingAndOtherFiltersAsUsageErrors) {
+  const struct {
+    const char* flag;
+    void (*set)(JobSettings&);
+  } cases[] = {
+      {"--tile", [](JobSettings& s) { s.tile = "0/2"; }},
+      {"--noise-threshold", [](JobSettings& s) { s.noise_threshold = "0.05"; }},
+      {"--filter", [](JobSettings& s) { s.filter = "gaussian"; }},
+  };
+  for (const auto& c : cases) {
+    JobSettings s = small_bdpt("cornell");
+    c.set(s);
+    const Error e = error_of([&] { RenderJob(s, load_job_scene(s)); });
+    EXPECT_EQ(e.subject(), c.flag);
+    EXPECT_EQ(e.exit_code(), ExitCode::kUsage);
+  }
+}
+
+// --spp-range parts of a bdpt render (light tracing's splats included), written as partial films
+// and merged in any order, are the one-process image bit for bit: the light image is an integer
+// sum, carried by the partial film.
+TEST(BdptJob, SampleRangePartsMergeIntoTheOneProcessImage) {
+  JobSettings whole_settings = small_bdpt("cornell", "21");
+  RenderJob whole(whole_settings, load_job_scene(whole_settings));
+  whole.prepare();
+  const Image want = whole.render().image;
+
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("bdpt_parts_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::vector<std::string> files;
+  for (const char* range : {"16:21", "0:8", "8:16"}) {
+    JobSettings s = whole_settings;
+    s.spp_range = range;
+    RenderJob part(s, load_job_scene(s));
+    part.prepare();
+    Film film = part.make_film();
+    part.render_to_film(film);
+    ASSERT_TRUE(film.has_splats());
+    files.push_back((dir / (std::string("part") + range[0] + ".exr")).string());
+    part.write_part(film, files.back());
+  }
+  const Film merged = merge_parts(files);
+  EXPECT_TRUE(merged.has_splats());
+  EXPECT_TRUE(same_pixels(merged.resolve(), want));
+  // A part read back keeps its light image to the bit.
+  const PartialFilm back = read_partial_film(files[1]);
+  JobSettings s = whole_settings;
+  s.spp_range = "0:8";
+  RenderJob part(s, load_job_scene(s));
+  part.prepare();
+  Film film = part.make_film();
+  part.render_to_film(film);
+  EXPECT_EQ(back.film.splats().data(), film.splats().data());
+  std::filesystem::remove_all(dir);
 }
 
 TEST(BdptJob, SceneFilesAskForItByName) {

@@ -326,7 +326,7 @@ TEST(RenderJob, TimeLimitWithNoiseThresholdStopsAtTheTimeOrWhenEveryPixelHasStop
   EXPECT_TRUE(same_pixels(tiny.image, run(uniform).image));
 }
 
-TEST(RenderJob, LensIsForPathAndBdptAndReachesTheCamera) {
+TEST(RenderJob, LensIsForThePathTracerAndReachesTheCamera) {
   // The lab integrator's one corner ray per pixel has no lens: refused from the same table as the
   // other path-only settings, whether the flag or the scene asks for it.
   JobSettings s = small("cornell");
@@ -352,8 +352,12 @@ TEST(RenderJob, LensIsForPathAndBdptAndReachesTheCamera) {
   EXPECT_EQ(job.scene().camera.focus_distance(), 3.0f);
   EXPECT_EQ(job.scene().camera.position(), glm::vec3(0.0f, 0.0f, -3.0f));
   s.focus = "2.5";
-  s.integrator = "bdpt";
   EXPECT_EQ(RenderJob(s, load_job_scene(s)).scene().camera.focus_distance(), 2.5f);
+  // bdpt's light tracing connects to a pinhole only: a lens is refused until it has the lens's.
+  s.integrator = "bdpt";
+  e = error_of([&] { RenderJob(s, load_job_scene(s)); });
+  EXPECT_EQ(e.subject(), "--aperture");
+  EXPECT_EQ(e.exit_code(), ExitCode::kUsage);
   // A lensed scene under the lab integrator.
   s.integrator = "lab";
   s.focus.clear();

@@ -264,3 +264,20 @@ def test_noise_threshold_renders_the_clis_adaptive_image(tmp_path):
                                             "--noise-threshold", 0.05))
     with pytest.raises(ValueError, match="noise_threshold: must be a relative error"):
         tritrace.render(scene, noise_threshold=1.5)
+
+
+def test_a_gltfs_spot_and_directional_lights_are_listed_and_render_as_the_clis(tmp_path):
+    # tests/data/gltf/plane_lights.gltf: 1366 cd and 683 lux, converted at 683 lm/W (Blender's
+    # glTF importer's default) to 2 W/sr and 1 W/m^2 (times the sun's colour (1, 0.5, 0.25)).
+    path = REPO / "tests" / "data" / "gltf" / "plane_lights.gltf"
+    scene = tritrace.load(str(path))
+    [spot] = scene.spot_lights
+    assert spot["intensity"] == pytest.approx((2.0, 2.0, 2.0))
+    assert spot["outer_angle"] == pytest.approx(0.6 * 180 / np.pi, rel=1e-6)
+    assert spot["falloff"] == "gltf"
+    [sun] = scene.directional_lights
+    assert sun["irradiance"] == pytest.approx((1.0, 0.5, 0.25))
+    assert sun["direction"] == pytest.approx((0.0, -1.0, 0.0), abs=1e-6)
+    frame = tritrace.render(scene, width=24, height=16, spp=4)
+    assert frame.image.max() > 0
+    assert_same_bits(frame.image, cli_image(tmp_path, path, "--width", 24, "--height", 16, "--spp", 4))

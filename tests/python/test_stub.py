@@ -28,7 +28,7 @@ def stub_top_level():
 
 
 # Helper types that exist only in the stub.
-STUB_ONLY = {"CameraInfo", "LightInfo"}
+STUB_ONLY = {"CameraInfo", "LightInfo", "SpotLightInfo", "DirectionalLightInfo"}
 
 
 def test_stub_and_module_have_the_same_public_names():

@@ -148,8 +148,9 @@ bool same_bits(const Image& a, const Image& b) {
              0;
 }
 
-// Every contribution lands in its own sample's pixel, a function of (seed, pixel, sample index):
-// the image is the same bit for bit for any thread count and tile size.
+// Each sample is a function of (seed, pixel, sample index), and light tracing's splats are
+// integer sums that no order of addition changes: the image is the same bit for bit for any
+// thread count and tile size.
 TEST(Bdpt, BitIdenticalForAnyThreadCountAndTileSize) {
   const Scene scene = make_cornell_box({.width = 24, .height = 20});
   const BvhAccel accel(scene.mesh, kDefaultKernel);
@@ -318,7 +319,7 @@ TEST(Bdpt, LightSubpathThroughGlassAgreesWithTheCameraSubpath) {
 }
 
 // Every strategy alone, weighted by its MIS weight, adds up to the whole image (the weights of
-// each path sum to one), here for paths of up to four bounces.
+// each path sum to one), here for paths of up to four bounces, light tracing (t = 1) included.
 TEST(Bdpt, WeightedStrategiesSumToTheImage) {
   const Scene scene = make_cornell_area({.width = 12, .height = 12});
   const BvhAccel accel(scene.mesh, kDefaultKernel);
@@ -326,8 +327,9 @@ TEST(Bdpt, WeightedStrategiesSumToTheImage) {
   const RenderOptions options{.threads = 1, .spp = 8, .seed = 9};
   const Image whole = render_bdpt(scene, accel, {.max_depth = max_depth}, options);
   std::vector<glm::vec3> sum(whole.pixels().size(), glm::vec3(0.0f));
-  for (int t = 2; t <= max_depth + 2; ++t) {
-    for (int s = 0; s + t <= max_depth + 2; ++s) {
+  // t = 1 is light tracing (s >= 2: an emitter seen directly is (0, 2)'s alone).
+  for (int t = 1; t <= max_depth + 2; ++t) {
+    for (int s = t == 1 ? 2 : 0; s + t <= max_depth + 2; ++s) {
       const Image part =
           render_bdpt(scene, accel, {.max_depth = max_depth, .only_s = s, .only_t = t}, options);
       for (size_t i = 0; i < sum.size(); ++i) sum[i] += part.pixels()[i];

@@ -380,13 +380,14 @@ TEST(PbrtScene, UnsupportedThingsWarnOncePerKindWithTheirFirstLine) {
   const LoadedScene loaded = parse(
       "WorldBegin\n"
       "Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n"
-      "LightSource \"spot\"\n"
+      "LightSource \"goniometric\"\n"
       "Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n"
       "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n");
   ASSERT_EQ(loaded.warnings.size(), 3u);
   EXPECT_EQ(loaded.warnings[0],
             "s.pbrt:2: warning: Shape \"curve\" not supported: skipped (2 times)");
-  EXPECT_EQ(loaded.warnings[1], "s.pbrt:3: warning: LightSource \"spot\" not supported: skipped");
+  EXPECT_EQ(loaded.warnings[1],
+            "s.pbrt:3: warning: LightSource \"goniometric\" not supported: skipped");
   EXPECT_EQ(loaded.warnings[2], "s.pbrt:5: warning: participating media (MakeNamedMedium) skipped");
 }
 

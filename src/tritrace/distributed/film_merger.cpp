@@ -37,6 +37,14 @@ void FilmMerger::add(const PartRange& range, Film packed) {
   if (finished_[static_cast<size_t>(range.tile)]) {
     throw Error("merge", range.describe() + " overlaps the tile part's finished samples");
   }
+  if (packed.has_splats()) {
+    // The light image: integer sums, so the parts add up to the one render's bits in any order.
+    if (tiles_ != 1) throw Error("merge", "a tile part with a light image (bdpt's light tracing)");
+    merged_.enable_splats();
+    merged_.splats().add(packed.splats());
+    ++splat_parts_;
+  }
+  ++parts_;
   Group& g = groups_[range.tile];
   if (g.pixels.empty()) {
     g.pixels = tile_group_pixels(render_.width, render_.height, range.tile, range.tiles);
@@ -123,6 +131,9 @@ Film FilmMerger::finish() && {
       list += PartRange{from, render_.spp, tile, tiles_}.describe();
     }
     throw Error("merge", "parts missing: " + list);
+  }
+  if (splat_parts_ != 0 && splat_parts_ != parts_) {
+    throw Error("merge", "some parts have a light image (bdpt's light tracing) and some do not");
   }
   return std::move(merged_);
 }

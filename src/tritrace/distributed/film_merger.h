@@ -53,6 +53,8 @@ class FilmMerger {
   size_t done_ = 0;
   size_t held_ = 0;
   size_t most_held_ = 0;
+  size_t parts_ = 0;        // parts added
+  size_t splat_parts_ = 0;  // of them, parts with a light image
 };
 
 // Reads the parts' headers, plans the merge (merge_plan.h), then reads and adds one part at a

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <numeric>
 
+#include "tritrace/error.h"
 #include "tritrace/render/renderer.h"
 
 namespace tritrace {
@@ -84,6 +85,15 @@ Film pack_part(const Film& film, int tile, int tiles) {
       AovSums* adst = packed.aov_sums(k);
       for (size_t j = 0; j < pixels.size(); ++j) adst[j] = asrc[pixels[j]];
     }
+  }
+  if (film.has_splats()) {
+    // Splats land anywhere in the image: only a whole-image part holds them (RenderJob refuses
+    // --tile with bdpt's light tracing).
+    if (tiles != 1) {
+      throw Error("part", "a tile part cannot hold a light image (bdpt's light tracing)");
+    }
+    packed.enable_splats();
+    packed.splats().data() = film.splats().data();
   }
   return packed;
 }

@@ -13,6 +13,7 @@
 #include <ImfStringAttribute.h>
 
 #include <algorithm>
+#include <bit>
 #include <charconv>
 #include <cstddef>
 #include <cstring>
@@ -75,6 +76,18 @@ constexpr LayerChannel kLayerChannels[] = {
     {"even.W", offsetof(AovSums, even) + 12, true, [](const AovSet& a) { return a.variance; }},
     {"samples", offsetof(AovSums, samples), true, [](const AovSet& a) { return a.spp; }},
 };
+
+// The light image (Film::splats, bdpt's light tracing): per colour channel one 64-bit integer,
+// stored as two 32-bit unsigned EXR channels (low and high word, read in place on a
+// little-endian machine). Present when the header has tritrace.splats.
+constexpr const char* kSplatAttribute = "tritrace.splats";
+constexpr const char* kSplatFormat = "fixed64 2^-28";
+constexpr size_t kSplatChannels = 6;
+static_assert(std::endian::native == std::endian::little,
+              "the light image's words are read in place");
+std::string splat_channel(size_t k) {
+  return std::string("splat.") + "RGB"[k / 2] + (k % 2 == 0 ? ".lo" : ".hi");
+}
 
 size_t channels_per_layer(const AovSet& aovs) {
   size_t n = 0;
@@ -327,10 +340,16 @@ PartInfo check_header(const HeaderFacts& f, const std::string& name, uint64_t fi
   if (f.compression != 3) throw Error(name, "partial film not ZIP-compressed");
   const size_t per_layer = channels_per_layer(r.aovs);
   const size_t layers = nodes->size() + (range.end % kSampleBlock != 0 ? 1 : 0);
-  if (f.channels.size() != layers * per_layer) {
+  const auto splats = f.strings.find(kSplatAttribute);
+  if (splats != f.strings.end() && (splats->second != kSplatFormat || range.tiles != 1)) {
+    throw bad(kSplatAttribute);
+  }
+  const size_t splat_channels = splats != f.strings.end() ? kSplatChannels : 0;
+  if (f.channels.size() != layers * per_layer + splat_channels) {
     throw Error(name, "partial film with " + std::to_string(f.channels.size()) +
                           " channels, not the " + std::to_string(layers * per_layer) + " of its " +
-                          std::to_string(layers) + " layers");
+                          std::to_string(layers) + " layers" +
+                          (splat_channels ? " and its light image's 6" : ""));
   }
   const size_t chunks = (static_cast<size_t>(shape.height) + kZipLines - 1) / kZipLines;
   const uint64_t raw = static_cast<uint64_t>(shape.width) * static_cast<uint64_t>(shape.height) *
@@ -448,6 +467,17 @@ std::vector<uint8_t> encode_partial_film(const Film& packed, const PartInfo& inf
       frame.insert(name, Imf::Slice(Imf::FLOAT, base + c.offset, stride, stride * width));
     }
   }
+  if (packed.has_splats()) {
+    header.insert(kSplatAttribute, Imf::StringAttribute(kSplatFormat));
+    char* base = reinterpret_cast<char*>(const_cast<uint64_t*>(packed.splats().data().data()));
+    constexpr size_t stride = 3 * sizeof(uint64_t);
+    for (size_t k = 0; k < kSplatChannels; ++k) {
+      header.channels().insert(splat_channel(k), Imf::Channel(Imf::UINT));
+      frame.insert(splat_channel(k),
+                   Imf::Slice(Imf::UINT, base + (k / 2) * sizeof(uint64_t) + (k % 2) * 4, stride,
+                              stride * width));
+    }
+  }
   ExrMemoryStream stream;
   try {
     Imf::OutputFile file(stream, header, exr_threads());
@@ -489,6 +519,21 @@ PartialFilm decode_partial_film(std::span<const uint8_t> bytes, const std::strin
                            : reinterpret_cast<char*>(part.film.sums(k));
         const size_t stride = c.aov ? sizeof(AovSums) : sizeof(glm::vec4);
         frame.insert(channel_text, Imf::Slice(Imf::FLOAT, base + c.offset, stride, stride * width));
+      }
+    }
+    if (facts.strings.contains(kSplatAttribute)) {
+      part.film.enable_splats();
+      char* base = reinterpret_cast<char*>(part.film.splats().data().data());
+      constexpr size_t stride = 3 * sizeof(uint64_t);
+      for (size_t k = 0; k < kSplatChannels; ++k) {
+        const Imf::Channel* channel = header.channels().findChannel(splat_channel(k));
+        if (!channel || channel->type != Imf::UINT || channel->xSampling != 1 ||
+            channel->ySampling != 1) {
+          throw Error(name, "partial film without its 32-bit unsigned channel " + splat_channel(k));
+        }
+        frame.insert(splat_channel(k),
+                     Imf::Slice(Imf::UINT, base + (k / 2) * sizeof(uint64_t) + (k % 2) * 4, stride,
+                                stride * width));
       }
     }
     file.setFrameBuffer(frame);

@@ -187,6 +187,24 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
     h.add_value(l.position);
     h.add_value(l.power);
   }
+  // Only where present, so that the identities of scenes without them stay as they were; each
+  // list after its length, so that one kind's values cannot pass for the other's.
+  if (!scene.spot_lights.empty()) h.add_value(static_cast<uint64_t>(scene.spot_lights.size()));
+  for (const SpotLight& l : scene.spot_lights) {
+    h.add_value(l.position);
+    h.add_value(l.direction);
+    h.add_value(l.intensity);
+    h.add_value(l.cos_inner);
+    h.add_value(l.cos_outer);
+    h.add_value(static_cast<uint8_t>(l.falloff));
+  }
+  if (!scene.directional_lights.empty()) {
+    h.add_value(static_cast<uint64_t>(scene.directional_lights.size()));
+  }
+  for (const DirectionalLight& l : scene.directional_lights) {
+    h.add_value(l.direction);
+    h.add_value(l.irradiance);
+  }
   h.add_value(scene.ambient);
   h.add_value(scene.environment);
   if (const EnvironmentMap* env = scene.environment_map.get()) {

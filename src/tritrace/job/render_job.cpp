@@ -14,6 +14,7 @@
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/job/setting_values.h"
 #include "tritrace/render/bdpt_integrator.h"
+#include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/make_integrator.h"
 
 namespace tritrace {
@@ -40,6 +41,42 @@ void check_bdpt(const Scene& scene, const IntegratorSpec& spec) {
   }
   if (const std::string why = bdpt_unsupported(scene); !why.empty()) {
     throw Error("--integrator", why, ExitCode::kUsage);
+  }
+}
+
+// Light tracing (bdpt's t = 1) splats onto any pixel, and estimates each pixel from all pixels'
+// samples together (Integrator::splats): refused where that cannot hold (docs/BDPT.md).
+void check_light_tracing(const JobSettings& settings, const Camera& camera) {
+  // Its connections to the camera project through the pinhole and weigh by the pinhole's density;
+  // a thin lens's (a point on the lens disk, then the plane in focus) and the orthographic
+  // camera's are not done yet (docs/BDPT.md).
+  if (camera.has_lens()) {
+    throw Error("--aperture",
+                "bdpt's light tracing connects to a pinhole camera; a lens (aperture radius > 0) "
+                "is not done yet: render depth of field with path",
+                ExitCode::kUsage);
+  }
+  if (camera.is_orthographic()) {
+    throw Error("--integrator",
+                "bdpt's light tracing connects to a perspective camera; this camera is "
+                "orthographic: render it with path",
+                ExitCode::kUsage);
+  }
+  if (!settings.tile.empty()) {
+    throw Error("--tile",
+                "bdpt's light tracing lands on pixels of every tile, so a tile part cannot hold "
+                "its image; split a bdpt render with --spp-range",
+                ExitCode::kUsage);
+  }
+  if (!settings.noise_threshold.empty()) {
+    throw Error("--noise-threshold",
+                "bdpt's light tracing estimates every pixel from all pixels' samples, so pixels "
+                "cannot stop apart",
+                ExitCode::kUsage);
+  }
+  if (filter_choice(settings) != FilterKind::kBox) {
+    throw Error("--filter", "bdpt's light tracing has the camera's density for the box filter only",
+                ExitCode::kUsage);
   }
 }
 
@@ -294,7 +331,15 @@ void RenderJob::set_up() {
                 "rendered apart; split the image with --tile instead of --spp-range",
                 ExitCode::kUsage);
   }
-  if (spec_.kind == IntegratorSpec::Kind::kBdpt) check_bdpt(*scene_, spec_);
+  if (spec_.kind == IntegratorSpec::Kind::kBdpt) {
+    check_bdpt(*scene_, spec_);
+    check_light_tracing(settings_, scene_->camera);
+  }
+  if (spec_.kind == IntegratorSpec::Kind::kLab) {
+    if (const std::string why = lab_unsupported(*scene_); !why.empty()) {
+      throw Error("--integrator", why, ExitCode::kUsage);
+    }
+  }
   accel_kind_ = tritrace::accel_kind(settings_);
   kernel_ = kernel_choice(settings_);
   aovs_ = aov_set(settings_);

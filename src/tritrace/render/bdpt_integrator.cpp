@@ -1,5 +1,6 @@
 // The bidirectional path tracer, one camera sample at a time: its camera subpath, its light
-// subpath, then every connection (s, t) with t >= 2 weighted by the power heuristic. The notation
+// subpath, then every connection (s, t) with t >= 2, and with light tracing every (s, 1) with
+// s >= 2 splatted onto the pixel it projects to, weighted by the power heuristic. The notation
 // (s light vertices, t camera vertices; pdf_fwd / pdf_rev as area densities) is Veach's (1997,
 // chapter 10), as pbrt's BDPT chapter also uses it; docs/BDPT.md has the definitions.
 #include "tritrace/render/bdpt_integrator.h"
@@ -162,6 +163,39 @@ glm::vec3 ray_start(const Vertex& x, glm::vec3 w, const RayOffsetParams& offset)
   return start;
 }
 
+// The pinhole camera's density of choosing direction w (unit, from the camera) with the samples
+// of every pixel together: each pixel's samples are uniform over its unit area on the image plane
+// at distance f (the focal length in pixels), where dA = f^2 / cos^3(theta) dw, and the film has
+// W H pixels, so p(w) = f^2 / (W H cos^3 theta) (Veach 1997, sec. 10.3.4; pbrt's BDPT chapter
+// writes the same with the area of the film at distance 1). It is also the importance the light
+// image needs: a pixel's measurement has importance f^2 / cos^3(theta) over its own solid angle,
+// and the light image divides by W H spp light subpaths (Film's resolve divides by spp). Only the
+// cosine is tested (0 behind the camera): the callers know the direction lies inside the film.
+float camera_pdf(const Camera& camera, glm::vec3 w) {
+  const float c = glm::dot(w, camera.forward());
+  if (!(c > 0.0f)) return 0.0f;
+  const float f = camera.focal_px();
+  return f * f /
+         (static_cast<float>(camera.width()) * static_cast<float>(camera.height()) * c * c * c);
+}
+
+// Where direction w (unit, from the camera) meets the image, in pixels from its top-left corner
+// (Camera::ray_through inverted); false where it misses the film.
+bool project(const Camera& camera, glm::vec3 w, int& x, int& y) {
+  const float c = glm::dot(w, camera.forward());
+  if (!(c > 0.0f)) return false;
+  const float f = camera.focal_px();
+  const float px = glm::dot(w, camera.right()) / c * f + static_cast<float>(camera.width() / 2);
+  const float py = glm::dot(w, camera.down()) / c * f + static_cast<float>(camera.height() / 2);
+  if (!(px >= 0.0f && py >= 0.0f && px < static_cast<float>(camera.width()) &&
+        py < static_cast<float>(camera.height()))) {
+    return false;
+  }
+  x = std::min(static_cast<int>(px), camera.width() - 1);
+  y = std::min(static_cast<int>(py), camera.height() - 1);
+  return true;
+}
+
 // Per thread: the two subpaths. They grow (doubling) as long subpaths need, up to the depth limit,
 // rather than to it at once: --max-depth 65536 would otherwise take tens of megabytes per thread.
 inline constexpr size_t kInitialSubpathVertices = 16;
@@ -182,7 +216,9 @@ class BdptTracer {
   BdptTracer(const BdptIntegrator& integrator, const Scene& scene, const Accel& accel)
       : it_(integrator), scene_(scene), accel_(accel) {}
 
-  glm::vec3 sample(const Ray& camera_ray, Sampler& sampler, Hit& first_hit);
+  // The sample's own pixel's radiance; with light tracing, the (s, 1) connections are added to
+  // `splats` (not null then).
+  glm::vec3 sample(const Ray& camera_ray, Sampler& sampler, Hit& first_hit, SplatBuffer* splats);
   uint64_t traced() const { return traced_; }
   // The albedo and normal AOVs of the last sample's camera subpath, as the path tracer writes them
   // (path_integrator.cpp): those of the first surface that is not specular, seen through perfect
@@ -202,6 +238,11 @@ class BdptTracer {
   int light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler);
   // Whether nothing blocks the segment between camera-side vertex c and light-side vertex l.
   bool visible(const Vertex& c, const Vertex& l);
+  // Whether nothing blocks the segment between surface vertex l and the camera at `eye`.
+  bool visible_to_camera(const Vertex& l, glm::vec3 eye);
+  // Light tracing: the (s, 1) connections of the light subpath's vertices to the camera.
+  void splat_light_subpath(Vertex* light, Vertex* camera, int nl, Sampler& sampler,
+                           SplatBuffer& splats);
   float mis_weight(Vertex* light, Vertex* camera, int s, int t) const;
 
   const BdptIntegrator& it_;
@@ -482,6 +523,23 @@ bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
   return blocked == 0;
 }
 
+bool BdptTracer::visible_to_camera(const Vertex& l, glm::vec3 eye) {
+  const glm::vec3 d = eye - l.p;
+  const glm::vec3 from = ray_start(l, glm::normalize(d), it_.offset_);
+  const glm::vec3 segment = eye - from;
+  const float length = std::sqrt(glm::dot(segment, segment));
+  if (!(length > 0.0f)) return true;
+  Ray r;
+  r.origin = from;
+  r.dir = segment * (1.0f / length);
+  r.tmin = 0.0f;
+  r.tmax = length;
+  ++traced_;
+  uint8_t blocked = 0;
+  accel_.occluded_incoherent(std::span<const Ray>(&r, 1), std::span<uint8_t>(&blocked, 1));
+  return blocked == 0;
+}
+
 // The power heuristic over the strategies with t >= 2 that can sample the path of light vertices
 // [0, s) and camera vertices [0, t), by the ratio walk of Veach 1997, section 10.2: moving the
 // connection one vertex multiplies the strategy's density by pdf_rev / pdf_fwd of the vertex that
@@ -492,7 +550,8 @@ float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const 
   const bool balance = it_.settings_.balance;
   const auto remap = [balance](float f) { return f != 0.0f ? (balance ? f : f * f) : 1.0f; };
   Vertex& pt = camera[t - 1];
-  Vertex& pt_minus = camera[t - 2];
+  // For t = 1 (pt the camera) there is no pt_minus: its slot stands in, written and restored.
+  Vertex& pt_minus = t > 1 ? camera[t - 2] : camera[0];
   Vertex* qs = s > 0 ? &light[s - 1] : nullptr;
   Vertex* qs_minus = s > 1 ? &light[s - 2] : nullptr;
   const float saved_pt = pt.pdf_rev, saved_pt_minus = pt_minus.pdf_rev;
@@ -501,7 +560,12 @@ float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const 
   const bool saved_pt_delta = pt.delta, saved_qs_delta = qs ? qs->delta : false;
   pt.delta = false;
   if (qs != nullptr) qs->delta = false;
-  if (s > 0) {
+  if (t == 1) {
+    // Light tracing: the camera's density of sampling qs (camera_pdf) is its pdf_rev. The
+    // camera's own pdf_rev is never read (no strategy has t = 0).
+    qs->pdf_rev = to_area(camera_pdf(scene_.camera, direction(pt, *qs)), pt, *qs);
+    if (qs_minus != nullptr) qs_minus->pdf_rev = pdf_area(*qs, &pt, *qs_minus);
+  } else if (s > 0) {
     pt.pdf_rev = pdf_area(*qs, qs_minus, pt);
     pt_minus.pdf_rev = pdf_area(pt, qs, pt_minus);
     qs->pdf_rev = pdf_area(pt, &pt_minus, *qs);
@@ -518,7 +582,11 @@ float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const 
 
   float sum = 0.0f;
   float r = 1.0f;
-  for (int i = t - 1; i >= 2; --i) {
+  // Moving the connection to camera vertex i - 1 gives strategy (s + t - i, i). i = 1 is light
+  // tracing, a strategy only with it on and with at least two light vertices ((1, 1), an emitter
+  // seen by the camera, is left to (0, 2)).
+  const int last_i = it_.settings_.light_tracing && s + t >= 3 ? 1 : 2;
+  for (int i = t - 1; i >= last_i; --i) {
     r *= remap(camera[i].pdf_rev) / remap(camera[i].pdf_fwd);
     if (!camera[i].delta && !camera[i - 1].delta) sum += r;
   }
@@ -540,7 +608,44 @@ float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const 
   return 1.0f / (1.0f + sum);
 }
 
-glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first_hit) {
+void BdptTracer::splat_light_subpath(Vertex* light, Vertex* camera, int nl, Sampler& sampler,
+                                     SplatBuffer& splats) {
+  const BdptSettings& settings = it_.settings_;
+  const bool only = settings.only_s >= 0 && settings.only_t >= 0;
+  if (only && settings.only_t != 1) return;
+  const Camera& cam = scene_.camera;
+  const Vertex& eye = camera[0];
+  // One number per sample for the splats' stochastic rounding (SplatBuffer::add), drawn after
+  // every dimension the subpaths use; each further splat shifts it by the golden ratio, which
+  // keeps each one uniform.
+  float u_round = sampler.get_1d();
+  for (int s = 2; s <= nl && s + 1 <= settings.max_depth + 2; ++s) {
+    if (only && s != settings.only_s) continue;
+    const Vertex& qs = light[s - 1];
+    if (!qs.connectible || infinite(qs)) continue;
+    const glm::vec3 d = eye.p - qs.p;
+    const float dist2 = glm::dot(d, d);
+    if (!(dist2 > 0.0f)) continue;
+    const glm::vec3 w = d * (1.0f / std::sqrt(dist2));  // from qs towards the camera
+    int px = 0, py = 0;
+    if (!project(cam, -w, px, py)) continue;
+    const glm::vec3 f_light = surface_f(qs, w, qs.wo);
+    if (!(max_component(f_light) > 0.0f)) continue;
+    const float g = std::abs(glm::dot(qs.ng, w)) / dist2;
+    const glm::vec3 contribution = qs.beta * f_light * (g * camera_pdf(cam, -w));
+    if (!(max_component(contribution) > 0.0f)) continue;
+    if (!visible_to_camera(qs, eye.p)) continue;
+    const float weight = settings.unweighted ? 1.0f : mis_weight(light, camera, s, 1);
+    const glm::vec3 term = contribution * weight;
+    if (!std::isfinite(term.x + term.y + term.z)) continue;
+    splats.add(px, py, term, u_round);
+    u_round += 0.618034f;
+    if (u_round >= 1.0f) u_round -= 1.0f;
+  }
+}
+
+glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first_hit,
+                             SplatBuffer* splats) {
   const BdptSettings& settings = it_.settings_;
   const int max_camera = settings.max_depth + 2;
   const int max_light = settings.max_depth + 1;
@@ -558,9 +663,12 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
   c0.pdf_fwd = c0.pdf_rev = 0.0f;
   first_hit = Hit{};
   camera_escaped_ = false;
-  // The camera's own density (for t = 1) is never needed: 1 stands for it.
-  const int nc = walk(sub.camera, 1, max_camera, camera_ray, glm::vec3(1.0f), 1.0f, false, sampler,
-                      &first_hit);
+  // The camera's density of the ray: the first camera vertex's pdf_fwd, read by the weights of
+  // light tracing (1 stands for it without).
+  const float camera_dir_pdf =
+      settings.light_tracing ? camera_pdf(scene_.camera, glm::normalize(camera_ray.dir)) : 1.0f;
+  const int nc = walk(sub.camera, 1, max_camera, camera_ray, glm::vec3(1.0f), camera_dir_pdf, false,
+                      sampler, &first_hit);
   camera_count_ = nc;
   const int nl = light_subpath(sub.light, max_light, sampler);
   // The subpaths no longer grow: plain pointers from here.
@@ -605,10 +713,21 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
       total += term;
     }
   }
+  // The renderer always gives an integrator that splats its film's light image
+  // (SampleOutput::splats); without one the light image is missing, never written out of bounds.
+  assert(!settings.light_tracing || splats != nullptr);
+  if (settings.light_tracing && splats != nullptr) {
+    splat_light_subpath(light, camera, nl, sampler, *splats);
+  }
   return total;
 }
 
 std::string bdpt_unsupported(const Scene& scene) {
+  // Light subpaths start on the lights, and emission sampling exists for point lights only.
+  if (!scene.spot_lights.empty() || !scene.directional_lights.empty()) {
+    return "bdpt does not yet start light subpaths on spot or directional lights; render this "
+           "scene with --integrator path";
+  }
   uint64_t instanced = 0;
   for (const Instance& inst : scene.instances) {
     const TriangleMesh& proto = scene.prototypes[inst.prototype];
@@ -737,7 +856,7 @@ uint64_t BdptIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
   BdptTracer tracer(*this, scene, accel);
   std::array<Hit, kMaxBatch> first_hits;
   for (size_t i = 0; i < n; ++i) {
-    out.radiance[i] = tracer.sample(batch.rays[i], batch.samplers[i], first_hits[i]);
+    out.radiance[i] = tracer.sample(batch.rays[i], batch.samplers[i], first_hits[i], out.splats);
     if (!out.albedo.empty() || !out.normal.empty()) {
       glm::vec3 albedo, normal;
       tracer.surface_aovs(albedo, normal);

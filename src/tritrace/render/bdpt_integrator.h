@@ -1,9 +1,9 @@
 // BdptIntegrator: bidirectional path tracing (Veach 1997, chapter 10; Lafortune and Willems 1993):
 // per camera sample one camera subpath and one light subpath, every connection strategy (s, t)
-// with t >= 2 evaluated and combined by multiple importance sampling (power heuristic). Light
-// tracing to the camera (t = 1) is not done yet, so every contribution lands in the sample's own
-// pixel and the image is deterministic like the path tracer's. Point lights, emissive triangles
-// and the environment (a constant colour or a map). docs/BDPT.md has the design.
+// with t >= 2, and light tracing to the camera (t = 1, s >= 2: a light subpath vertex connected to
+// the pinhole, added to the pixel it projects to through the film's SplatBuffer), combined by
+// multiple importance sampling (power heuristic). Point lights, emissive triangles and the
+// environment (a constant colour or a map). docs/BDPT.md has the design.
 #pragma once
 
 #include <cstdint>
@@ -32,6 +32,10 @@ struct BdptSettings {
   bool unweighted = false;
   // The balance heuristic instead of the power heuristic (for tests: both are unbiased).
   bool balance = false;
+  // Light tracing to the camera (the strategies (s, 1), s >= 2), splatted onto the pixel each
+  // connection projects to. Off: only t >= 2, each sample's contribution stays in its pixel, and
+  // the weights cover exactly those strategies (the first version's image).
+  bool light_tracing = true;
 };
 
 // Why bdpt cannot render `scene` correctly yet (empty when it can): the caller refuses it.
@@ -46,6 +50,8 @@ class BdptIntegrator final : public Integrator {
 
   uint64_t radiance(const SampleBatch& batch, const SampleOutput& out, const Scene& scene,
                     const Accel& accel) const override;
+
+  bool splats() const override { return settings_.light_tracing; }
 
   const BdptSettings& settings() const { return settings_; }
 

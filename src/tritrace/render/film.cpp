@@ -64,6 +64,13 @@ Image Film::resolve() const {
   for (int y = 0; y < height_; ++y) {
     for (int x = 0; x < width_; ++x) image.at(x, y) = resolve_pixel(pixel_sums(x, y));
   }
+  if (has_splats()) {
+    const uint32_t spp = end_ - first_;
+    for (int y = 0; y < height_; ++y) {
+      for (int x = 0; x < width_; ++x)
+        image.at(x, y) = add_splats(image.at(x, y), splats_.raw(x, y), spp);
+    }
+  }
   return image;
 }
 

@@ -1,4 +1,5 @@
 // Film: per pixel, the sums of weighted radiance and of weights over the samples taken, plus the
+// light image of integrators that splat (bdpt's light tracing, SplatBuffer below), plus the
 // same sums of the AOVs (albedo and normal of the first non-specular hit, depth of the first hit)
 // and the half buffer of the variance AOV (the sums over even sample indices), the inputs of
 // denoisers. The image is the film resolved (sum / weight), never the other way round. Sums are
@@ -6,6 +7,8 @@
 // sample ranges or tiles rendered apart combine into exactly the film of one render.
 #pragma once
 
+#include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -32,6 +35,82 @@ struct AovSet {
   bool any() const { return albedo || normal || depth || variance || spp; }
   bool operator==(const AovSet&) const = default;
 };
+
+// The light image: contributions that land on other pixels than the sample's own (bdpt's light
+// tracing to the camera, t = 1), summed per pixel and channel in 64-bit fixed point. Integer
+// addition is associative, so the sums are the same bits whatever the order in which threads,
+// tiles, passes, sample-range parts and MPI ranks add them: no ordering of the splats is needed,
+// and concurrent adds are relaxed atomics. Each splat is rounded to a multiple of kSplatUnit
+// stochastically (down or up with the probabilities that make the rounded value's expectation
+// the splat itself), so the quantisation adds a little variance (at most kSplatUnit^2 / 4 per
+// splat) and no bias. Sums wrap modulo 2^64 (well defined for unsigned integers), so even an
+// intermediate overflow leaves the total right as long as the total fits.
+class SplatBuffer {
+ public:
+  // 2^-28: the resolution (3.7e-9) is far below a float pixel value's rounding at the brightness
+  // of anything visible, and a pixel's sum may reach 2^35 (3.4e10: a splat mean of 1e4 over 3e6
+  // samples) before it wraps.
+  static constexpr double kSplatUnit = 1.0 / 268435456.0;
+  // A single splat is clamped to +-2^50 units (about 4e6) before it is rounded: larger values
+  // would risk the total's range (none occurs in a converging estimate of a finite image).
+  static constexpr double kMaxUnits = 1125899906842624.0;
+
+  SplatBuffer() = default;
+  SplatBuffer(int width, int height)
+      : width_(width), height_(height), sums_(static_cast<size_t>(width) * height * 3, 0) {}
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  bool empty() const { return sums_.empty(); }
+
+  // Adds `value` to pixel (x, y), rounded stochastically with u in [0, 1). Thread-safe; never
+  // allocates. A non-finite channel adds nothing.
+  void add(int x, int y, glm::vec3 value, float u) {
+    uint64_t* p = sums_.data() + (static_cast<size_t>(y) * width_ + x) * 3;
+    for (int c = 0; c < 3; ++c) {
+      const double units = static_cast<double>(value[c]) / kSplatUnit;
+      if (!(std::abs(units) < kMaxUnits)) continue;  // also NaN
+      const double low = std::floor(units);
+      const int64_t q = static_cast<int64_t>(low) + (units - low > static_cast<double>(u) ? 1 : 0);
+      if (q != 0) {
+        std::atomic_ref<uint64_t>(p[c]).fetch_add(static_cast<uint64_t>(q),
+                                                  std::memory_order_relaxed);
+      }
+    }
+  }
+  // Adds another buffer of the same size (parts' light images).
+  void add(const SplatBuffer& other) {
+    for (size_t i = 0; i < sums_.size(); ++i) sums_[i] += other.sums_[i];
+  }
+
+  // Pixel (x, y)'s raw sums (3 channels, two's complement).
+  const uint64_t* raw(int x, int y) const {
+    return sums_.data() + (static_cast<size_t>(y) * width_ + x) * 3;
+  }
+  uint64_t* raw(int x, int y) { return sums_.data() + (static_cast<size_t>(y) * width_ + x) * 3; }
+  std::vector<uint64_t>& data() { return sums_; }
+  const std::vector<uint64_t>& data() const { return sums_; }
+
+ private:
+  int width_ = 0;
+  int height_ = 0;
+  std::vector<uint64_t> sums_;
+};
+
+// A pixel's resolved value with its light image: the mean of its own samples plus the light
+// image's sum over the samples per pixel that all pixels took, spp (every light subpath starts
+// from one camera sample, so the light image's estimate divides by the light subpaths per pixel;
+// docs/BDPT.md). The one formula for Film::resolve and the renderer's direct-to-image path, so
+// that both give the same bits.
+inline glm::vec3 add_splats(glm::vec3 mean, const uint64_t* sums, uint32_t spp) {
+  if (spp == 0) return mean;
+  const double scale = SplatBuffer::kSplatUnit / static_cast<double>(spp);
+  glm::vec3 out = mean;
+  for (int c = 0; c < 3; ++c) {
+    out[c] += static_cast<float>(static_cast<double>(static_cast<int64_t>(sums[c])) * scale);
+  }
+  return out;
+}
 
 // One sample's contribution to its pixel.
 struct FilmSample {
@@ -83,6 +162,15 @@ class Film {
   glm::vec4 pixel_sums(int x, int y) const;
   AovSums pixel_aov_sums(int x, int y) const;
   glm::vec3 radiance_sum(int x, int y) const { return glm::vec3(pixel_sums(x, y)); }
+
+  // The light image (SplatBuffer), kept only by films of integrators that splat: resolve() adds
+  // it over the film's samples per pixel, end_sample() - first_sample().
+  bool has_splats() const { return !splats_.empty(); }
+  void enable_splats() {
+    if (splats_.empty()) splats_ = SplatBuffer(width_, height_);
+  }
+  SplatBuffer& splats() { return splats_; }
+  const SplatBuffer& splats() const { return splats_; }
   float weight_sum(int x, int y) const { return pixel_sums(x, y).w; }
 
   // The mean radiance per pixel (sum / weight; black where no sample landed).
@@ -116,6 +204,7 @@ class Film {
   std::vector<BlockNode> nodes_;
   std::vector<std::vector<glm::vec4>> layers_;
   std::vector<std::vector<AovSums>> aov_layers_;
+  SplatBuffer splats_;
 };
 
 // The resolved pixel of a (radiance sum, weight sum): sum / weight, black for no weight. A weight

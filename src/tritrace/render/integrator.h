@@ -32,6 +32,9 @@ struct SampleOutput {
   std::span<glm::vec3> albedo{};
   std::span<glm::vec3> normal{};
   std::span<float> depth{};
+  // The film's light image, for integrators whose splats() is true (never null for them): the
+  // contributions that land on other pixels (Integrator::splats).
+  SplatBuffer* splats = nullptr;
 };
 
 // Fills out's AOV spans (those not empty) from the camera rays' first hits: the hit material's
@@ -47,6 +50,14 @@ class Integrator {
   // True for the lab's integrator: one deterministic sample through each pixel's corner, no random
   // numbers. Otherwise the renderer places samples over the pixel with the film's filter.
   virtual bool pixel_corner_only() const { return false; }
+
+  // True for an integrator that also adds to other pixels than the sample's own (bdpt's light
+  // tracing): the renderer then gives it the film's SplatBuffer in SampleOutput::splats, and the
+  // image is each pixel's mean plus the light image over the samples per pixel. Such
+  // contributions are estimates over every pixel's samples together, so they need every pixel to
+  // take the same samples with the box filter: the renderer refuses adaptive sampling, tile parts
+  // and other filters with them.
+  virtual bool splats() const { return false; }
 
   // out.radiance.size() == batch.rays.size() <= kMaxBatch. Returns the number of rays traced
   // (camera and secondary), for the renderer's statistics.

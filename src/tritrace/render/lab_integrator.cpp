@@ -248,6 +248,12 @@ void lab_shadow_rays(const TriangleMesh& mesh, std::span<const Hit> hits, glm::v
   }
 }
 
+std::string lab_unsupported(const Scene& scene) {
+  if (scene.spot_lights.empty() && scene.directional_lights.empty()) return {};
+  return "the lab integrator shades point lights only (the lab's model); this scene has spot or "
+         "directional lights: render it with --integrator path";
+}
+
 uint64_t LabIntegrator::radiance(const SampleBatch& batch, const SampleOutput& out,
                                  const Scene& scene, const Accel& accel) const {
   const std::span<const Ray> rays = batch.rays;

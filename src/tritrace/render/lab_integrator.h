@@ -3,6 +3,8 @@
 // indirect term (the scene's ambient). A missed ray is black.
 #pragma once
 
+#include <string>
+
 #include "tritrace/geometry/hit.h"
 #include "tritrace/geometry/triangle_mesh.h"
 #include "tritrace/math/offset_ray.h"
@@ -39,6 +41,11 @@ ShadowRay lab_shadow_ray(const SurfaceTriangle& tri, const Hit& hit, glm::vec3 l
 // IEEE operations in the same order, so every field is the same bit for bit (tested).
 void lab_shadow_rays(const TriangleMesh& mesh, std::span<const Hit> hits, glm::vec3 light,
                      const RayOffsetParams& offset, std::span<ShadowRay> out);
+
+// Why the lab integrator cannot render `scene` as its author meant (empty when it can): the lab's
+// model has point lights only, so a scene with spot or directional lights is refused rather than
+// drawn without them.
+std::string lab_unsupported(const Scene& scene);
 
 class LabIntegrator final : public Integrator {
  public:

@@ -40,6 +40,32 @@ LightSampler::LightSampler(const Scene& scene) {
     lights_.push_back(light);
     power.push_back(p);
   }
+  for (uint32_t i = 0; i < scene.spot_lights.size(); ++i) {
+    const float p = mean(spot_light_power(scene.spot_lights[i]));
+    if (!(p > 0.0f) || !std::isfinite(p)) continue;
+    Light light{};
+    light.index = i;
+    light.spot = true;
+    lights_.push_back(light);
+    power.push_back(p);
+  }
+  if (!scene.directional_lights.empty()) {
+    // Weighed by the flux through the scene's bounding sphere; a scene of no extent (or one too
+    // large for a float's r^2) falls back to E, any positive weight being unbiased.
+    const Bounds3 b = scene_bounds(scene);
+    const float radius = 0.5f * glm::length(b.hi - b.lo);
+    for (uint32_t i = 0; i < scene.directional_lights.size(); ++i) {
+      const DirectionalLight& l = scene.directional_lights[i];
+      float p = mean(directional_light_power(l, radius));
+      if (!(p > 0.0f) || !std::isfinite(p)) p = mean(l.irradiance);
+      if (!(p > 0.0f) || !std::isfinite(p)) continue;
+      Light light{};
+      light.index = i;
+      light.directional = true;
+      lights_.push_back(light);
+      power.push_back(p);
+    }
+  }
   // Emissive triangles in the scene's numbering: the scene's own, then each instance's (in world
   // space, as the flattened scene would hold them), so that an instanced scene samples its lights
   // as its flattened copy does.
@@ -108,7 +134,7 @@ LightSampler::LightSampler(const Scene& scene) {
   if (has_environment_) environment_pmf_ = table_.pmf(static_cast<uint32_t>(lights_.size() - 1));
   for (size_t k = 0; k < lights_.size(); ++k) {
     Light& light = lights_[k];
-    if (light.point || light.environment) continue;
+    if (light.point || light.spot || light.directional || light.environment) continue;
     light.pmf_over_area = table_.pmf(static_cast<uint32_t>(k)) / triangle_area(light.e1, light.e2);
     emissive_pmf_over_area_.push_back(light.pmf_over_area);
   }
@@ -127,6 +153,28 @@ LightSample LightSampler::sample(const Scene& scene, glm::vec3 x, float u_select
     out.point = x + e.wi;
     out.radiance = e.radiance;
     out.pdf = pick.pmf * e.pdf;
+    return out;
+  }
+  if (light.spot) {
+    const SpotLight& s = scene.spot_lights[light.index];
+    out.point = s.position;
+    const glm::vec3 from_light = x - s.position;
+    const float dist2 = glm::dot(from_light, from_light);
+    if (!(dist2 > 0.0f)) return out;
+    out.radiance =
+        s.intensity * spot_falloff(s, glm::dot(s.direction, from_light) / std::sqrt(dist2));
+    out.pdf = pick.pmf;
+    out.delta = true;
+    return out;
+  }
+  if (light.directional) {
+    const DirectionalLight& d = scene.directional_lights[light.index];
+    out.infinite = true;
+    out.delta = true;
+    out.wi = -d.direction;
+    out.point = x + out.wi;
+    out.radiance = d.irradiance;
+    out.pdf = pick.pmf;
     return out;
   }
   if (light.point) {

@@ -1,7 +1,7 @@
-// LightSampler: every emitter of a scene (point lights, emissive triangles and an environment map)
-// in one list, chosen in proportion to its power through an alias table, with the densities that
-// next-event estimation and multiple importance sampling need. Built once per scene, then
-// read-only.
+// LightSampler: every emitter of a scene (point, spot and directional lights, emissive triangles
+// and an environment map) in one list, chosen in proportion to its power through an alias table,
+// with the densities that next-event estimation and multiple importance sampling need. Built once
+// per scene, then read-only.
 #pragma once
 
 #include <cstdint>
@@ -15,15 +15,19 @@
 namespace tritrace {
 
 struct LightSample {
-  glm::vec3 point{0.0f};     // on the light
-  glm::vec3 normal{0.0f};    // the light's lab normal at `point` (zero for a point light)
-  glm::vec3 radiance{0.0f};  // Le towards the shading point, or intensity for a point light
-  float pdf = 0.0f;          // solid angle density at the shading point; inf for a point light
-  bool delta = false;        // a point light: no other strategy can sample it
-  bool infinite = false;     // the environment map: `wi` is the direction, `point` is unused
-  glm::vec3 wi{0.0f};        // towards the environment (infinite only)
-  uint32_t prim = 0;         // the emissive triangle (unused for a point light)
-  float extent = 0.0f;       // the triangle's largest edge component (for the shadow ray's end)
+  glm::vec3 point{0.0f};   // on the light
+  glm::vec3 normal{0.0f};  // the light's lab normal at `point` (zero for a delta light)
+  // Le towards the shading point; for a point or spot light its intensity towards it (W/sr), for
+  // a directional light its irradiance (W/m^2) on a surface facing it.
+  glm::vec3 radiance{0.0f};
+  // Solid angle density at the shading point; for a delta light the probability of choosing it.
+  float pdf = 0.0f;
+  bool delta = false;     // a point, spot or directional light: no other strategy can sample it
+  bool infinite = false;  // the environment map or a directional light: `wi` is the direction
+                          // and `point` is x + wi
+  glm::vec3 wi{0.0f};     // towards the light (infinite only)
+  uint32_t prim = 0;      // the emissive triangle (unused for a point light)
+  float extent = 0.0f;    // the triangle's largest edge component (for the shadow ray's end)
 };
 
 // Emissive triangles of instances beyond this many are not light-sampled (found by BSDF sampling
@@ -46,8 +50,9 @@ class LightSampler {
   // seen from x (for the MIS weight of a BSDF-sampled ray that hit it); 0 for a non-emitter.
   float pdf_triangle(const Scene& scene, uint32_t prim, glm::vec3 x, glm::vec3 y) const;
 
-  // The probability of choosing light i (point lights first, then emissive triangles in mesh
-  // order, then the environment map), for tests.
+  // The probability of choosing light i (point lights first, then spot lights, directional lights,
+  // emissive triangles in mesh order, then the environment map), for tests. Each is chosen in
+  // proportion to its power (spot_light_power, directional_light_power).
   float pmf(size_t i) const { return table_.pmf(static_cast<uint32_t>(i)); }
 
   // The scene's environment map (empty when it has none), and the solid-angle density with which
@@ -59,10 +64,13 @@ class LightSampler {
 
  private:
   // What sampling a light reads, in one place (no trips through the scene's arrays): for a point
-  // light its position and intensity; for a triangle its vertex, edges, normal and radiance.
+  // light its position and intensity; for a triangle its vertex, edges, normal and radiance. A spot
+  // or directional light is read from the scene's list.
   struct Light {
-    uint32_t index;  // into scene.lights for a point light, else the triangle's prim
+    uint32_t index;  // into scene.lights (point), spot_lights, directional_lights, else the prim
     bool point;
+    bool spot;
+    bool directional;
     bool environment;
     bool two_sided;
     bool textured;  // its material has an emission texture

@@ -47,8 +47,11 @@ float max_component(glm::vec3 c) {
 template <class BsdfPdf>
 glm::vec3 light_contribution(const LightSample& ls, glm::vec3 throughput_f, float cos_theta,
                              float dist2, bool mis, BsdfPdf&& bsdf_pdf) {
-  // A point light's intensity / r^2 is the irradiance normal to the light's direction.
-  if (ls.delta) return throughput_f * ls.radiance * (cos_theta / (dist2 * ls.pdf));
+  // A point or spot light's intensity / r^2 is the irradiance normal to the light's direction; a
+  // directional light (infinite) gives that irradiance itself, at any distance.
+  if (ls.delta) {
+    return throughput_f * ls.radiance * (cos_theta / ((ls.infinite ? 1.0f : dist2) * ls.pdf));
+  }
   const float weight = mis ? power_heuristic(1.0f, ls.pdf, 1.0f, bsdf_pdf()) : 1.0f;
   return throughput_f * ls.radiance * (cos_theta * weight / ls.pdf);
 }
@@ -69,10 +72,10 @@ struct ShadowRays {
            glm::vec3 contribution_if_unblocked, uint16_t path, glm::vec3& radiance,
            const RayOffsetParams& offset) {
     glm::vec3 end;
-    if (ls.delta) {
-      end = offset_ray_origin(ls.point, -wi, extent, offset);
-    } else if (ls.infinite) {
+    if (ls.infinite) {
       end = from + wi;  // only its direction is used: the ray runs to kRayTMax
+    } else if (ls.delta) {
+      end = offset_ray_origin(ls.point, -wi, extent, offset);
     } else {
       const glm::vec3 light_side = glm::dot(ls.normal, wi) < 0.0f ? ls.normal : -ls.normal;
       end = offset_ray_origin(ls.point, light_side, ls.extent, offset);
@@ -141,8 +144,8 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
   assert(n <= kMaxBatch && batch.samplers.size() == n && out.radiance.size() == n);
   const TriangleMesh& mesh = scene.mesh;
   const bool mis = settings_.strategy == PathSettings::Strategy::kMis;
-  // Point lights are found by light sampling only, whatever the strategy for emissive triangles
-  // and the environment.
+  // Delta lights (point, spot, directional) are found by light sampling only, whatever the
+  // strategy for emissive triangles and the environment.
   const bool light_finds_triangles = settings_.strategy != PathSettings::Strategy::kBsdfOnly;
   const bool uniform_environment = uniform_environment_;
   const bool light_finds_environment = uniform_environment && light_finds_triangles;

@@ -1,8 +1,9 @@
-// PathIntegrator: unbiased path tracing of scenes lit by point lights, emissive triangles and an
-// environment (a constant colour, or a map sampled as a light). At every vertex: next-event
-// estimation (one light chosen by power, one shadow ray) and a bounce sampled from the surface's
-// BSDF (cosine-sampled for diffuse), the two combined by multiple importance sampling with the
-// power heuristic (Veach 1997) where both can find the light; Russian roulette after a few bounces.
+// PathIntegrator: unbiased path tracing of scenes lit by point, spot and directional lights,
+// emissive triangles and an environment (a constant colour, or a map sampled as a light). At every
+// vertex: next-event estimation (one light chosen by power, one shadow ray) and a bounce sampled
+// from the surface's BSDF (cosine-sampled for diffuse), the two combined by multiple importance
+// sampling with the power heuristic (Veach 1997) where both can find the light; Russian roulette
+// after a few bounces.
 // Unbiased unless PathSettings::clamp_indirect is set. The paths of a batch advance together, one
 // bounce at a time, so each bounce is one batch query to the accel (traced ray by ray: bounce rays
 // are incoherent).

@@ -94,7 +94,7 @@ template <typename Target>
 void render_tiles(const Scene& scene, const Accel& accel, const Integrator& integrator,
                   const RenderOptions& options, const AovSet& aovs,
                   const BlockCounter& nodes_before, uint32_t first, uint32_t spp, Target& target,
-                  RenderStats* stats) {
+                  SplatBuffer* splats, RenderStats* stats) {
   const Camera& camera = scene.camera;
   const int width = camera.width();
   const int height = camera.height();
@@ -209,7 +209,7 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
             std::span(radiance).first(count),
             aovs.albedo ? std::span(albedo).first(count) : std::span<glm::vec3>(),
             aovs.normal ? std::span(normal).first(count) : std::span<glm::vec3>(),
-            aovs.depth ? std::span(depth).first(count) : std::span<float>()};
+            aovs.depth ? std::span(depth).first(count) : std::span<float>(), splats};
         if (count > 0) traced += integrator.radiance(in, out, scene, accel);
         // The same block order as the rays: sample i of the batch is slot i.
         glm::vec4* open = slots.slot(counter.size());
@@ -393,10 +393,29 @@ struct ImageTarget {
   }
 };
 
+// Integrators that splat estimate each pixel's light image from every pixel's samples together
+// (Integrator::splats): every pixel must take the same samples, uniformly over its area.
+void check_splats(const Integrator& integrator, const RenderOptions& options) {
+  if (!integrator.splats()) return;
+  if (options.tile_parts > 1) {
+    throw Error("render",
+                "light tracing (bdpt) splats onto every pixel; a tile part cannot hold them");
+  }
+  if (options.noise_threshold > 0.0f) {
+    throw Error("render",
+                "light tracing (bdpt) estimates every pixel from all pixels' samples; adaptive "
+                "sampling would change their count per pixel");
+  }
+  if (options.filter != FilterKind::kBox) {
+    throw Error("render", "light tracing (bdpt) has the camera's density for the box filter only");
+  }
+}
+
 }  // namespace
 
 void render_to_film(const Scene& scene, const Accel& accel, const Integrator& integrator,
                     Film& film, const RenderOptions& options, RenderStats* stats) {
+  check_splats(integrator, options);
   const bool corner = integrator.pixel_corner_only();
   const uint32_t first = corner ? 0 : options.first_sample;
   const uint32_t spp = corner ? 1 : options.spp;
@@ -434,7 +453,9 @@ void render_to_film(const Scene& scene, const Accel& accel, const Integrator& in
   const size_t old_layers = film.layer_count();
   film.reserve_layers(after.size() + 1);
   FilmTarget target{film, old_layers};
-  render_tiles(scene, accel, integrator, options, film.aovs(), start, first, spp, target, stats);
+  if (integrator.splats()) film.enable_splats();
+  render_tiles(scene, accel, integrator, options, film.aovs(), start, first, spp, target,
+               integrator.splats() ? &film.splats() : nullptr, stats);
   if (state) state->end_sample = first + spp;
   film.set_layout(film.first_sample(), first + spp,
                   std::vector<BlockNode>(after.nodes().begin(), after.nodes().end()));
@@ -452,12 +473,23 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
     throw Error("render", "adaptive sampling renders a pixel's samples from 0, not from " +
                               std::to_string(first));
   }
+  check_splats(integrator, options);
   Image image(scene.camera.width(), scene.camera.height());
   ImageTarget target{image};
   RenderOptions one_go = options;
   one_go.adaptive_state = nullptr;  // no film to continue
+  SplatBuffer splats;
+  if (integrator.splats()) splats = SplatBuffer(image.width(), image.height());
   render_tiles(scene, accel, integrator, one_go, AovSet{}, BlockCounter(), first,
-               corner ? 1 : options.spp, target, stats);
+               corner ? 1 : options.spp, target, integrator.splats() ? &splats : nullptr, stats);
+  if (integrator.splats()) {
+    // What Film::resolve adds, in the same operations.
+    for (int y = 0; y < image.height(); ++y) {
+      for (int x = 0; x < image.width(); ++x) {
+        image.at(x, y) = add_splats(image.at(x, y), splats.raw(x, y), options.spp);
+      }
+    }
+  }
   return image;
 }
 

@@ -1,6 +1,8 @@
 // Renderer: splits the image into tiles and shades them on all cores with TBB, one batch per tile
 // and sample index. Every sample depends only on (seed, pixel, sample index), never on the thread
-// or tile, so the image is the same bit for bit whatever the thread count and tile size.
+// or tile, so the image is the same bit for bit whatever the thread count and tile size. Splats of
+// an integrator that adds to other pixels (Integrator::splats, bdpt's light tracing) go into the
+// film's light image, integer sums that no order of addition changes.
 #pragma once
 
 #include <cstdint>
@@ -146,7 +148,9 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
 // Adds options' samples of every pixel to `film` (the camera's size), with the film's AOVs: how the
 // viewer accumulates frame after frame, and how sample ranges are rendered apart. An empty film
 // starts at options.first_sample, which must be a multiple of 8; a film that holds samples is
-// continued at its end_sample() only. Throws Error("film", ...) otherwise.
+// continued at its end_sample() only. Throws Error("film", ...) otherwise. With an integrator
+// that splats, the film keeps a light image (Film::splats); tile parts, adaptive sampling and
+// filters other than the box are then refused (Error("render", ...)), here and in render().
 void render_to_film(const Scene& scene, const Accel& accel, const Integrator& integrator,
                     Film& film, const RenderOptions& options = {}, RenderStats* stats = nullptr);
 

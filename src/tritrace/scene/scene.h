@@ -1,6 +1,6 @@
-// Scene: everything a render reads, built once and then read-only: triangles, materials, point
-// lights, the constant indirect (ambient) term, the environment, textures and the camera, plus
-// instanced meshes.
+// Scene: everything a render reads, built once and then read-only: triangles, materials, point,
+// spot and directional lights, the constant indirect (ambient) term, the environment, textures and
+// the camera, plus instanced meshes.
 #pragma once
 
 #include <cmath>
@@ -8,6 +8,7 @@
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 #include <memory>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -82,6 +83,56 @@ struct PointLight {
   glm::vec3 position{0.0f};
   glm::vec3 power{0.0f};  // P, radiant power per channel
 };
+
+// How a spot light's intensity falls off between its inner and outer cone, as a function of the
+// cosine c of the angle from its axis (both are 1 inside the inner cone and 0 outside the outer):
+//   kGltf:       t^2 with t = clamp((c - cos_outer) / (cos_inner - cos_outer), 0, 1), the
+//                KHR_lights_punctual specification's recommended falloff (its lightAngleScale and
+//                lightAngleOffset form, squared);
+//   kSmoothstep: 3 t^2 - 2 t^3 with the same t, pbrt-v4's SpotLight (SmoothStep of the cosine).
+enum class SpotFalloff : uint8_t { kGltf, kSmoothstep };
+
+// A point light that shines into a cone: intensity I(w) = intensity * falloff(dot(direction, w))
+// towards unit direction w (W/sr per channel).
+struct SpotLight {
+  glm::vec3 position{0.0f};
+  glm::vec3 direction{0.0f, 0.0f, 1.0f};  // the cone's axis, unit length
+  glm::vec3 intensity{0.0f};              // I on the axis, W/sr
+  float cos_inner = 1.0f;                 // full intensity for cosines >= cos_inner
+  float cos_outer = 0.0f;                 // dark for cosines <= cos_outer (< cos_inner)
+  SpotFalloff falloff = SpotFalloff::kGltf;
+};
+
+// The factor of a spot light's axis intensity in the direction whose cosine to the axis is
+// `cos_theta` (SpotFalloff).
+inline float spot_falloff(const SpotLight& l, float cos_theta) {
+  if (cos_theta >= l.cos_inner) return 1.0f;
+  if (cos_theta <= l.cos_outer) return 0.0f;
+  const float t = (cos_theta - l.cos_outer) / (l.cos_inner - l.cos_outer);
+  return l.falloff == SpotFalloff::kGltf ? t * t : t * t * (3.0f - 2.0f * t);
+}
+
+// The power a spot light emits, by channel: I 2 pi (1 - cos_inner + k (cos_inner - cos_outer)),
+// the integral of its intensity over the sphere, where k = 1/3 for the glTF falloff (the integral
+// of t^2 over t in [0, 1]) and 1/2 for smoothstep (of 3 t^2 - 2 t^3).
+inline glm::vec3 spot_light_power(const SpotLight& l) {
+  const float k = l.falloff == SpotFalloff::kGltf ? 1.0f / 3.0f : 0.5f;
+  return l.intensity * (2.0f * std::numbers::pi_v<float> *
+                        ((1.0f - l.cos_inner) + k * (l.cos_inner - l.cos_outer)));
+}
+
+// Parallel light from infinitely far away (the sun): `irradiance` E (W/m^2 per channel) on a
+// surface facing it, E cos(theta) on one tilted by theta.
+struct DirectionalLight {
+  glm::vec3 direction{0.0f, 0.0f, 1.0f};  // the way the light travels, unit length
+  glm::vec3 irradiance{0.0f};
+};
+
+// A directional light's power as seen by a scene inside a sphere of radius `radius`: E pi r^2, the
+// flux through the sphere's cross-section (pbrt-v4's DistantLight::Phi does the same).
+inline glm::vec3 directional_light_power(const DirectionalLight& l, float radius) {
+  return l.irradiance * (std::numbers::pi_v<float> * radius * radius);
+}
 
 // p -> linear * p + translation. Points and directions are moved with the same operations
 // everywhere (flattening, shading, rays into object space), so that they round alike.
@@ -184,7 +235,12 @@ struct Scene {
   std::vector<TriangleMesh> prototypes;
   std::vector<Instance> instances;
   std::vector<Material> materials;
+  // Point lights (the lab's kind, which every integrator shades) apart from the other delta
+  // lights, which only the path tracer shades: the lab and bdpt integrators refuse scenes that
+  // have them (lab_unsupported, bdpt_unsupported).
   std::vector<PointLight> lights;
+  std::vector<SpotLight> spot_lights;
+  std::vector<DirectionalLight> directional_lights;
   glm::vec3 ambient{0.0f};  // the lab's constant indirect light N
   // Radiance arriving from every direction that no surface blocks (the path integrator's constant
   // environment light; the lab integrator ignores it).
@@ -195,6 +251,10 @@ struct Scene {
   Camera camera;
 
   bool has_instances() const { return !instances.empty(); }
+  // Whether the scene has a light of any kind other than emissive triangles and the environment.
+  bool has_delta_lights() const {
+    return !lights.empty() || !spot_lights.empty() || !directional_lights.empty();
+  }
   // Triangles drawn: the mesh's plus each instance's prototype's.
   uint64_t drawn_triangles() const;
   // Triangles stored: the mesh's plus each prototype's once.

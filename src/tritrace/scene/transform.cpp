@@ -33,6 +33,14 @@ Scene transformed(const Scene& scene, const Similarity& xf) {
   for (const PointLight& light : scene.lights) {
     out.lights.push_back({xf.apply(light.position), light.power * (xf.scale * xf.scale)});
   }
+  // A spot light's intensity scales as a point light's power, keeping the irradiance it gives at
+  // the moved points; a directional light's irradiance and every direction stay.
+  for (SpotLight light : scene.spot_lights) {
+    light.position = xf.apply(light.position);
+    light.intensity *= xf.scale * xf.scale;
+    out.spot_lights.push_back(light);
+  }
+  out.directional_lights = scene.directional_lights;
   out.ambient = scene.ambient;
   out.camera = scene.camera.with_position(xf.apply(scene.camera.position()));
   return out;

@@ -140,11 +140,6 @@ GltfCamera parse_camera(const Json& cameras, size_t index, const std::string& pa
 
 }  // namespace
 
-bool is_gltf_file(const std::string& path) {
-  const std::string ext = lower_extension(path);
-  return ext == ".gltf" || ext == ".glb";
-}
-
 std::vector<GltfCamera> read_gltf_cameras(const std::string& path) {
   Json j;
   try {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "tritrace/math/bounds.h"
+#include "tritrace/scene/io/gltf_lights.h"  // is_gltf_file
 #include "tritrace/scene/io/loaded_scene.h"
 
 namespace tritrace {
@@ -23,8 +24,6 @@ struct GltfCamera {
   double xmag = 0.0, ymag = 0.0;       // orthographic: half the view's width and height
   glm::dmat4 world{1.0};               // the node's world transform (the camera looks along -z)
 };
-
-bool is_gltf_file(const std::string& path);  // by extension: .gltf or .glb, any case
 
 // The cameras of the file's scene (its "scene", else the first; without scenes, every root node)
 // in scene-graph order: depth first, a node before its children, children in the order listed. A

@@ -807,6 +807,20 @@ class Interpreter {
     return rgb * static_cast<float>(p.get_float("scale", 1.0));
   }
 
+  // Whether a light's value survived the scale and the CTM (non-finite inputs are refused).
+  static bool finite_light(glm::vec3 v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+  }
+
+  // A direction given in the light's space, moved to world space by the CTM's linear part (not its
+  // inverse transpose: it is a direction of travel, not a normal) and normalised; zero when it
+  // vanishes.
+  static glm::vec3 moved_direction(const Placement& place, dvec3 v) {
+    const dvec3 w = glm::dmat3(place.m) * v;
+    const double len = glm::length(w);
+    return len > 0.0 && std::isfinite(len) ? glm::vec3(w / len) : glm::vec3(0.0f);
+  }
+
   void light(const std::string& type, const PbrtParams& p, const PbrtToken& d) {
     const Placement place(gs_.ctm);
     if (type == "point") {
@@ -818,6 +832,54 @@ class Interpreter {
       const glm::vec3 position = place.point(glm::vec3(from));
       out_.scene.lights.push_back(
           {position, intensity * static_cast<float>(4.0 * std::numbers::pi)});
+    } else if (type == "spot") {
+      // pbrt-v4's SpotLight: I(w) = I scale smoothstep(cos(theta); cos(coneangle),
+      // cos(coneangle - conedelta)), the axis from "from" to "to", both moved by the CTM.
+      const double cone = p.get_float("coneangle", 30.0);
+      const double delta = p.get_float("conedelta", 5.0);
+      if (!(cone > 0.0 && cone <= 180.0)) {
+        fail(d.at, "spot light \"coneangle\" must be more than 0 and at most 180 degrees");
+      }
+      if (!(delta > 0.0 && delta <= cone)) {
+        fail(d.at, "spot light \"conedelta\" must be more than 0 and at most \"coneangle\"");
+      }
+      SpotLight l;
+      l.falloff = SpotFalloff::kSmoothstep;
+      l.cos_outer = static_cast<float>(std::cos(cone * std::numbers::pi / 180.0));
+      l.cos_inner = static_cast<float>(std::cos((cone - delta) * std::numbers::pi / 180.0));
+      if (!(l.cos_inner > l.cos_outer)) {
+        fail(d.at, "spot light \"conedelta\" is too small to tell the cones' cosines apart");
+      }
+      l.intensity = light_spectrum(p, "I");
+      const double power = p.get_float("power", -1.0);
+      // pbrt-v4: "power" is the radiant power in place of the intensity's scale, divided by the
+      // cone's solid-angle integral 2 pi (1 - cos_start + (cos_start - cos_end) / 2).
+      if (power > 0.0) {
+        SpotLight unit = l;
+        unit.intensity = glm::vec3(1.0f);
+        l.intensity *= static_cast<float>(power / spot_light_power(unit).x);
+      }
+      const dvec3 from = p.get_point("from").value_or(dvec3(0.0));
+      const dvec3 to = p.get_point("to").value_or(dvec3(0.0, 0.0, 1.0));
+      l.position = place.point(glm::vec3(from));
+      l.direction = moved_direction(place, to - from);
+      if (l.direction == glm::vec3(0.0f)) fail(d.at, "spot light \"from\" and \"to\" coincide");
+      if (!finite_light(l.intensity) || !finite_light(l.position)) {
+        fail(d.at, "spot light beyond float range");
+      }
+      out_.scene.spot_lights.push_back(l);
+    } else if (type == "distant") {
+      // pbrt-v4's DistantLight: radiance L scale arriving from direction from - to, which is the
+      // irradiance it gives a surface facing it.
+      glm::vec3 irradiance = light_spectrum(p, "L");
+      const double illuminance = p.get_float("illuminance", -1.0);
+      if (illuminance > 0.0) irradiance *= static_cast<float>(illuminance);
+      const dvec3 from = p.get_point("from").value_or(dvec3(0.0));
+      const dvec3 to = p.get_point("to").value_or(dvec3(0.0, 0.0, 1.0));
+      const glm::vec3 travel = moved_direction(place, to - from);
+      if (travel == glm::vec3(0.0f)) fail(d.at, "distant light \"from\" and \"to\" coincide");
+      if (!finite_light(irradiance)) fail(d.at, "distant light beyond float range");
+      out_.scene.directional_lights.push_back({travel, irradiance});
     } else if (type == "infinite") {
       const std::string file = p.get_string("filename", "");
       if (file.empty()) {

@@ -216,6 +216,14 @@ class Parser {
     return v;
   }
 
+  // A direction: three numbers, not all zero, returned normalised.
+  glm::vec3 unit_vec3(const Json& j, const std::string& where) const {
+    const glm::dvec3 v(vec3(j, where));
+    const double len = glm::length(v);
+    if (!(len > 0.0) || !std::isfinite(len)) fail(where, "must be a non-zero direction");
+    return glm::vec3(v / len);
+  }
+
   // {"color": [r, g, b]} or {"file": "sky.hdr" | "sky.exr", "scale": s, "rotate": degrees}.
   void parse_environment(const Json& j) {
     const Json& env = object(j, "/environment");
@@ -332,16 +340,65 @@ class Parser {
     }
   }
 
+  // {"type": "point" (the default), "position", "power"}, {"type": "spot", "position",
+  // "direction", "intensity", "outer_angle", "inner_angle" (0 by default)} or {"type":
+  // "directional", "direction", "irradiance"}; angles in degrees from the axis.
   void parse_lights(const Json& j) {
     array(j, "/lights");
     for (size_t i = 0; i < j.size(); ++i) {
       const std::string where = "/lights/" + std::to_string(i);
-      object(j[i], where);
-      check_keys(j[i], where, {"position", "power"});
-      if (!j[i].contains("position")) fail(where, "missing \"position\"");
-      if (!j[i].contains("power")) fail(where, "missing \"power\"");
-      out_.scene.lights.push_back({vec3(j[i]["position"], where + "/position"),
-                                   non_negative_vec3(j[i]["power"], where + "/power")});
+      const Json& l = object(j[i], where);
+      std::string type = "point";
+      if (l.contains("type")) type = string(l["type"], where + "/type");
+      const auto require = [&](std::initializer_list<const char*> keys) {
+        for (const char* key : keys) {
+          if (!l.contains(key)) fail(where, std::string("missing \"") + key + "\"");
+        }
+      };
+      if (type == "point") {
+        check_keys(l, where, {"type", "position", "power"});
+        require({"position", "power"});
+        out_.scene.lights.push_back({vec3(l["position"], where + "/position"),
+                                     non_negative_vec3(l["power"], where + "/power")});
+      } else if (type == "spot") {
+        check_keys(l, where,
+                   {"type", "position", "direction", "intensity", "inner_angle", "outer_angle"});
+        require({"position", "direction", "intensity", "outer_angle"});
+        SpotLight s;
+        s.position = vec3(l["position"], where + "/position");
+        s.direction = unit_vec3(l["direction"], where + "/direction");
+        s.intensity = non_negative_vec3(l["intensity"], where + "/intensity");
+        const double outer = number(l["outer_angle"], where + "/outer_angle");
+        if (!(outer > 0.0 && outer <= 180.0)) {
+          fail(where + "/outer_angle",
+               "must be more than 0 and at most 180 degrees, got " + describe(l["outer_angle"]));
+        }
+        double inner = 0.0;
+        if (l.contains("inner_angle")) {
+          inner = number(l["inner_angle"], where + "/inner_angle");
+          if (!(inner >= 0.0 && inner < outer)) {
+            fail(where + "/inner_angle", "must be at least 0 and less than outer_angle (" +
+                                             describe(l["outer_angle"]) + ") degrees, got " +
+                                             describe(l["inner_angle"]));
+          }
+        }
+        s.cos_inner = static_cast<float>(std::cos(inner * std::numbers::pi / 180.0));
+        s.cos_outer = static_cast<float>(std::cos(outer * std::numbers::pi / 180.0));
+        if (!(s.cos_inner > s.cos_outer)) {
+          fail(where + "/inner_angle", "is too close to outer_angle to tell their cosines apart");
+        }
+        s.falloff = SpotFalloff::kGltf;
+        out_.scene.spot_lights.push_back(s);
+      } else if (type == "directional") {
+        check_keys(l, where, {"type", "direction", "irradiance"});
+        require({"direction", "irradiance"});
+        out_.scene.directional_lights.push_back(
+            {unit_vec3(l["direction"], where + "/direction"),
+             non_negative_vec3(l["irradiance"], where + "/irradiance")});
+      } else {
+        fail(where + "/type",
+             "must be \"point\", \"spot\" or \"directional\", got '" + shown(type) + "'");
+      }
     }
   }
 

@@ -124,7 +124,8 @@ LoadedScene load_builtin_scene(const std::string& name, const SceneOverrides& ov
   return loaded;
 }
 
-LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& overrides) {
+LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& overrides,
+                            const PunctualLights& lights) {
   LoadedScene loaded;
   Scene& scene = loaded.scene;
   scene.materials = mesh.materials;
@@ -138,7 +139,8 @@ LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& over
                         std::to_string(loaded.stats.dropped_non_finite) + " non-finite)");
   }
   scene.ambient = kLabAmbient;
-  scene.environment = glm::vec3(kDefaultEnvironmentRadiance);
+  // The default key light and grey environment only for a file that brings no light of its own.
+  if (lights.empty()) scene.environment = glm::vec3(kDefaultEnvironmentRadiance);
 
   // Frame the bounding sphere in the vertical field of view, seen from the front (+z) and a
   // little above, with y up.
@@ -160,7 +162,13 @@ LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& over
   loaded.camera.look_at = glm::vec3(centre);
   loaded.camera.up = glm::vec3(0.0f, 1.0f, 0.0f);
   loaded.camera.vertical_fov_degrees = kFramingFovDegrees;
-  scene.lights.push_back({glm::vec3(light), glm::vec3(static_cast<float>(power))});
+  if (lights.empty()) {
+    scene.lights.push_back({glm::vec3(light), glm::vec3(static_cast<float>(power))});
+  } else {
+    scene.lights = lights.points;
+    scene.spot_lights = lights.spots;
+    scene.directional_lights = lights.directionals;
+  }
   apply_overrides(loaded, overrides);
   return loaded;
 }
@@ -179,9 +187,10 @@ LoadedScene load_scene(const std::string& path, const SceneOverrides& overrides)
     return loaded;
   }
   const ImportedMesh mesh = import_mesh_file(path);
+  const PunctualLights lights = is_gltf_file(path) ? read_gltf_lights(path) : PunctualLights{};
   LoadedScene loaded;
   try {
-    loaded = scene_from_mesh(mesh, overrides);
+    loaded = scene_from_mesh(mesh, overrides, lights);
   } catch (const Error& e) {
     if (!e.subject().empty()) throw;
     throw Error(path, e.reason(), e.exit_code());
@@ -192,8 +201,8 @@ LoadedScene load_scene(const std::string& path, const SceneOverrides& overrides)
     if (!overrides.camera.empty()) no_cameras(path);
     return loaded;
   }
-  // The file's camera replaces the framing's; the default key light placed with the framing stays
-  // (a file without lights gets it either way).
+  // The file's camera replaces the framing's (the lights, the file's or the default key light
+  // placed with the framing, stay as scene_from_mesh made them).
   const size_t chosen = choose_camera(cameras, overrides.camera, path);
   for (const GltfCamera& c : cameras) loaded.cameras.push_back({c.name, describe(c)});
   loaded.camera_index = static_cast<int>(chosen);

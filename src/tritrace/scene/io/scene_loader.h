@@ -5,6 +5,7 @@
 
 #include <string>
 
+#include "tritrace/scene/io/gltf_lights.h"
 #include "tritrace/scene/io/loaded_scene.h"
 #include "tritrace/scene/io/mesh_import.h"
 
@@ -38,7 +39,9 @@ LoadedScene load_scene(const std::string& path, const SceneOverrides& overrides 
 LoadedScene load_builtin_scene(const std::string& name, const SceneOverrides& overrides = {});
 
 // A scene holding an imported mesh with the defaults: a camera framed on its bounds (y up, as
-// most mesh formats have it), a point light near the camera and the lab's ambient term.
-LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& overrides = {});
+// most mesh formats have it) and the lab's ambient term, lit by the file's own `lights` (a glTF's
+// punctual lights) or, when it has none, by a point light near the camera and a grey environment.
+LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& overrides = {},
+                            const PunctualLights& lights = {});
 
 }  // namespace tritrace
