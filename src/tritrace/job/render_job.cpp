@@ -431,7 +431,6 @@ RenderedImage RenderJob::render_for(double seconds, RenderStats* stats) const {
     options.spp = n;
     options.progress = nullptr;
     options.adaptive_state = &state;
-    options.adaptive_spp = cap;  // a pixel still on when the time is up is not ended early
     RenderStats pass;
     render_to_film(film, options, &pass);
     total.rays += pass.rays;

@@ -62,24 +62,32 @@ double adaptive_error(const PixelMoments& m, uint32_t n) {
   return std::sqrt(variance / std::max(mean, kAdaptiveDarkFloor));
 }
 
+double neighbourhood_error(std::span<const PixelMoments* const> neighbours) {
+  if (neighbours.empty()) return std::numeric_limits<double>::infinity();
+  double sum = 0.0;
+  for (const PixelMoments* m : neighbours) {
+    const double e = adaptive_error(*m, kAdaptivePilotSpp);
+    sum += e * e;
+  }
+  return std::sqrt(sum / static_cast<double>(neighbours.size()));
+}
+
+uint32_t adaptive_budget(double error, double threshold) {
+  uint32_t n = kAdaptivePilotSpp;
+  // Doubling n divides the error by sqrt(2): go on while the error expected at n is above T.
+  while (n < kAdaptiveMostBudget &&
+         !(error * std::sqrt(static_cast<double>(kAdaptivePilotSpp) / n) < threshold)) {
+    n *= 2;
+  }
+  return n;
+}
+
 size_t AdaptiveState::active_pixels() const {
-  return static_cast<size_t>(std::count_if(pixels.begin(), pixels.end(),
-                                           [](const AdaptivePixel& p) { return p.active(); }));
+  return static_cast<size_t>(std::count_if(budget.begin(), budget.end(),
+                                           [&](uint32_t b) { return b == 0 || b > end_sample; }));
 }
 
 namespace {
-
-// What a pixel whose sampling has ended must add to its radiance sum (weight unchanged, so its
-// AOVs, which share the weight, keep their values) for the film to resolve to the average of its
-// two cross estimates instead of the pooled mean of the samples it kept; zero when both halves
-// kept the same weight, where the two are the same (bit for bit: nothing is added).
-glm::vec3 cross_estimate_correction(const AdaptivePixel& p) {
-  const glm::dvec4& a = p.half[0].kept;
-  const glm::dvec4& b = p.half[1].kept;
-  if (!(a.w > 0.0) || !(b.w > 0.0) || a.w == b.w) return glm::vec3(0.0f);
-  const glm::dvec3 target = 0.5 * (glm::dvec3(a) / a.w + glm::dvec3(b) / b.w);
-  return glm::vec3(target * (a.w + b.w) - (glm::dvec3(a) + glm::dvec3(b)));
-}
 
 // A thread's sums for the pixels of the tile it renders: slot k of pixel i (in the batch's block
 // order) is the value of the tile's BlockCounter node k, and the slot after the last node the
@@ -111,18 +119,19 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
   const Camera& camera = scene.camera;
   const int width = camera.width();
   const int height = camera.height();
+  const bool corner = integrator.pixel_corner_only();
+  const bool adaptive = options.noise_threshold > 0.0f && !corner;
   const bool tile_part = options.tile_parts > 1;
-  const int tile = tile_part ? kPartTileSize : std::clamp(options.tile_size, 1, 16);
+  // Adaptive sampling's decisions read a pixel's neighbours within its 16 x 16 tile.
+  const int tile =
+      tile_part || adaptive ? kPartTileSize : std::clamp(options.tile_size, 1, kPartTileSize);
   static_assert(size_t{16} * 16 <= kMaxBatch);
   const int tiles_x = (width + tile - 1) / tile;
   const int tiles_y = (height + tile - 1) / tile;
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
-  const bool corner = integrator.pixel_corner_only();
   const uint32_t end = first + spp;
   const PixelFilter filter(options.filter);
-  const bool adaptive = options.noise_threshold > 0.0f && !corner;
   AdaptiveState* const state = adaptive ? options.adaptive_state : nullptr;
-  const uint32_t adaptive_end = options.adaptive_spp > 0 ? options.adaptive_spp : end;
   assert(!adaptive || first == 0 || (state && state->end_sample == first));
   // A part renders tiles part, part + parts, ...: neighbouring tiles cost about the same, so
   // interleaving them balances the parts' work whatever the scene.
@@ -153,11 +162,10 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
     // Adaptive sampling: which of the tile's pixels (by slot) still take samples, their running
     // sums, and the slot of each ray of the batch.
     thread_local std::array<uint8_t, kMaxBatch> active;
-    thread_local std::array<AdaptivePixel, kMaxBatch> halves;
+    thread_local std::array<PixelMoments, kMaxBatch> moments;  // over the pilot
+    thread_local std::array<uint32_t, kMaxBatch> budget;       // 0: not yet set
+    thread_local std::array<uint16_t, kMaxBatch> slot_xy;      // slot of tile pixel (x, y)
     thread_local std::array<uint16_t, kMaxBatch> slot_of;
-    // Whether ray i's sample counts in the image (adaptive sampling: while the other half of its
-    // pixel's samples goes on).
-    thread_local std::array<uint8_t, kMaxBatch> kept;
     uint64_t traced = 0, taken = 0;
     bool rendered = false;
     for (int k = next_tile.fetch_add(1, std::memory_order_relaxed); k < tiles_total;
@@ -170,12 +178,16 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
       target.load(x0, y0, x1, y1, slots);
       if (adaptive && state && first > 0) {
         for_each_slot(x0, y0, x1, y1, width, [&](size_t i, size_t p) {
-          halves[i] = state->pixels[p];
-          active[i] = halves[i].active() ? 1 : 0;
+          moments[i] = state->moments[p];
+          budget[i] = state->budget[p];
+          active[i] = budget[i] == 0 || first < budget[i];
         });
       } else {
         std::fill_n(active.begin(), pixels, uint8_t{1});
-        if (adaptive) std::fill_n(halves.begin(), pixels, AdaptivePixel{});
+        if (adaptive) {
+          std::fill_n(moments.begin(), pixels, PixelMoments{});
+          std::fill_n(budget.begin(), pixels, 0u);
+        }
       }
       if (first % kSampleBlock == 0) {
         std::fill_n(slots.slot(counter.size()), pixels, glm::vec4(0.0f));
@@ -215,13 +227,6 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
         // The slot of ray i: i itself unless adaptive sampling has stopped pixels of the tile.
         const bool all = count == pixels;
         const auto slot_at = [&](size_t i) -> size_t { return all ? i : slot_of[i]; };
-        // Sample s belongs to half s % 2 of its pixel, and counts while the other half goes on.
-        const int own = static_cast<int>(s % 2);
-        if (adaptive) {
-          for (size_t i = 0; i < count; ++i) kept[i] = halves[slot_at(i)].half[1 - own].on;
-        } else {
-          std::fill_n(kept.begin(), count, uint8_t{1});
-        }
         const SampleBatch in{std::span<const Ray>(batch.data(), count),
                              corner ? std::span<Sampler>() : std::span(samplers).first(count)};
         const SampleOutput out{
@@ -237,15 +242,12 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
           for (size_t i = 0; i < count; ++i) open[i] = glm::vec4(radiance[i], 1.0f);
         } else {
           for (size_t i = 0; i < count; ++i) {
-            if (kept[i]) open[slot_at(i)] += glm::vec4(weight[i] * radiance[i], weight[i]);
+            open[slot_at(i)] += glm::vec4(weight[i] * radiance[i], weight[i]);
           }
-          if (adaptive) {
+          if (adaptive && s < kAdaptivePilotSpp) {
             for (size_t i = 0; i < count; ++i) {
-              AdaptiveHalf& h = halves[slot_at(i)].half[own];
-              const glm::dvec3 l(radiance[i]);
-              const double w = weight[i];
-              if (kept[i]) h.kept += glm::dvec4(w * l, w);
-              if (h.on) h.moments.add(w, 0.2126 * l.x + 0.7152 * l.y + 0.0722 * l.z);
+              const glm::vec3 l = radiance[i];
+              moments[slot_at(i)].add(weight[i], 0.2126 * l.x + 0.7152 * l.y + 0.0722 * l.z);
             }
           }
         }
@@ -253,20 +255,19 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
           AovSums* open_aovs = slots.aov_slot(counter.size());
           const float* w = corner ? nullptr : weight.data();
           for (size_t i = 0; i < count; ++i) {
-            AovSums& a = open_aovs[slot_at(i)];
-            if (aovs.spp) a.samples += 1.0f;
-            if (!kept[i]) continue;
             const float wi = w ? w[i] : 1.0f;
+            AovSums& a = open_aovs[slot_at(i)];
             if (aovs.albedo) a.albedo += wi * albedo[i];
             if (aovs.normal) a.normal += wi * normal[i];
             if (aovs.depth) a.depth += wi * depth[i];
+            if (aovs.spp) a.samples += 1.0f;
           }
           // The even half buffer, by the parity of the global sample index (a part starting at
           // sample 8 continues the same split), summed exactly as the total is above.
           if (aovs.variance && s % 2 == 0) {
             for (size_t i = 0; i < count; ++i) {
               const float wi = w ? w[i] : 1.0f;
-              if (kept[i]) open_aovs[slot_at(i)].even += glm::vec4(wi * radiance[i], wi);
+              open_aovs[slot_at(i)].even += glm::vec4(wi * radiance[i], wi);
             }
           }
         }
@@ -287,43 +288,47 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
           std::fill_n(slots.slot(counter.size()), pixels, glm::vec4(0.0f));
           if (aovs.any()) std::fill_n(slots.aov_slot(counter.size()), pixels, AovSums{});
         }
-        // Adaptive sampling's checks, at kAdaptiveMinSpp x 2^k samples (before the last): each
-        // half of each pixel from its own samples of [0, s + 1) only. A pixel whose halves have
-        // both stopped, or that reaches adaptive_end, gets its cross estimates' correction in
-        // the sums it last wrote (the open block's, or the node it just became).
         const uint32_t taken_so_far = s + 1;
-        if (adaptive) {
-          glm::vec4* last = slots.slot(counter.size() - (taken_so_far % kSampleBlock == 0 ? 1 : 0));
-          // A check at the last sample changes nothing in this call's image, but a later pass
-          // continues from its decisions.
-          if (taken_so_far >= kAdaptiveMinSpp && (taken_so_far < end || state) &&
-              (taken_so_far & (taken_so_far - 1)) == 0) {
-            for (size_t i = 0; i < pixels; ++i) {
-              if (!active[i]) continue;
-              for (AdaptiveHalf& h : halves[i].half) {
-                if (!h.on) continue;
-                // The half's standard error of the mean, over sqrt(2) for the pixel's 2x samples.
-                const double error =
-                    adaptive_error(h.moments, taken_so_far / 2) * 0.70710678118654752;
-                if (h.near && error < options.noise_threshold) h.on = 0;
-                h.near = error < kAdaptiveConfirm * options.noise_threshold;
+        // After the pilot, each pixel's budget from its neighbours' pilot samples (never its
+        // own). Set at the last sample too when a later pass continues from it.
+        if (adaptive && taken_so_far == kAdaptivePilotSpp && (taken_so_far < end || state)) {
+          const int w = x1 - x0, h = y1 - y0;
+          size_t k = 0;
+          for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
+            for (int y = by; y < ey; ++y) {
+              for (int x = bx; x < ex; ++x, ++k) {
+                slot_xy[static_cast<size_t>((y - y0) * w + (x - x0))] = static_cast<uint16_t>(k);
               }
-              if (!halves[i].active()) {
-                active[i] = 0;
-                last[i] += glm::vec4(cross_estimate_correction(halves[i]), 0.0f);
+            }
+          });
+          for (int y = 0; y < h; ++y) {
+            for (int x = 0; x < w; ++x) {
+              constexpr int r = kAdaptiveRadius;
+              std::array<const PixelMoments*, (2 * r + 1) * (2 * r + 1) - 1> around;
+              size_t n_around = 0;
+              for (int dy = -r; dy <= r; ++dy) {
+                for (int dx = -r; dx <= r; ++dx) {
+                  const int nx = x + dx, ny = y + dy;
+                  if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+                  around[n_around++] = &moments[slot_xy[static_cast<size_t>(ny * w + nx)]];
+                }
               }
+              const size_t i = slot_xy[static_cast<size_t>(y * w + x)];
+              budget[i] = adaptive_budget(neighbourhood_error(std::span(around.data(), n_around)),
+                                          options.noise_threshold);
             }
           }
-          if (taken_so_far == adaptive_end) {
-            for (size_t i = 0; i < pixels; ++i) {
-              if (active[i]) last[i] += glm::vec4(cross_estimate_correction(halves[i]), 0.0f);
-            }
+        }
+        if (adaptive && taken_so_far >= kAdaptivePilotSpp) {
+          for (size_t i = 0; i < pixels; ++i) {
+            if (budget[i] != 0 && taken_so_far >= budget[i]) active[i] = 0;
           }
         }
       }
       if (adaptive && state) {
         for_each_slot(x0, y0, x1, y1, width, [&](size_t i, size_t p) {
-          state->pixels[p] = halves[i];
+          state->moments[p] = moments[i];
+          state->budget[p] = budget[i];
         });
       }
       const size_t layers = counter.size() + (end % kSampleBlock != 0 ? 1 : 0);
@@ -455,7 +460,7 @@ void render_to_film(const Scene& scene, const Accel& accel, const Integrator& in
     const size_t pixels = static_cast<size_t>(film.width()) * static_cast<size_t>(film.height());
     const bool continues = state && !empty && first == film.end_sample() &&
                            state->end_sample == first && film.first_sample() == 0 &&
-                           state->pixels.size() == pixels;
+                           state->budget.size() == pixels;
     if (!continues && (first != 0 || !empty)) {
       throw Error("film",
                   "adaptive sampling renders a pixel's samples from 0, continued only with the "
@@ -463,7 +468,8 @@ void render_to_film(const Scene& scene, const Accel& accel, const Integrator& in
                       std::to_string(first));
     }
     if (state && first == 0) {
-      *state = AdaptiveState{0, std::vector<AdaptivePixel>(pixels)};
+      *state =
+          AdaptiveState{0, std::vector<PixelMoments>(pixels), std::vector<uint32_t>(pixels, 0)};
     }
   }
   if (empty) film.set_layout(first, first, {});
