@@ -183,8 +183,7 @@ TEST(AdaptiveSampling, PixelsAmongFlatNeighboursStopAfterThePilotAmongNoisyOnesG
 }
 
 // The neighbourhood's error is the root mean square of the neighbours' errors after the pilot,
-// and the budget the power of two (from the pilot) at which that error, falling as
-// 1 / sqrt(samples), is below the threshold.
+// and the budget the pilot times e / T, rounded up to the pilot times a power of two.
 TEST(AdaptiveError, NeighbourhoodErrorAndBudget) {
   PixelMoments flat, noisy;
   for (uint32_t i = 0; i < kAdaptivePilotSpp; ++i) {
@@ -198,10 +197,12 @@ TEST(AdaptiveError, NeighbourhoodErrorAndBudget) {
   EXPECT_TRUE(std::isinf(neighbourhood_error({})));
   EXPECT_EQ(adaptive_budget(0.0, 0.05), kAdaptivePilotSpp);
   EXPECT_EQ(adaptive_budget(0.049, 0.05), 64u);
-  EXPECT_EQ(adaptive_budget(0.05, 0.05), 128u);  // not below T at 64
-  // 0.2 needs (0.2 / 0.05)^2 = 16 times the pilot, 1024; just above it, 2048.
-  EXPECT_EQ(adaptive_budget(0.1999, 0.05), 1024u);
-  EXPECT_EQ(adaptive_budget(0.2001, 0.05), 2048u);
+  EXPECT_EQ(adaptive_budget(0.05, 0.05), 128u);  // e / T = 1 is not below 1
+  // 0.2 / 0.05 = 4 times the pilot, 256, with e / T x 64 / n = 1 not below 1: 512; just below
+  // 0.2, 256; 0.7 asks for 896, so 1024.
+  EXPECT_EQ(adaptive_budget(0.1999, 0.05), 256u);
+  EXPECT_EQ(adaptive_budget(0.2, 0.05), 512u);
+  EXPECT_EQ(adaptive_budget(0.7, 0.05), 1024u);
   EXPECT_EQ(adaptive_budget(std::numeric_limits<double>::infinity(), 0.05), kAdaptiveMostBudget);
 }
 

@@ -74,9 +74,9 @@ double neighbourhood_error(std::span<const PixelMoments* const> neighbours) {
 
 uint32_t adaptive_budget(double error, double threshold) {
   uint32_t n = kAdaptivePilotSpp;
-  // Doubling n divides the error by sqrt(2): go on while the error expected at n is above T.
+  // The first n = kAdaptivePilotSpp 2^k with n >= kAdaptivePilotSpp e / T (strictly above).
   while (n < kAdaptiveMostBudget &&
-         !(error * std::sqrt(static_cast<double>(kAdaptivePilotSpp) / n) < threshold)) {
+         !(error * (static_cast<double>(kAdaptivePilotSpp) / n) < threshold)) {
     n *= 2;
   }
   return n;
