@@ -107,12 +107,13 @@ TEST_F(AdaptiveTest, EachPixelIsTheUniformRenderOfTheSamplesItTook) {
 // after the pilot, at 64; one whose neighbours' half buffers (an estimate the rule does not use)
 // show a relative error far above the threshold at 32 spp goes on past 64.
 TEST(AdaptiveSampling, PixelsAmongFlatNeighboursStopAfterThePilotAmongNoisyOnesGoOn) {
-  // Large enough that the light covers whole pixels.
-  const Scene scene = make_cornell_area({.width = 96, .height = 96});
+  // Large enough that the light covers whole 5 x 5 neighbourhoods.
+  constexpr int kSize = 192;
+  const Scene scene = make_cornell_area({.width = kSize, .height = kSize});
   const auto accel = make_accel(AccelKind::kBvh, scene, kDefaultKernel);
   const PathIntegrator integrator(scene);
   const auto film = [&](RenderOptions options, AovSet aovs) {
-    Film f(96, 96, aovs);
+    Film f(kSize, kSize, aovs);
     render_to_film(scene, *accel, integrator, f, options);
     return f;
   };
@@ -139,7 +140,7 @@ TEST(AdaptiveSampling, PixelsAmongFlatNeighboursStopAfterThePilotAmongNoisyOnesG
     for (int dy = -kAdaptiveRadius; dy <= kAdaptiveRadius; ++dy) {
       for (int dx = -kAdaptiveRadius; dx <= kAdaptiveRadius; ++dx) {
         const int nx = x + dx, ny = y + dy;
-        if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= 96 || ny >= 96 ||
+        if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= kSize || ny >= kSize ||
             nx / kPartTileSize != x / kPartTileSize || ny / kPartTileSize != y / kPartTileSize) {
           continue;
         }
@@ -164,8 +165,8 @@ TEST(AdaptiveSampling, PixelsAmongFlatNeighboursStopAfterThePilotAmongNoisyOnesG
     return std::sqrt(sum / n) > 4.0 * threshold;
   };
   size_t flat = 0, noisy = 0, noisy_on = 0;
-  for (int y = 0; y < 96; ++y) {
-    for (int x = 0; x < 96; ++x) {
+  for (int y = 0; y < kSize; ++y) {
+    for (int x = 0; x < kSize; ++x) {
       const float n = taken.at(x, y).x;
       if (all_around(x, y, flat_at)) {
         ++flat;
