@@ -44,9 +44,9 @@ struct RenderOptions {
   int tile_part = 0;
   int tile_parts = 1;
   // Adaptive sampling (--noise-threshold; 0: off): every pixel takes kAdaptivePilotSpp samples,
-  // and then as many more, up to spp, as its neighbours' error (adaptive_error, pooled by
+  // and then more, up to spp, in proportion to its neighbours' error (adaptive_error, pooled by
   // neighbourhood_error over the 5 x 5 pixels around it within its 16 x 16 tile, itself left
-  // out) says it needs to bring that error below this (adaptive_budget). The decision never reads
+  // out) over this (adaptive_budget). The decision never reads
   // the pixel's own samples, so the image is unbiased (AdaptiveState says why); it reads only
   // pixels of the same 16 x 16 tile (adaptive sampling always renders tiles of kPartTileSize,
   // whatever tile_size says), so the image is the same for any thread count, tile size and tile
@@ -73,7 +73,8 @@ inline constexpr uint32_t kAdaptivePilotSpp = 64;
 inline constexpr double kAdaptiveDarkFloor = 0.1;
 // A pixel's neighbours for adaptive sampling: the (2 r + 1)^2 - 1 pixels around it (within its
 // 16 x 16 tile). 5 x 5 measured better than 3 x 3 on glass.json (RMSE at equal time 0.93 against
-// 0.98 of uniform's; docs/PERFORMANCE.md): more pilot samples see more of a rare caustic.
+// 0.98 of uniform's, both with the budget rounded as the old checks did): more pilot samples see
+// more of a rare caustic; 7 x 7 and 11 x 11 were no better (docs/PERFORMANCE.md).
 inline constexpr int kAdaptiveRadius = 2;
 
 // A pixel's running sums for adaptive sampling, over its samples' luminance x_i = w_i Y(L_i) and
@@ -115,7 +116,7 @@ double neighbourhood_error(std::span<const PixelMoments* const> neighbours);
 // (minimise sum s^2 / n subject to sum n fixed). Rounding e / T up to a count at which the error
 // itself is below T (n proportional to e^2, the rule the checks used) gave the noisiest pixels
 // far more: on glass.json at T = 0.02 that was 1.18 of uniform sampling's RMSE at equal time
-// against 0.97 (docs/PERFORMANCE.md). Powers of two keep counts to few values, as the spp AOV
+// against 0.96 (docs/PERFORMANCE.md). Powers of two keep counts to few values, as the spp AOV
 // shows. It does not depend on spp, so passes of any length (--time-limit) set the budgets one
 // call sets.
 inline constexpr uint32_t kAdaptiveMostBudget = uint32_t{1} << 30;
