@@ -464,9 +464,12 @@ bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
     accel_.occluded_incoherent(std::span<const Ray>(&r, 1), std::span<uint8_t>(&blocked, 1));
     return blocked == 0;
   }
+  // A surface vertex's end stops short of its surface by the connection's own rounding as well
+  // (stop_short_of_surface), on the side ray_start left it by.
   const glm::vec3 to =
       l.point_light ? offset_ray_origin(l.p, -w, triangle_extent(c.tri.e1, c.tri.e2), it_.offset_)
-                    : ray_start(l, -w, it_.offset_);
+                    : stop_short_of_surface(ray_start(l, -w, it_.offset_),
+                                            glm::dot(l.ng, -w) >= 0.0f ? l.ng : -l.ng, from);
   const glm::vec3 segment = to - from;
   const float length = std::sqrt(glm::dot(segment, segment));
   // Nothing fits between the two offset points (the path tracer's rule).
