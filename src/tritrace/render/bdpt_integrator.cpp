@@ -464,12 +464,20 @@ bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
     accel_.occluded_incoherent(std::span<const Ray>(&r, 1), std::span<uint8_t>(&blocked, 1));
     return blocked == 0;
   }
-  // A surface vertex's end stops short of its surface by the connection's own rounding as well
-  // (stop_short_of_surface), on the side ray_start left it by.
-  const glm::vec3 to =
-      l.point_light ? offset_ray_origin(l.p, -w, triangle_extent(c.tri.e1, c.tri.e2), it_.offset_)
-                    : stop_short_of_surface(ray_start(l, -w, it_.offset_),
-                                            glm::dot(l.ng, -w) >= 0.0f ? l.ng : -l.ng, from);
+  // A surface vertex's end, as the path tracer's shadow rays end at a light: moved off its
+  // surface along its geometric normal only, on the side the ray arrives from, then on by the
+  // connection's own rounding (stop_short_of_surface). Not ray_start: its first step, towards the
+  // centroid, moves each coordinate by its own ULPs, which is not parallel to a tilted triangle and
+  // can sink the point below it by as much as the second step lifts it (1.1% of ends under a sphere
+  // light at (300, -200, 100) lay behind their own triangle, and bdpt rendered it 2.5% dark).
+  glm::vec3 to;
+  if (l.point_light) {
+    to = offset_ray_origin(l.p, -w, triangle_extent(c.tri.e1, c.tri.e2), it_.offset_);
+  } else {
+    const glm::vec3 side = glm::dot(l.ng, w) <= 0.0f ? l.ng : -l.ng;
+    to = stop_short_of_surface(
+        offset_ray_origin(l.p, side, triangle_extent(l.tri.e1, l.tri.e2), it_.offset_), side, from);
+  }
   const glm::vec3 segment = to - from;
   const float length = std::sqrt(glm::dot(segment, segment));
   // Nothing fits between the two offset points (the path tracer's rule).
