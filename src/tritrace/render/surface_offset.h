@@ -21,9 +21,19 @@ namespace tritrace {
   const float extent = triangle_extent(e1, e2);
   const glm::vec3 inward = tri.v0 + (e1 + e2) / 3.0f - x;
   const float inward_length = std::sqrt(glm::dot(inward, inward));
+  // offset_ray_origin moves each coordinate by its own ULPs, so the step is not parallel to a
+  // tilted triangle: a coordinate moved against the sign of n's would sink the point below the
+  // surface, by as much as the step off it lifts it far from the origin (0.95% of rays leaving a
+  // sphere light's triangles at (300, -200, 100) hit their own triangle; docs/RELIABILITY.md).
+  // Such coordinates stay; the others can only raise the point. On a wall whose normal lies
+  // along an axis nothing changes (that component of the step is 0).
+  const auto keep = [](float d, float nc) { return d * nc < 0.0f ? 0.0f : d; };
+  const glm::vec3 step = inward_length > 0.0f ? inward * (1.0f / inward_length) : glm::vec3(0.0f);
   const glm::vec3 inside =
-      inward_length > 0.0f ? offset_ray_origin(x, inward * (1.0f / inward_length), extent, offset)
-                           : x;
+      inward_length > 0.0f
+          ? offset_ray_origin(x, glm::vec3(keep(step.x, n.x), keep(step.y, n.y), keep(step.z, n.z)),
+                              extent, offset)
+          : x;
   return offset_ray_origin(inside, n, extent, offset);
 }
 
