@@ -466,10 +466,10 @@ bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
   }
   // A surface vertex's end, as the path tracer's shadow rays end at a light: moved off its
   // surface along its geometric normal only, on the side the ray arrives from, then on by the
-  // connection's own rounding (stop_short_of_surface). Not ray_start: its first step, towards the
-  // centroid, moves each coordinate by its own ULPs, which is not parallel to a tilted triangle and
-  // can sink the point below it by as much as the second step lifts it (1.1% of ends under a sphere
-  // light at (300, -200, 100) lay behind their own triangle, and bdpt rendered it 2.5% dark).
+  // connection's own rounding (stop_short_of_surface). It was ray_start (leave_surface), whose
+  // step towards the centroid then sank 1.1% of ends under a sphere light at (300, -200, 100)
+  // behind their own triangle (bdpt rendered it 2.5% dark); that step is fixed too, but an end
+  // needs no move off a neighbour's plane that the path tracer's light ends do without.
   glm::vec3 to;
   if (l.point_light) {
     to = offset_ray_origin(l.p, -w, triangle_extent(c.tri.e1, c.tri.e2), it_.offset_);
