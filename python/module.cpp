@@ -886,9 +886,10 @@ time_limit (seconds: the path tracer's samples in passes until the time is up, s
 Frame.spp says how many were reached, and the image is the one that spp gives), denoise (True:
 the path tracer's image through the built-in denoiser, as `tritrace render --denoise`), clamp
 (the most one sample's indirect light adds to a pixel, per channel: biased, as
-`tritrace render --clamp`), noise_threshold (adaptive sampling: a pixel stops once the relative
-error of its mean is below it at a check and below sqrt(2) times it at the check before, checks
-at 32, 64, 128, ... samples, spp the most; Frame.mean_spp says how many it took), aperture
+`tritrace render --clamp`), noise_threshold (adaptive sampling: every pixel takes a pilot of 64
+samples, then 64 e / T more in steps of 64, 128, 256, ..., spp the most, e the error of its 5 x 5
+neighbours' pilots within its 16 x 16 tile, never its own, so the image is unbiased, as
+`tritrace render --noise-threshold`; Frame.mean_spp says how many it took), aperture
 (a thin lens's radius in world units, as `tritrace render --aperture`; path only), focus
 (the distance of the plane in focus, as --focus).
 aovs: any of "albedo", "normal", "depth", "variance", "spp". Camera settings beyond the CLI's

@@ -275,11 +275,12 @@ def render(
     look-at camera. time_limit (seconds): the path tracer's samples in passes until the time is
     up (spp the most); Frame.spp says how many it reached. denoise=True: the image through the
     built-in denoiser, as `tritrace render --denoise`. clamp: the most one sample's indirect light
-    adds to a pixel (biased, as `tritrace render --clamp`). noise_threshold: adaptive sampling,
-    each pixel stops once the relative error of its mean is below it (checked at 32, 64, 128, ...
-    samples, and confirmed by the check before; spp the most); Frame.mean_spp says how many a
-    pixel took on average, aovs "spp" gives Frame.spp_map. aperture and focus: a thin lens's
-    radius and the distance of the plane in focus, as --aperture and --focus. Bad values raise ValueError with the
+    adds to a pixel (biased, as `tritrace render --clamp`). noise_threshold: adaptive sampling
+    as `tritrace render --noise-threshold`: after 64 samples each pixel takes more in proportion to
+    its neighbours' relative error over the threshold (never its own, so the image is unbiased; spp
+    the most); Frame.mean_spp says how many a pixel took on average, aovs "spp" gives
+    Frame.spp_map. aperture and focus: a thin lens's radius and the distance of the plane in
+    focus, as --aperture and --focus. Bad values raise ValueError with the
     CLI's message, wrong types TypeError.
     """
 

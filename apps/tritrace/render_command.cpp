@@ -69,15 +69,18 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
                 "of each pixel from its two halves of samples; --aovs still chooses which of "
                 "them are written");
   sub->add_option("--noise-threshold", args.job.noise_threshold,
-                  "Adaptive sampling for the path tracer: each pixel stops taking samples once the "
-                  "estimated standard error of its mean luminance L (from the running second "
-                  "moment of its own samples) divided by sqrt(L) (sqrt(0.1) below L = 0.1), a "
-                  "relative error at L = 1, is below T at a check and was below 1.41 T at the one "
-                  "before (checks at 32, 64, "
-                  "128, ... samples, so the first stop is at 64); --spp is the most a pixel "
-                  "takes. The image is the same for any thread count and tile size, and --tile "
-                  "parts and --mpi still merge exactly; not with --spp-range. With --time-limit, "
-                  "passes until the time is up or every pixel has stopped. "
+                  "Adaptive sampling for the path tracer: every pixel takes 64 samples, then as "
+                  "many as its neighbours' error says it needs, up to --spp: the neighbours (the "
+                  "5 x 5 pixels around it in its 16 x 16 tile, itself left out) give their "
+                  "standard error of the mean luminance L over sqrt(L) (sqrt(0.1) below L = 0.1), "
+                  "a relative error at L = 1, after 64 samples; with e their root mean square, "
+                  "the pixel takes 64 e / T samples rounded up to 64, 128, 256, ... (64 when e < "
+                  "T), in proportion to the noise around it. The decision never reads the pixel's "
+                  "own samples, so the image is "
+                  "unbiased, and reads only its tile, so it is the same for any thread count and "
+                  "tile size, and --tile parts and --mpi still merge exactly; not with "
+                  "--spp-range. With --time-limit, passes until the time is up or every pixel has "
+                  "stopped. "
                   "--aovs spp writes how many samples each pixel took")
       ->type_name("T")
       ->check(checked(setting_check("--noise-threshold")));

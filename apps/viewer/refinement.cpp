@@ -23,9 +23,8 @@ std::string_view stop_reason_text(StopReason reason) {
 }
 
 uint32_t uniform_end(const RefinementLimits& limits) {
-  // With the renderer's rule a pixel can first stop at 2 kAdaptiveMinSpp (a check below the
-  // threshold confirmed by the one before), and only at a check before its last sample.
-  return limits.adaptive() ? std::min(limits.max_spp, 2 * kAdaptiveMinSpp) : limits.max_spp;
+  // With the renderer's rule every pixel takes kAdaptivePilotSpp samples before any stops.
+  return limits.adaptive() ? std::min(limits.max_spp, kAdaptivePilotSpp) : limits.max_spp;
 }
 
 uint32_t next_adaptive_level(uint32_t spp, uint32_t max_spp) {

@@ -2,13 +2,13 @@
 // --time-limit seconds after the view came to rest, and with --noise-threshold until every pixel
 // has converged. Plain arithmetic, unit-tested without SDL.
 //
-// With a noise threshold the renderer decides per pixel from that pixel's samples [0, n) at checks
-// n = kAdaptiveMinSpp 2^k, so an adaptive render cannot be continued frame by frame the way a
-// uniform one can. The viewer therefore accumulates uniformly, frame by frame, up to the first
-// count at which a pixel can stop (before it an adaptive render takes every sample, so the film is
-// the adaptive one bit for bit), and then renders whole adaptive images of twice the samples
-// each time (128, 256, ... up to --spp), each split into tile parts that fit a frame, so that keys
-// still answer within a frame while a level renders. Each level is exactly the image
+// With a noise threshold the renderer sets each pixel's budget from its neighbours' first
+// kAdaptivePilotSpp samples (render/renderer.h), so an adaptive render cannot be continued frame by
+// frame the way a uniform one can. The viewer therefore accumulates uniformly, frame by frame, up
+// to the first count at which a pixel can stop (before it an adaptive render takes every sample, so
+// the film is the adaptive one bit for bit), and then renders whole adaptive images of twice the
+// samples each time (128, 256, ... up to --spp), each split into tile parts that fit a frame, so
+// that keys still answer within a frame while a level renders. Each level is exactly the image
 // `tritrace render --spp N --noise-threshold T` writes.
 #pragma once
 
@@ -32,7 +32,7 @@ struct RefinementLimits {
 };
 
 // Where frame-by-frame accumulation ends: max_spp, or with a noise threshold the first count at
-// which the renderer can stop a pixel (2 kAdaptiveMinSpp) when that is smaller.
+// which the renderer can stop a pixel (kAdaptivePilotSpp) when that is smaller.
 uint32_t uniform_end(const RefinementLimits& limits);
 
 // The adaptive level after an image of `spp` samples: twice as many, at most max_spp; 0 when spp

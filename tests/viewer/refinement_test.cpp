@@ -30,8 +30,8 @@ JobSettings adaptive_job(const std::string& width, const std::string& height,
 }
 
 TEST(Refinement, UniformAccumulationEndsWhereAPixelCanFirstStop) {
-  // The renderer's first possible stop is at its second check, 2 x 32 samples.
-  ASSERT_EQ(kAdaptiveMinSpp, 32u);
+  // Every pixel takes the renderer's pilot of 64 samples before any stops.
+  ASSERT_EQ(kAdaptivePilotSpp, 64u);
   EXPECT_EQ(uniform_end({.max_spp = 1000, .noise_threshold = 0.05f}), 64u);
   EXPECT_EQ(uniform_end({.max_spp = 40, .noise_threshold = 0.05f}), 40u);
   EXPECT_EQ(uniform_end({.max_spp = 1000}), 1000u) << "no threshold: uniform to the end";

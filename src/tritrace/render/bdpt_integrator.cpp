@@ -240,6 +240,7 @@ class BdptTracer {
   bool visible(const Vertex& c, const Vertex& l);
   // Whether nothing blocks the segment between surface vertex l and the camera at `eye`.
   bool visible_to_camera(const Vertex& l, glm::vec3 eye);
+  bool unblocked(glm::vec3 from, glm::vec3 dir, float length);
   // Light tracing: the (s, 1) connections of the light subpath's vertices to the camera.
   void splat_light_subpath(Vertex* light, Vertex* camera, int nl, Sampler& sampler,
                            SplatBuffer& splats);
@@ -491,30 +492,11 @@ int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampl
   return walk(path, 1, max_vertices, ray, beta, pdf_dir, true, sampler, nullptr);
 }
 
-bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
-  const glm::vec3 w = direction(c, l);
-  const glm::vec3 from = ray_start(c, w, it_.offset_);
-  if (infinite(l)) {
-    Ray r;
-    r.origin = from;
-    r.dir = w;
-    r.tmin = 0.0f;
-    r.tmax = kRayTMax;
-    ++traced_;
-    uint8_t blocked = 0;
-    accel_.occluded_incoherent(std::span<const Ray>(&r, 1), std::span<uint8_t>(&blocked, 1));
-    return blocked == 0;
-  }
-  const glm::vec3 to =
-      l.point_light ? offset_ray_origin(l.p, -w, triangle_extent(c.tri.e1, c.tri.e2), it_.offset_)
-                    : ray_start(l, -w, it_.offset_);
-  const glm::vec3 segment = to - from;
-  const float length = std::sqrt(glm::dot(segment, segment));
-  // Nothing fits between the two offset points (the path tracer's rule).
-  if (!(length > 0.0f && glm::dot(segment, w) > 0.0f)) return true;
+// One shadow ray: nothing between from and from + dir * length.
+bool BdptTracer::unblocked(glm::vec3 from, glm::vec3 dir, float length) {
   Ray r;
   r.origin = from;
-  r.dir = segment * (1.0f / length);
+  r.dir = dir;
   r.tmin = 0.0f;
   r.tmax = length;
   ++traced_;
@@ -523,21 +505,40 @@ bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
   return blocked == 0;
 }
 
+bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
+  const glm::vec3 w = direction(c, l);
+  const glm::vec3 from = ray_start(c, w, it_.offset_);
+  if (infinite(l)) {
+    return unblocked(from, w, kRayTMax);
+  }
+  // A surface vertex's end, as the path tracer's shadow rays end at a light: moved off its
+  // surface along its geometric normal only, on the side the ray arrives from, then on by the
+  // connection's own rounding (stop_short_of_surface). It was ray_start (leave_surface), whose
+  // step towards the centroid then sank 1.1% of ends under a sphere light at (300, -200, 100)
+  // behind their own triangle (bdpt rendered it 2.5% dark); that step is fixed too, but an end
+  // needs no move off a neighbour's plane that the path tracer's light ends do without.
+  glm::vec3 to;
+  if (l.point_light) {
+    to = offset_ray_origin(l.p, -w, triangle_extent(c.tri.e1, c.tri.e2), it_.offset_);
+  } else {
+    const glm::vec3 side = glm::dot(l.ng, w) <= 0.0f ? l.ng : -l.ng;
+    to = stop_short_of_surface(
+        offset_ray_origin(l.p, side, triangle_extent(l.tri.e1, l.tri.e2), it_.offset_), side, from);
+  }
+  const glm::vec3 segment = to - from;
+  const float length = std::sqrt(glm::dot(segment, segment));
+  // Nothing fits between the two offset points (the path tracer's rule).
+  if (!(length > 0.0f && glm::dot(segment, w) > 0.0f)) return true;
+  return unblocked(from, segment * (1.0f / length), length);
+}
+
 bool BdptTracer::visible_to_camera(const Vertex& l, glm::vec3 eye) {
   const glm::vec3 d = eye - l.p;
   const glm::vec3 from = ray_start(l, glm::normalize(d), it_.offset_);
   const glm::vec3 segment = eye - from;
   const float length = std::sqrt(glm::dot(segment, segment));
   if (!(length > 0.0f)) return true;
-  Ray r;
-  r.origin = from;
-  r.dir = segment * (1.0f / length);
-  r.tmin = 0.0f;
-  r.tmax = length;
-  ++traced_;
-  uint8_t blocked = 0;
-  accel_.occluded_incoherent(std::span<const Ray>(&r, 1), std::span<uint8_t>(&blocked, 1));
-  return blocked == 0;
+  return unblocked(from, segment * (1.0f / length), length);
 }
 
 // The power heuristic over the strategies with t >= 2 that can sample the path of light vertices

@@ -78,7 +78,8 @@ struct ShadowRays {
       end = offset_ray_origin(ls.point, -wi, extent, offset);
     } else {
       const glm::vec3 light_side = glm::dot(ls.normal, wi) < 0.0f ? ls.normal : -ls.normal;
-      end = offset_ray_origin(ls.point, light_side, ls.extent, offset);
+      end = stop_short_of_surface(offset_ray_origin(ls.point, light_side, ls.extent, offset),
+                                  light_side, from);
     }
     const glm::vec3 segment = end - from;
     const float length = ls.infinite ? kRayTMax : std::sqrt(glm::dot(segment, segment));

@@ -62,8 +62,29 @@ double adaptive_error(const PixelMoments& m, uint32_t n) {
   return std::sqrt(variance / std::max(mean, kAdaptiveDarkFloor));
 }
 
+double neighbourhood_error(std::span<const PixelMoments* const> neighbours) {
+  if (neighbours.empty()) return std::numeric_limits<double>::infinity();
+  double sum = 0.0;
+  for (const PixelMoments* m : neighbours) {
+    const double e = adaptive_error(*m, kAdaptivePilotSpp);
+    sum += e * e;
+  }
+  return std::sqrt(sum / static_cast<double>(neighbours.size()));
+}
+
+uint32_t adaptive_budget(double error, double threshold) {
+  uint32_t n = kAdaptivePilotSpp;
+  // The first n = kAdaptivePilotSpp 2^k with n >= kAdaptivePilotSpp e / T (strictly above).
+  while (n < kAdaptiveMostBudget &&
+         !(error * (static_cast<double>(kAdaptivePilotSpp) / n) < threshold)) {
+    n *= 2;
+  }
+  return n;
+}
+
 size_t AdaptiveState::active_pixels() const {
-  return static_cast<size_t>(std::count(active.begin(), active.end(), uint8_t{1}));
+  return static_cast<size_t>(std::count_if(budget.begin(), budget.end(),
+                                           [&](uint32_t b) { return b == 0 || b > end_sample; }));
 }
 
 namespace {
@@ -98,17 +119,19 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
   const Camera& camera = scene.camera;
   const int width = camera.width();
   const int height = camera.height();
+  const bool corner = integrator.pixel_corner_only();
+  const bool adaptive = options.noise_threshold > 0.0f && !corner;
   const bool tile_part = options.tile_parts > 1;
-  const int tile = tile_part ? kPartTileSize : std::clamp(options.tile_size, 1, 16);
+  // Adaptive sampling's decisions read a pixel's neighbours within its 16 x 16 tile.
+  const int tile =
+      tile_part || adaptive ? kPartTileSize : std::clamp(options.tile_size, 1, kPartTileSize);
   static_assert(size_t{16} * 16 <= kMaxBatch);
   const int tiles_x = (width + tile - 1) / tile;
   const int tiles_y = (height + tile - 1) / tile;
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
-  const bool corner = integrator.pixel_corner_only();
   const bool lens = camera.has_lens();
   const uint32_t end = first + spp;
   const PixelFilter filter(options.filter);
-  const bool adaptive = options.noise_threshold > 0.0f && !corner;
   AdaptiveState* const state = adaptive ? options.adaptive_state : nullptr;
   assert(!adaptive || first == 0 || (state && state->end_sample == first));
   // A part renders tiles part, part + parts, ...: neighbouring tiles cost about the same, so
@@ -140,8 +163,9 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
     // Adaptive sampling: which of the tile's pixels (by slot) still take samples, their running
     // sums, and the slot of each ray of the batch.
     thread_local std::array<uint8_t, kMaxBatch> active;
-    thread_local std::array<uint8_t, kMaxBatch> near;  // below sqrt(2) T at the last check
-    thread_local std::array<PixelMoments, kMaxBatch> moments;
+    thread_local std::array<PixelMoments, kMaxBatch> moments;  // over the pilot
+    thread_local std::array<uint32_t, kMaxBatch> budget;       // 0: not yet set
+    thread_local std::array<uint16_t, kMaxBatch> slot_xy;      // slot of tile pixel (x, y)
     thread_local std::array<uint16_t, kMaxBatch> slot_of;
     uint64_t traced = 0, taken = 0;
     bool rendered = false;
@@ -156,13 +180,15 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
       if (adaptive && state && first > 0) {
         for_each_slot(x0, y0, x1, y1, width, [&](size_t i, size_t p) {
           moments[i] = state->moments[p];
-          active[i] = state->active[p];
-          near[i] = state->near[p];
+          budget[i] = state->budget[p];
+          active[i] = budget[i] == 0 || first < budget[i];
         });
       } else {
         std::fill_n(active.begin(), pixels, uint8_t{1});
-        std::fill_n(near.begin(), pixels, uint8_t{0});
-        if (adaptive) std::fill_n(moments.begin(), pixels, PixelMoments{});
+        if (adaptive) {
+          std::fill_n(moments.begin(), pixels, PixelMoments{});
+          std::fill_n(budget.begin(), pixels, 0u);
+        }
       }
       if (first % kSampleBlock == 0) {
         std::fill_n(slots.slot(counter.size()), pixels, glm::vec4(0.0f));
@@ -220,7 +246,7 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
           for (size_t i = 0; i < count; ++i) {
             open[slot_at(i)] += glm::vec4(weight[i] * radiance[i], weight[i]);
           }
-          if (adaptive) {
+          if (adaptive && s < kAdaptivePilotSpp) {
             for (size_t i = 0; i < count; ++i) {
               const glm::vec3 l = radiance[i];
               moments[slot_at(i)].add(weight[i], 0.2126 * l.x + 0.7152 * l.y + 0.0722 * l.z);
@@ -264,26 +290,47 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
           std::fill_n(slots.slot(counter.size()), pixels, glm::vec4(0.0f));
           if (aovs.any()) std::fill_n(slots.aov_slot(counter.size()), pixels, AovSums{});
         }
-        // Adaptive sampling's checks, at kAdaptiveMinSpp x 2^k samples (before the last): each
-        // pixel from its own samples [0, s + 1) only.
         const uint32_t taken_so_far = s + 1;
-        // A check at the last sample changes nothing in this call's image, but a later pass
-        // continues from its decisions.
-        if (adaptive && taken_so_far >= kAdaptiveMinSpp && (taken_so_far < end || state) &&
-            (taken_so_far & (taken_so_far - 1)) == 0) {
+        // After the pilot, each pixel's budget from its neighbours' pilot samples (never its
+        // own). Set at the last sample too when a later pass continues from it.
+        if (adaptive && taken_so_far == kAdaptivePilotSpp && (taken_so_far < end || state)) {
+          const int w = x1 - x0, h = y1 - y0;
+          size_t k = 0;
+          for_each_block(x0, y0, x1, y1, [&](int bx, int by, int ex, int ey) {
+            for (int y = by; y < ey; ++y) {
+              for (int x = bx; x < ex; ++x, ++k) {
+                slot_xy[static_cast<size_t>((y - y0) * w + (x - x0))] = static_cast<uint16_t>(k);
+              }
+            }
+          });
+          for (int y = 0; y < h; ++y) {
+            for (int x = 0; x < w; ++x) {
+              constexpr int r = kAdaptiveRadius;
+              std::array<const PixelMoments*, (2 * r + 1) * (2 * r + 1) - 1> around;
+              size_t n_around = 0;
+              for (int dy = -r; dy <= r; ++dy) {
+                for (int dx = -r; dx <= r; ++dx) {
+                  const int nx = x + dx, ny = y + dy;
+                  if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+                  around[n_around++] = &moments[slot_xy[static_cast<size_t>(ny * w + nx)]];
+                }
+              }
+              const size_t i = slot_xy[static_cast<size_t>(y * w + x)];
+              budget[i] = adaptive_budget(neighbourhood_error(std::span(around.data(), n_around)),
+                                          options.noise_threshold);
+            }
+          }
+        }
+        if (adaptive && taken_so_far >= kAdaptivePilotSpp) {
           for (size_t i = 0; i < pixels; ++i) {
-            if (!active[i]) continue;
-            const double error = adaptive_error(moments[i], taken_so_far);
-            if (near[i] && error < options.noise_threshold) active[i] = 0;
-            near[i] = error < kAdaptiveConfirm * options.noise_threshold;
+            if (budget[i] != 0 && taken_so_far >= budget[i]) active[i] = 0;
           }
         }
       }
       if (adaptive && state) {
         for_each_slot(x0, y0, x1, y1, width, [&](size_t i, size_t p) {
           state->moments[p] = moments[i];
-          state->active[p] = active[i];
-          state->near[p] = near[i];
+          state->budget[p] = budget[i];
         });
       }
       const size_t layers = counter.size() + (end % kSampleBlock != 0 ? 1 : 0);
@@ -434,7 +481,7 @@ void render_to_film(const Scene& scene, const Accel& accel, const Integrator& in
     const size_t pixels = static_cast<size_t>(film.width()) * static_cast<size_t>(film.height());
     const bool continues = state && !empty && first == film.end_sample() &&
                            state->end_sample == first && film.first_sample() == 0 &&
-                           state->active.size() == pixels;
+                           state->budget.size() == pixels;
     if (!continues && (first != 0 || !empty)) {
       throw Error("film",
                   "adaptive sampling renders a pixel's samples from 0, continued only with the "
@@ -442,8 +489,8 @@ void render_to_film(const Scene& scene, const Accel& accel, const Integrator& in
                       std::to_string(first));
     }
     if (state && first == 0) {
-      *state = AdaptiveState{0, std::vector<PixelMoments>(pixels), std::vector<uint8_t>(pixels, 1),
-                             std::vector<uint8_t>(pixels, 0)};
+      *state =
+          AdaptiveState{0, std::vector<PixelMoments>(pixels), std::vector<uint32_t>(pixels, 0)};
     }
   }
   if (empty) film.set_layout(first, first, {});
