@@ -93,8 +93,9 @@ void add_scene_flags(CLI::App& app, JobSettings& flags) {
       ->check(rule("--threads"));
   app.add_option("--integrator", flags.integrator,
                  "lab (the lab's shading: direct light, a shadow ray and a constant indirect term, "
-                 "one ray through each pixel corner) or path (unbiased path tracing with "
-                 "next-event estimation and MIS); default: the scene's (lab for cornell and "
+                 "one ray through each pixel corner), path (unbiased path tracing with "
+                 "next-event estimation and MIS) or bdpt (bidirectional path tracing with light "
+                 "tracing, for caustics; docs/BDPT.md); default: the scene's (lab for cornell and "
                  "terrain:*, path for cornell-area, mesh files and scene files that do not say)")
       ->type_name("NAME")
       ->check(rule("--integrator"));
