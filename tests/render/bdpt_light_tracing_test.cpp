@@ -13,6 +13,7 @@
 #include <random>
 #include <vector>
 
+#include "mean_and_error.h"
 #include "tritrace/accel/bvh/bvh_accel.h"
 #include "tritrace/error.h"
 #include "tritrace/render/bdpt_integrator.h"
@@ -75,30 +76,9 @@ TEST(SplatBuffer, RoundingIsUnbiased) {
   EXPECT_EQ(buffer.raw(0, 0)[2], 0u);
 }
 
-// The mean of K renders' image means and its standard error from their spread.
-struct MeanAndError {
-  double mean = 0.0, error = 0.0;
-};
-template <typename Render>
-MeanAndError mean_of(int k, Render&& render_one) {
-  double sum = 0.0, sum2 = 0.0;
-  for (int i = 0; i < k; ++i) {
-    const double m = render_one(i);
-    sum += m;
-    sum2 += m * m;
-  }
-  const double mean = sum / k;
-  return {mean, std::sqrt(std::max(0.0, sum2 / k - mean * mean) / (k - 1.0))};
-}
-
-void expect_same_mean(MeanAndError a, MeanAndError b, double power) {
-  const double error = std::sqrt(a.error * a.error + b.error * b.error);
-  std::printf("  %.6f +- %.6f vs %.6f +- %.6f (z %.2f)\n", a.mean, a.error, b.mean, b.error,
-              (a.mean - b.mean) / error);
-  EXPECT_GT(b.mean, 0.0);
-  EXPECT_LT(std::abs(a.mean - b.mean), 4.0 * error);
-  EXPECT_LT(error, power * b.mean);
-}
+using testing_mc::expect_same_mean;
+using testing_mc::mean_of;
+using testing_mc::MeanAndError;
 
 // Each light tracing strategy (s, 1) alone, unweighted, estimates every path of s + 1 vertices
 // (s - 1 bounces) on the diffuse cornell-area: the path tracer's image at --max-depth s - 1 less

@@ -5,6 +5,7 @@
 // light leaves through delta refractions: the adjoint's classic 1/eta^2 mistake would show), the
 // strategies against each other (each alone, unweighted, estimates the same paths; weighted, they
 // add up to the whole image), and images independent of threads and tiles.
+#include "mean_and_error.h"
 #include "tritrace/render/bdpt_integrator.h"
 
 #include <gtest/gtest.h>
@@ -165,33 +166,16 @@ TEST(Bdpt, BitIdenticalForAnyThreadCountAndTileSize) {
   }
 }
 
+using testing_mc::expect_same_mean;
+using testing_mc::MeanAndError;
+
 // The mean of K independent renders' image means (seeds seed, seed + 1, ...) with its standard
 // error from their spread.
-struct MeanAndError {
-  double mean = 0.0, error = 0.0;
-};
 MeanAndError mean_of_renders(const Scene& scene, const Accel& accel, const Integrator& integrator,
                              uint32_t spp, uint64_t seed, int k) {
-  double sum = 0.0, sum2 = 0.0;
-  for (int i = 0; i < k; ++i) {
-    const double m =
-        luminance_mean(render(scene, accel, integrator, {.spp = spp, .seed = seed + i}));
-    sum += m;
-    sum2 += m * m;
-  }
-  const double mean = sum / k;
-  return {mean, std::sqrt(std::max(0.0, sum2 / k - mean * mean) / (k - 1.0))};
-}
-
-// Two estimates agree within four combined standard errors, and the test has power: the combined
-// error is below `power` times the mean.
-void expect_same_mean(MeanAndError a, MeanAndError b, double power) {
-  const double error = std::sqrt(a.error * a.error + b.error * b.error);
-  std::printf("  %.6f +- %.6f vs %.6f +- %.6f (z %.2f)\n", a.mean, a.error, b.mean, b.error,
-              (a.mean - b.mean) / error);
-  EXPECT_GT(b.mean, 0.0);
-  EXPECT_LT(std::abs(a.mean - b.mean), 4.0 * error);
-  EXPECT_LT(error, power * b.mean);
+  return testing_mc::mean_of(k, [&](int i) {
+    return luminance_mean(render(scene, accel, integrator, {.spp = spp, .seed = seed + i}));
+  });
 }
 
 // --max-depth means what it means for the path tracer: 0 is the emitters the camera sees (the

@@ -1,0 +1,41 @@
+// Test helpers for Monte Carlo agreement checks: the mean of K independent estimates with its
+// standard error from their spread, and a check that two such means agree.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace tritrace::testing_mc {
+
+struct MeanAndError {
+  double mean = 0.0, error = 0.0;
+};
+
+// The mean of estimate(0), ..., estimate(k - 1) and its standard error.
+template <typename Estimate>
+MeanAndError mean_of(int k, Estimate&& estimate) {
+  double sum = 0.0, sum2 = 0.0;
+  for (int i = 0; i < k; ++i) {
+    const double m = estimate(i);
+    sum += m;
+    sum2 += m * m;
+  }
+  const double mean = sum / k;
+  return {mean, std::sqrt(std::max(0.0, sum2 / k - mean * mean) / (k - 1.0))};
+}
+
+// Two estimates agree within four combined standard errors, and the test has power: the combined
+// error is below `power` times the mean.
+inline void expect_same_mean(MeanAndError a, MeanAndError b, double power) {
+  const double error = std::sqrt(a.error * a.error + b.error * b.error);
+  std::printf("  %.6f +- %.6f vs %.6f +- %.6f (z %.2f)\n", a.mean, a.error, b.mean, b.error,
+              (a.mean - b.mean) / error);
+  EXPECT_GT(b.mean, 0.0);
+  EXPECT_LT(std::abs(a.mean - b.mean), 4.0 * error);
+  EXPECT_LT(error, power * b.mean);
+}
+
+}  // namespace tritrace::testing_mc
