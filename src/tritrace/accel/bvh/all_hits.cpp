@@ -116,7 +116,10 @@ uint32_t crossings_from(const WideBvh& tree, const Ray& ray, const WatertightRay
         ref = node.child[std::countr_zero(mask)];
         for (mask &= mask - 1; mask; mask &= mask - 1) {
           assert(sp < kStackSize);
-          stack[sp++] = node.child[std::countr_zero(mask)];
+          const uint32_t child = node.child[std::countr_zero(mask)];
+          // Every stacked child will be visited: fetch it while the first is traversed.
+          prefetch(tree, child);
+          stack[sp++] = child;
         }
         continue;
       }
