@@ -316,3 +316,30 @@ def test_bad_rays_for_all_hits_raise_value_error_naming_the_argument():
             query(np.zeros(3), [0, 0, 1], tmax=np.nan)
         with pytest.raises(ValueError, match="^directions: must have shape"):
             query(np.zeros(3), [0, 1])
+
+
+def test_threads_query_while_another_adds():
+    import threading
+    scene = tritrace.QueryScene()
+    scene.add(*grid_box(2))
+    rng = np.random.default_rng(9)
+    origins = rng.uniform(0.1, 1.9, (20000, 3)).astype(np.float32)   # inside the box
+    directions = rng.normal(size=(20000, 3)).astype(np.float32)
+    failures = []
+
+    def query():
+        for _ in range(10):
+            counts = scene.count_intersections(origins, directions)
+            hits = scene.intersect(origins, directions)
+            if not (np.all(counts == 1) and np.all(hits["geometry_ids"] == 0)):
+                failures.append("a query saw a wrong answer")
+
+    threads = [threading.Thread(target=query) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for k in range(20):  # far from the box: no answer above changes
+        scene.add(*unit_quad(100 + k))
+    for t in threads:
+        t.join()
+    assert not failures
+    assert scene.geometry_count == 21
