@@ -32,7 +32,6 @@ using bvh::TriangleBlock;
 using bvh::WideBvh;
 using bvh::WideNode;
 
-using bvh::kFarScale;
 using bvh::kStackSize;
 
 using bvh::offer;
