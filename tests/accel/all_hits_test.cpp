@@ -336,6 +336,88 @@ TEST(AllHitsTest, GridBoxCountsEachCrossingOnceThroughEdgesAndVertices) {
   EXPECT_GT(touching, 100u);
 }
 
+// A closed, non-convex solid made of unit voxels: a 3 x 3 x 2 block with a pit in the middle of
+// its top and a notch at one top corner. Its surface is every voxel face with an empty neighbour,
+// each square split along alternating diagonals; integer coordinates.
+bool filled(int x, int y, int z) {
+  if (x < 0 || y < 0 || z < 0 || x > 2 || y > 2 || z > 1) return false;
+  return !(z == 1 && ((x == 1 && y == 1) || (x == 0 && y == 0)));
+}
+
+IndexedMesh notched_block() {
+  IndexedMesh m;
+  std::map<std::array<int, 3>, uint32_t> index;
+  auto vertex = [&](std::array<int, 3> p) {
+    auto [it, added] = index.emplace(p, static_cast<uint32_t>(m.vertices.size()));
+    if (added) m.vertices.emplace_back(p[0], p[1], p[2]);
+    return it->second;
+  };
+  for (int x = -1; x <= 3; ++x) {
+    for (int y = -1; y <= 3; ++y) {
+      for (int z = -1; z <= 2; ++z) {
+        for (int axis = 0; axis < 3; ++axis) {
+          std::array<int, 3> next{x, y, z};
+          ++next[axis];
+          if (filled(x, y, z) == filled(next[0], next[1], next[2])) continue;
+          auto at = [&](int di, int dj) {
+            std::array<int, 3> p = next;  // the face between the two voxels lies at next[axis]
+            p[(axis + 1) % 3] += di;
+            p[(axis + 2) % 3] += dj;
+            return vertex(p);
+          };
+          const uint32_t a = at(0, 0), b = at(1, 0), c = at(1, 1), d = at(0, 1);
+          if ((x + y + z) % 2 == 0) {
+            m.triangles.emplace_back(a, b, c);
+            m.triangles.emplace_back(a, c, d);
+          } else {
+            m.triangles.emplace_back(a, b, d);
+            m.triangles.emplace_back(b, c, d);
+          }
+        }
+      }
+    }
+  }
+  return m;
+}
+
+TEST(AllHitsTest, ParityFromVoxelCentresSaysInsideANonConvexSolid) {
+  const GeometrySet set = set_of(notched_block());
+  // The full block shows 9 + 9 + 4 * 6 = 42 squares; the pit takes one top square and shows its
+  // floor and four walls (+4), the corner notch trades its three squares for three (0): 46.
+  ASSERT_EQ(set.triangle_count(), 2u * 46);
+  std::vector<Ray> rays;
+  std::vector<bool> inside;
+  for (const glm::vec3& d : dyadic_directions()) {
+    for (int x = -1; x <= 3; ++x) {
+      for (int y = -1; y <= 3; ++y) {
+        for (int z = -1; z <= 2; ++z) {
+          rays.push_back(Ray{glm::vec3(x, y, z) + 0.5f, d});
+          inside.push_back(filled(x, y, z));
+        }
+      }
+    }
+  }
+  std::vector<uint32_t> counts(rays.size());
+  bvh::count_intersections(set.tree(), rays, counts);
+  size_t through_edges = 0;  // rays on which the plain kernel hits more triangles than it crosses
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const WatertightRay w = prepare_watertight(rays[i]);
+    uint32_t hits = 0;
+    TriangleHit h;
+    for (size_t t = 0; t < set.triangle_count(); ++t) {
+      hits +=
+          intersect_watertight(w, set.mesh().v0()[t], set.mesh().v1()[t], set.mesh().v2()[t], h);
+    }
+    through_edges += hits > counts[i];
+  }
+  EXPECT_GT(through_edges, rays.size() / 4);
+  for (size_t i = 0; i < rays.size(); ++i) {
+    ASSERT_EQ(counts[i] % 2, inside[i] ? 1u : 0u)
+        << "from (" << rays[i].origin.x << ", " << rays[i].origin.y << ", " << rays[i].origin.z
+        << ") along (" << rays[i].dir.x << ", " << rays[i].dir.y << ", " << rays[i].dir.z << ")";
+  }
+}
+
 TEST(AllHitsTest, CubeCountsOnceThroughItsDiagonalsEdgesAndCorners) {
   const GeometrySet set = set_of(grid_box(1));
   ASSERT_EQ(set.triangle_count(), 12u);
