@@ -94,16 +94,30 @@ int search_radius_arg(const py::object& value) {
   return static_cast<int>(r);
 }
 
+// The sampler that rendered the variance's halves: "sobol" (render()'s default) or
+// "independent".
+SamplerKind sampler_arg(const py::object& value) {
+  if (!PyUnicode_Check(value.ptr()))
+    raise_type_error("sampler: must be a str, got " + type_of(value));
+  const std::string name = value.cast<std::string>();
+  const std::optional<SamplerKind> kind = parse_sampler(name);
+  if (!kind) {
+    throw py::value_error("sampler: must be 'sobol' or 'independent', got '" + name + "'");
+  }
+  return *kind;
+}
+
 }  // namespace
 
 py::array_t<float> denoise_arrays(const py::object& color, const py::object& albedo,
                                   const py::object& normal, const py::object& depth,
                                   const py::object& variance, const py::object& search_radius,
-                                  const py::object& threads) {
+                                  const py::object& sampler, const py::object& threads) {
   int width = 0, height = 0;
   const Image colour = image_arg("color", color, 3, &width, &height, "");
   DenoiseOptions options;
   options.search_radius = search_radius_arg(search_radius);
+  const float overestimate = half_buffer_variance_ratio(sampler_arg(sampler));
   FlagTexts texts;
   texts.add_int("--threads", threads);
   const int thread_count_given = thread_count(texts.parse());
@@ -133,9 +147,10 @@ py::array_t<float> denoise_arrays(const py::object& color, const py::object& alb
   {
     py::gil_scoped_release nogil;
     // What `tritrace denoise` does with an EXR's layers (apps/tritrace/denoise_command.cpp): the
-    // variance layer averaged over 5 x 5 pixels, else the variance estimated from the image.
+    // variance layer averaged over 5 x 5 pixels and divided by the sampler's overestimate, else
+    // the variance estimated from the image.
     const auto run = [&] {
-      const Image v = variance_image ? smooth_variance(*variance_image)
+      const Image v = variance_image ? smooth_variance(*variance_image, 2, overestimate)
                                      : estimate_variance_spatially(colour, albedo_image);
       result = denoise(colour, v, {albedo_image, normal_image, depth_image}, options);
     };

@@ -15,12 +15,13 @@ namespace py = pybind11;
 // `tritrace denoise` averages an EXR's variance layer; None: estimated from the image as
 // `tritrace denoise` does for an EXR without one. A feature left None is left out of the
 // neighbours' weights (and without albedo the colour is filtered as it is, not demodulated).
-// search_radius: 1 to 32, as the CLI's --search-radius; threads: None (all cores) or as
-// render()'s. Checks every argument (ValueError or TypeError naming it), then filters with the
-// GIL released. Returns a new (H, W, 3) float32 array.
+// search_radius: 1 to 32, as the CLI's --search-radius; sampler: "sobol" or "independent", the
+// sampler that rendered the variance (its halves' overestimate divides it); threads: None (all
+// cores) or as render()'s. Checks every argument (ValueError or TypeError naming it), then filters
+// with the GIL released. Returns a new (H, W, 3) float32 array.
 py::array_t<float> denoise_arrays(const py::object& color, const py::object& albedo,
                                   const py::object& normal, const py::object& depth,
                                   const py::object& variance, const py::object& search_radius,
-                                  const py::object& threads);
+                                  const py::object& sampler, const py::object& threads);
 
 }  // namespace tritrace::python

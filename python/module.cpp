@@ -748,7 +748,7 @@ milliseconds, rays, threads: what was rendered and how.)")
 
   m.def("denoise", &denoise_arrays, "color"_a, "albedo"_a = none, "normal"_a = none,
         "depth"_a = none, "variance"_a = none, py::kw_only(), "search_radius"_a = 7,
-        "threads"_a = none,
+        "sampler"_a = "sobol", "threads"_a = none,
         R"(Denoises an image with the built-in feature-guided denoiser, as `tritrace denoise`
 denoises an EXR with the same layers, returning a new float32 (height, width, 3) array.
 
@@ -757,11 +757,13 @@ color: (height, width, 3) linear radiance; albedo and normal: (height, width, 3)
 "albedo", "normal", "depth"), or None to leave that feature out (without albedo the colour is
 not divided by it); variance: (height, width, 3), the variance of each pixel's mean (render()'s
 aovs "variance"), averaged over 5 x 5 pixels as `tritrace denoise` averages an EXR's variance
-layer, or None to estimate it from the image (larger than the truth at edges). So
-denoise(f.image, f.albedo, f.normal, f.depth, f.variance) of a render f is the image
-render(..., denoise=True) returns, bit for bit. Any real dtype (converted once to float32);
-every value must be finite. search_radius: 1 to 32 (a (2r+1)^2 window; larger smooths more
-and takes longer); threads: None (all cores) or a count. The result is the same for any
+layer, or None to estimate it from the image (larger than the truth at edges). sampler: the
+sampler the render used, "sobol" (render()'s default) or "independent": the variance of the
+Sobol sampler's sample halves is about twice the truth and is halved, the independent
+sampler's is taken as it is. So denoise(f.image, f.albedo, f.normal, f.depth, f.variance,
+sampler=s) of a render f with sampler s is the image render(..., denoise=True) returns, bit
+for bit. Any real dtype (converted once to float32); every value must be finite.
+search_radius: 1 to 32 (a (2r+1)^2 window; larger smooths more and takes longer); threads: None (all cores) or a count. The result is the same for any
 thread count. Releases the GIL while filtering. Bad shapes or values raise ValueError naming
 the argument, wrong types TypeError.)");
 

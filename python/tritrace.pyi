@@ -376,6 +376,7 @@ def denoise(
     variance: Optional[npt.ArrayLike] = None,
     *,
     search_radius: int = 7,
+    sampler: Literal["sobol", "independent"] = "sobol",
     threads: Optional[int] = None,
 ) -> npt.NDArray[np.float32]:
     """Denoises an image with the built-in feature-guided denoiser, as `tritrace denoise`
@@ -387,8 +388,11 @@ def denoise(
     is not divided by it). variance: (height, width, 3), the variance of each pixel's mean
     (render()'s aovs "variance"), averaged over 5 x 5 pixels as `tritrace denoise` averages an
     EXR's variance layer; None estimates it from the image (larger than the truth at edges).
-    So denoise(f.image, f.albedo, f.normal, f.depth, f.variance) of a render f is the image
-    render(..., denoise=True) returns, bit for bit. Any real dtype (converted once to float32);
+    sampler: the sampler the render used, "sobol" (render()'s default) or "independent": the
+    variance of the Sobol sampler's sample halves is about twice the truth and is halved, the
+    independent sampler's is taken as it is. So denoise(f.image, f.albedo, f.normal, f.depth,
+    f.variance, sampler=s) of a render f with sampler s is the image render(..., denoise=True)
+    returns, bit for bit. Any real dtype (converted once to float32);
     every value must be finite. search_radius: 1 to 32 (a (2r+1)^2 window; larger smooths more
     and takes longer). threads: None (all cores) or a count; the result is the same for any.
     Releases the GIL while filtering. Bad shapes or values raise ValueError naming the

@@ -320,7 +320,8 @@ int run_bench(const BenchArgs& args) {
             if (args.denoise) {
               const auto start = std::chrono::steady_clock::now();
               // What render --denoise runs: the variance layer smoothed and corrected, both passes.
-              const Image denoised = denoise_film_image(frame.image, frame.aovs);
+              const Image denoised =
+                  denoise_film_image(frame.image, frame.aovs, job.options().sampler);
               const std::chrono::duration<double, std::milli> took =
                   std::chrono::steady_clock::now() - start;
               if (i > 0) denoise_ms.push_back(took.count());

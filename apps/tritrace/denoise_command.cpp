@@ -6,6 +6,8 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "flags/flag_values.h"
@@ -56,7 +58,8 @@ int run_denoise(const DenoiseArgs& args) {
       {"Z", "Z", "Z"},
       {"variance.R", "variance.G", "variance.B"},
   }};
-  const std::vector<Image> images = read_exr_layers(args.input, layers);
+  std::map<std::string, std::string> attributes;
+  const std::vector<Image> images = read_exr_layers(args.input, layers, &attributes);
   const char* missing[4] = {"colour channels R, G, B", "albedo layer (albedo.R, .G, .B)",
                             "normal layer (normal.X, .Y, .Z)", "depth channel Z"};
   for (int l = 0; l < 4; ++l) {
@@ -67,10 +70,13 @@ int run_denoise(const DenoiseArgs& args) {
   }
   const Image& colour = images[0];
   const bool has_variance = !images[4].pixels().empty();
-  // With the render's variance layer, the render's own denoising (render --denoise); without,
-  // the variance estimated from the image.
-  const Image variance =
-      has_variance ? smooth_variance(images[4]) : estimate_variance_spatially(colour, images[1]);
+  // With the render's variance layer, the render's own denoising (render --denoise), its
+  // overestimate that of the sampler the file records (Sobol when it records none, as tritrace
+  // wrote before it recorded the sampler); without, the variance estimated from the image.
+  const SamplerKind sampler = recorded_sampler(attributes, args.input);
+  const Image variance = has_variance
+                             ? smooth_variance(images[4], 2, half_buffer_variance_ratio(sampler))
+                             : estimate_variance_spatially(colour, images[1]);
   DenoiseOptions options;
   options.search_radius = args.search_radius;
   RenderedImage rendered{denoise(colour, variance, {images[1], images[2], images[3]}, options),
@@ -79,9 +85,11 @@ int run_denoise(const DenoiseArgs& args) {
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (!args.quiet) {
+    const std::string from_layer =
+        "from its layer, " + std::string(sampler_name(sampler)) + " sampler";
     std::printf("denoised %s (%dx%d, variance %s) in %.1f ms to %s\n", args.input.c_str(),
                 colour.width(), colour.height(),
-                has_variance ? "from its layer" : "estimated from the image", ms,
+                has_variance ? from_layer.c_str() : "estimated from the image", ms,
                 args.output.c_str());
   }
   return 0;

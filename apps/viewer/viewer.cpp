@@ -633,7 +633,9 @@ class Viewer {
 
   // The film denoised with its own features and the variance of its sample halves, exactly as
   // `tritrace render --denoise` denoises its film.
-  Image denoised_frame() const { return denoise_film_image(film_.resolve(), film_.resolve_aovs()); }
+  Image denoised_frame() const {
+    return denoise_film_image(film_.resolve(), film_.resolve_aovs(), render_options_.sampler);
+  }
 
   // How image_ becomes bytes, in the window as in files: as `tritrace render` writes it.
   ImageEncoding encoding() const { return path_ ? ImageEncoding::srgb() : ImageEncoding::lab(); }

@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -2156,6 +2157,58 @@ TEST_F(CliTest, RenderDenoiseIsDenoiseOfTheRendersLayers) {
   EXPECT_NE(ReadFile(work_ / "direct.pfm"), ReadFile(work_ / "noisy.pfm"));
   const RunResult lab = Run({"render", "--denoise", "-o", "lab.png"});
   ExpectErrorLine(lab, 2, "--denoise", "applies to the path tracer");
+}
+
+// The EXR records the path tracer's sampler (tritrace.sampler), and `tritrace denoise` divides the
+// variance layer by that sampler's overestimate, so a render with --sampler independent denoises
+// later as render --denoise did. A file without the attribute (as tritrace wrote before) is taken
+// as Sobol: its layers rewritten without any attribute denoise as the Sobol render's file does,
+// and not as the independent one's. Another value is refused naming the file.
+TEST_F(CliTest, DenoiseReadsTheSamplerTheFileRecords) {
+  const std::vector<std::string> scene = {"--scene",  "cornell-area", "--width", "32",
+                                          "--height", "24",           "--spp",   "8"};
+  const std::array<std::array<std::string, 3>, 5> layers = {
+      {{"R", "G", "B"},
+       {"albedo.R", "albedo.G", "albedo.B"},
+       {"normal.X", "normal.Y", "normal.Z"},
+       {"Z", "Z", "Z"},
+       {"variance.R", "variance.G", "variance.B"}}};
+  for (const char* sampler : {"sobol", "independent"}) {
+    const std::string name(sampler);
+    std::vector<std::string> args = scene;
+    for (const char* a : {"--sampler", sampler}) args.push_back(a);
+    std::vector<std::string> denoised = args;
+    denoised.push_back("--denoise");
+    RenderQuietly(denoised, name + "_direct.pfm");
+    for (const char* a : {"--aovs", "albedo,normal,depth,variance"}) args.push_back(a);
+    RenderQuietly(args, name + ".exr");
+    EXPECT_EQ(tritrace::testing::read_exr_channels((work_ / (name + ".exr")).string())
+                  .strings.at("tritrace.sampler"),
+              name);
+    const RunResult r = Run({"denoise", name + ".exr", "-o", name + "_later.pfm"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("variance from its layer, " + name + " sampler"), std::string::npos)
+        << r.out;
+    EXPECT_EQ(ReadFile(work_ / (name + "_direct.pfm")), ReadFile(work_ / (name + "_later.pfm")))
+        << name;
+    // The same layers with no header attributes.
+    const std::vector<tritrace::Image> in =
+        tritrace::read_exr_layers((work_ / (name + ".exr")).string(), layers);
+    tritrace::write_exr(in[0], (work_ / (name + "_old.exr")).string(),
+                        {in[1], in[2], in[3], in[4], tritrace::Image()});
+    ASSERT_EQ(Run({"denoise", name + "_old.exr", "-o", name + "_old.pfm", "-q"}).exit_code, 0);
+  }
+  EXPECT_EQ(ReadFile(work_ / "sobol_old.pfm"), ReadFile(work_ / "sobol_later.pfm"));
+  EXPECT_NE(ReadFile(work_ / "independent_old.pfm"), ReadFile(work_ / "independent_later.pfm"));
+
+  const std::vector<tritrace::Image> in =
+      tritrace::read_exr_layers((work_ / "sobol.exr").string(), layers);
+  const std::vector<tritrace::ExrAttribute> halton = {{"tritrace.sampler", std::string("halton")}};
+  tritrace::write_exr(in[0], (work_ / "halton.exr").string(),
+                      {in[1], in[2], in[3], in[4], tritrace::Image()},
+                      tritrace::ExrPixelType::kFloat, halton);
+  ExpectErrorLine(Run({"denoise", "halton.exr", "-o", "h.pfm"}), 1, "halton.exr",
+                  "attribute tritrace.sampler is 'halton', not a sampler (sobol or independent)");
 }
 
 // An EXR of `side` x `side` pixels whose channels hold the values `fill` gives each.

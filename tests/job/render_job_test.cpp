@@ -5,8 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include "tritrace/error.h"
 #include "tritrace/render/make_integrator.h"
@@ -405,11 +407,97 @@ TEST(RenderJob, DenoisedRenderIsTheDenoiserOnTheFilmsFeatures) {
   RenderJob with_aovs(plain, load_job_scene(plain));
   with_aovs.prepare();
   const RenderedImage noisy = with_aovs.render();
-  EXPECT_TRUE(same_pixels(got.image, denoise_film_image(noisy.image, noisy.aovs)));
+  EXPECT_TRUE(
+      same_pixels(got.image, denoise_film_image(noisy.image, noisy.aovs, SamplerKind::kSobol)));
   EXPECT_FALSE(same_pixels(got.image, noisy.image));
   EXPECT_TRUE(same_pixels(got.aovs.depth, noisy.aovs.depth));
   EXPECT_EQ(got.aovs.albedo.width(), 0);
   EXPECT_EQ(got.aovs.variance.width(), 0);
+}
+
+// The denoiser divides the variance AOV by the overestimate of the sampler's halves: 2 for Sobol,
+// 1 for independent samples. Halving the AOV of a Sobol film's denoising gives the independent
+// one's bit for bit (the 5 x 5 mean and a factor of 2 commute exactly in floats), and a job with
+// --sampler independent --denoise denoises with its own sampler's factor.
+TEST(RenderJob, TheDenoiserDividesTheVarianceByTheSamplersOverestimate) {
+  JobSettings plain = small("cornell-area", "8");
+  plain.aovs = "albedo,normal,depth,variance";
+  plain.sampler = "independent";
+  RenderJob with_aovs(plain, load_job_scene(plain));
+  with_aovs.prepare();
+  const RenderedImage noisy = with_aovs.render();
+  AovImages halved = noisy.aovs;
+  for (int y = 0; y < halved.variance.height(); ++y) {
+    for (int x = 0; x < halved.variance.width(); ++x) halved.variance.at(x, y) *= 0.5f;
+  }
+  const Image sobol = denoise_film_image(noisy.image, noisy.aovs, SamplerKind::kSobol);
+  const Image independent = denoise_film_image(noisy.image, noisy.aovs, SamplerKind::kIndependent);
+  EXPECT_TRUE(
+      same_pixels(sobol, denoise_film_image(noisy.image, halved, SamplerKind::kIndependent)));
+  EXPECT_FALSE(same_pixels(sobol, independent));
+
+  JobSettings s = plain;
+  s.aovs = "";
+  s.denoise = true;
+  RenderJob job(s, load_job_scene(s));
+  job.prepare();
+  EXPECT_TRUE(same_pixels(job.render().image, independent));
+}
+
+// Mirrors Denoiser.HalfBufferVarianceOfTheSobolSamplerOverestimatesTheVariance at the job level:
+// with the independent sampler the variance the denoiser is given (the AOV's 5 x 5 mean, not
+// divided) is the variance of a pixel's mean over independent seeds. Per seed r, X_r = sum over
+// the interior pixels (whose 5 x 5 window lies inside the image) and channels of the given
+// variance minus the 5 x 5 mean of R / (R - 1) (m_r - mean m)^2 (computed here); their mean must
+// be zero within 4 standard errors. With Sobol's factor of 2 applied it is half and fails.
+TEST(RenderJob, TheDenoisersVarianceForTheIndependentSamplerIsTheSpreadOverSeeds) {
+  constexpr int kSeeds = 40, kW = 24, kH = 16;
+  std::vector<Image> means, given;
+  for (int r = 0; r < kSeeds; ++r) {
+    JobSettings s = small("cornell-area", "16");
+    s.aovs = "variance";
+    s.sampler = "independent";
+    s.seed = std::to_string(r + 1);
+    RenderJob job(s, load_job_scene(s));
+    job.prepare();
+    const RenderedImage out = job.render();
+    means.push_back(out.image);
+    given.push_back(film_denoise_variance(out.aovs, SamplerKind::kIndependent));
+  }
+  Image average(kW, kH);
+  for (const Image& m : means) {
+    for (int y = 0; y < kH; ++y) {
+      for (int x = 0; x < kW; ++x) average.at(x, y) += m.at(x, y) / static_cast<float>(kSeeds);
+    }
+  }
+  std::vector<double> x(kSeeds, 0.0);
+  double estimated = 0.0, observed = 0.0;
+  for (int r = 0; r < kSeeds; ++r) {
+    for (int y = 2; y < kH - 2; ++y) {
+      for (int px = 2; px < kW - 2; ++px) {
+        for (int c = 0; c < 3; ++c) {
+          double spread = 0.0;
+          for (int dy = -2; dy <= 2; ++dy) {
+            for (int dx = -2; dx <= 2; ++dx) {
+              const double d = means[r].at(px + dx, y + dy)[c] - average.at(px + dx, y + dy)[c];
+              spread += d * d * kSeeds / (kSeeds - 1.0) / 25.0;
+            }
+          }
+          x[r] += given[r].at(px, y)[c] - spread;
+          estimated += given[r].at(px, y)[c] / kSeeds;
+          observed += spread / kSeeds;
+        }
+      }
+    }
+  }
+  double mean_x = 0.0, var_x = 0.0;
+  for (double v : x) mean_x += v / kSeeds;
+  for (double v : x) var_x += (v - mean_x) * (v - mean_x) / (kSeeds - 1.0);
+  const double se = std::sqrt(var_x / kSeeds);
+  EXPECT_GT(observed, 0.0);
+  EXPECT_LT(std::abs(mean_x), 4.0 * se)
+      << "estimated " << estimated << ", observed " << observed << ", se " << se;
+  EXPECT_LT(std::abs(estimated / observed - 1.0), 0.25) << "and close as a ratio";
 }
 
 TEST(RenderJob, NoiseThresholdIsForWholePathRendersOrTileParts) {

@@ -56,6 +56,22 @@ def test_render_with_denoise_is_denoise_of_the_renders_arrays():
     np.testing.assert_array_equal(plain.image, tritrace.render(scene, **args).image)
 
 
+def test_sampler_keyword_matches_render_with_that_sampler():
+    # The independent sampler's half-buffer variance is taken as it is, Sobol's halved: each
+    # render(denoise=True) is denoise(...) with its own sampler, and not with the other.
+    scene = tritrace.Scene.builtin("cornell-area")
+    args = dict(SIZE, spp=8, seed=5, sampler="independent")
+    plain = tritrace.render(scene, aovs=("albedo", "normal", "depth", "variance"), **args)
+    denoised = tritrace.render(scene, denoise=True, **args)
+    inputs = (plain.image, plain.albedo, plain.normal, plain.depth, plain.variance)
+    np.testing.assert_array_equal(tritrace.denoise(*inputs, sampler="independent"), denoised.image)
+    assert not np.array_equal(tritrace.denoise(*inputs), denoised.image)
+    # Sobol's factor of 2 on the variance is the independent sampler's on half the variance.
+    halved = (plain.image, plain.albedo, plain.normal, plain.depth, plain.variance * 0.5)
+    np.testing.assert_array_equal(tritrace.denoise(*inputs, sampler="sobol"),
+                                  tritrace.denoise(*halved, sampler="independent"))
+
+
 def test_the_result_does_not_depend_on_the_thread_count(capfd):
     scene = tritrace.Scene.builtin("cornell-area")
     f = tritrace.render(scene, aovs=("albedo", "normal", "depth", "variance"), spp=4, **SIZE)
@@ -244,6 +260,10 @@ def test_bad_options_raise_naming_the_option():
     for radius in (1.5, True, "3"):
         with pytest.raises(TypeError, match=r"^search_radius: must be an int, got "):
             tritrace.denoise(colour, search_radius=radius)
+    with pytest.raises(ValueError, match=r"^sampler: must be 'sobol' or 'independent', got 'halton'"):
+        tritrace.denoise(colour, sampler="halton")
+    with pytest.raises(TypeError, match=r"^sampler: must be a str, got "):
+        tritrace.denoise(colour, sampler=None)
     with pytest.raises(ValueError, match=r"^threads: "):
         tritrace.denoise(colour, threads=0)
     with pytest.raises(TypeError, match=r"^threads: "):

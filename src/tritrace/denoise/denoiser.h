@@ -13,6 +13,7 @@
 #pragma once
 
 #include "tritrace/image/image.h"
+#include "tritrace/math/random.h"
 
 namespace tritrace {
 
@@ -104,11 +105,20 @@ struct DenoiseFeatures {
 // is the middle of what cornell-area measured.
 inline constexpr float kSobolHalfBufferVarianceRatio = 2.0f;
 
+// The overestimate of the half-buffer variance for the sampler that took the samples:
+// kSobolHalfBufferVarianceRatio for Sobol, 1 for independent samples, whose halves are
+// independent so that (a - b)^2 / 4 is unbiased (test
+// HalfBufferVarianceOfTheSobolSamplerOverestimatesTheVariance).
+constexpr float half_buffer_variance_ratio(SamplerKind sampler) {
+  return sampler == SamplerKind::kSobol ? kSobolHalfBufferVarianceRatio : 1.0f;
+}
+
 // The renderer's per-pixel variance AOV (one degree of freedom per pixel) averaged over the
 // (2 radius + 1)^2 pixels around each (clamped at the border), as variance_from_halves averages
 // its estimates, and divided by `overestimate` (kSobolHalfBufferVarianceRatio for the Sobol
-// sampler's halves, 1 for independent halves) to give the variance of the mean that denoise()
-// expects. `render --denoise` and `tritrace denoise` both call it with the defaults.
+// sampler's halves, 1 for independent halves: half_buffer_variance_ratio) to give the variance of
+// the mean that denoise() expects. `render --denoise` and `tritrace denoise` both call it with
+// radius 2 and the ratio of the sampler the render used.
 [[nodiscard]] Image smooth_variance(const Image& variance, int radius = 2,
                                     float overestimate = kSobolHalfBufferVarianceRatio);
 

@@ -15,6 +15,7 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
+#include <ImfStringAttribute.h>
 #include <openexr.h>
 #include <cmath>
 
@@ -311,7 +312,8 @@ Image read_image_float(const std::string& path) {
 }
 
 std::vector<Image> read_exr_layers(const std::string& path,
-                                   std::span<const std::array<std::string, 3>> layers) {
+                                   std::span<const std::array<std::string, 3>> layers,
+                                   std::map<std::string, std::string>* strings) {
   if (!std::filesystem::is_regular_file(path)) throw Error(path, "cannot read image: no such file");
   const std::vector<uint8_t> bytes = read_file_bytes(path);
   check_exr_header(bytes, path);
@@ -321,6 +323,14 @@ std::vector<Image> read_exr_layers(const std::string& path,
     const Imath::Box2i window = file.header().dataWindow();
     const int w = window.max.x - window.min.x + 1, h = window.max.y - window.min.y + 1;
     check_image_sides(w, h, path);
+    if (strings) {
+      strings->clear();
+      for (auto a = file.header().begin(); a != file.header().end(); ++a) {
+        if (const auto* text = dynamic_cast<const Imf::StringAttribute*>(&a.attribute())) {
+          (*strings)[a.name()] = text->value();
+        }
+      }
+    }
     const Imf::ChannelList& channels = file.header().channels();
     const size_t pixels = static_cast<size_t>(w) * static_cast<size_t>(h);
     const ptrdiff_t origin = static_cast<ptrdiff_t>(window.min.y) * w + window.min.x;

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <span>
 #include <string>
@@ -81,9 +82,11 @@ inline constexpr std::string_view kFloatImageExtensions = ".hdr or .exr";
 // depth "Z" names it three times), read as 32-bit floats into one image per layer, in the order
 // asked. A layer none of whose channels the file has comes back empty (0 x 0). Throws
 // Error(path, reason) for an unreadable file, a layer with only some of its channels (naming the
-// missing one), or a non-finite value (naming the channel and pixel). For `tritrace denoise`.
+// missing one), or a non-finite value (naming the channel and pixel). For `tritrace denoise`,
+// which also asks for the header's string attributes (name to value) through `strings`.
 std::vector<Image> read_exr_layers(const std::string& path,
-                                   std::span<const std::array<std::string, 3>> layers);
+                                   std::span<const std::array<std::string, 3>> layers,
+                                   std::map<std::string, std::string>* strings = nullptr);
 
 // Writes a Radiance HDR file (RGBE, run-length encoded, through stb_image_write), atomically.
 void write_radiance_hdr(const Image& image, const std::string& path);

@@ -215,6 +215,9 @@ std::vector<ExrAttribute> render_attributes(const RenderRecord& record) {
   if (record.noise_threshold > 0.0f) {
     out.push_back({"tritrace.noiseThreshold", record.noise_threshold});
   }
+  if (record.sampler) {
+    out.push_back({"tritrace.sampler", std::string(sampler_name(*record.sampler))});
+  }
   return out;
 }
 
@@ -236,6 +239,12 @@ RenderRecord merged_record(const RenderIdentity& identity, const Film& film, dou
     r.noise_threshold = std::strtof(identity.settings.c_str() + at + key.size(), nullptr);
     r.mean_spp = film_mean_spp(film);
   }
+  const std::string sampler_key = " sampler=";
+  if (const size_t at = identity.settings.find(sampler_key); at != std::string::npos) {
+    const size_t from = at + sampler_key.size();
+    r.sampler = parse_sampler(
+        std::string_view(identity.settings).substr(from, identity.settings.find(' ', from) - from));
+  }
   return r;
 }
 
@@ -252,11 +261,24 @@ void write_render(const RenderedImage& rendered, const std::string& file, bool p
   }
 }
 
-Image denoise_film_image(const Image& colour, const AovImages& aovs) {
+Image film_denoise_variance(const AovImages& aovs, SamplerKind sampler) {
   // The half-buffer variance of one pixel has one degree of freedom: averaged over 5 x 5 pixels
   // it is steady enough to weigh neighbours by (docs/DENOISING.md).
-  const Image variance = smooth_variance(aovs.variance, 2);
-  return denoise(colour, variance, {aovs.albedo, aovs.normal, aovs.depth});
+  return smooth_variance(aovs.variance, 2, half_buffer_variance_ratio(sampler));
+}
+
+Image denoise_film_image(const Image& colour, const AovImages& aovs, SamplerKind sampler) {
+  return denoise(colour, film_denoise_variance(aovs, sampler),
+                 {aovs.albedo, aovs.normal, aovs.depth});
+}
+
+SamplerKind recorded_sampler(const std::map<std::string, std::string>& attributes,
+                             const std::string& file) {
+  const auto it = attributes.find("tritrace.sampler");
+  if (it == attributes.end()) return SamplerKind::kSobol;
+  if (const std::optional<SamplerKind> kind = parse_sampler(it->second)) return *kind;
+  throw Error(file, "attribute tritrace.sampler is '" + it->second +
+                        "', not a sampler (sobol or independent)");
 }
 
 RenderJob::RenderJob(const JobSettings& settings, LoadedScene loaded)
@@ -408,7 +430,7 @@ RenderedImage RenderJob::resolve(const Film& film) const {
   RenderedImage out{film.resolve(), film.resolve_aovs()};
   if (settings_.denoise) {
     const auto start = std::chrono::steady_clock::now();
-    out.image = denoise_film_image(out.image, out.aovs);
+    out.image = denoise_film_image(out.image, out.aovs, options_.sampler);
     out.denoise_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   }
@@ -435,6 +457,7 @@ RenderRecord RenderJob::record(const RenderStats& stats, double seconds) const {
   r.render_seconds = seconds;
   r.time_limit = time_limit_seconds(settings_).value_or(0.0);
   r.noise_threshold = path() ? options_.noise_threshold : 0.0f;
+  if (path()) r.sampler = options_.sampler;
   return r;
 }
 

@@ -5,6 +5,7 @@
 // Front ends add only what is theirs: terminal output, ranks, a window, timing loops, arrays.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -17,6 +18,7 @@
 #include "tritrace/image/image.h"
 #include "tritrace/image/image_io.h"
 #include "tritrace/job/job_settings.h"
+#include "tritrace/math/random.h"
 #include "tritrace/render/film.h"
 #include "tritrace/render/integrator.h"
 #include "tritrace/render/renderer.h"
@@ -42,12 +44,15 @@ struct RenderRecord {
   double time_limit = 0.0;       // --time-limit's seconds; 0: none
   float noise_threshold = 0.0f;  // --noise-threshold; 0: none
   RenderStop stop = RenderStop::kSpp;
+  // The path tracer's sampler (the denoiser's variance factor depends on it); none for the lab.
+  std::optional<SamplerKind> sampler;
 };
 
 // The record as EXR header attributes: tritrace.spp (int), tritrace.meanSpp (float, adaptive),
 // tritrace.renderSeconds and tritrace.denoiseSeconds (float, the latter with --denoise),
 // tritrace.timeLimit and tritrace.noiseThreshold (float, when set), tritrace.stoppedBy (string:
-// "spp", "converged" or "time limit"). Only the two times differ between runs of the same render.
+// "spp", "converged" or "time limit"), tritrace.sampler (string: "sobol" or "independent", path
+// renders). Only the two times differ between runs of the same render.
 // None for a record of no render (spp 0: tritrace denoise's).
 std::vector<ExrAttribute> render_attributes(const RenderRecord& record);
 
@@ -68,9 +73,19 @@ struct RenderedImage {
 };
 
 // The denoiser as a render runs it on its film's image: the variance AOV (from the halves of the
-// samples) averaged over 5 x 5 pixels, albedo, normal and depth as features. `tritrace denoise`
-// runs the same on an EXR with those layers, so a merged render denoises as one process would.
-Image denoise_film_image(const Image& colour, const AovImages& aovs);
+// samples) averaged over 5 x 5 pixels and divided by half_buffer_variance_ratio(sampler), the
+// overestimate of the halves of the sampler that took the samples; albedo, normal and depth as
+// features. `tritrace denoise` runs the same on an EXR with those layers (the sampler from its
+// tritrace.sampler attribute), so a merged render denoises as one process would.
+Image denoise_film_image(const Image& colour, const AovImages& aovs, SamplerKind sampler);
+// The variance denoise_film_image gives the denoiser: the variance AOV averaged over 5 x 5 pixels
+// over half_buffer_variance_ratio(sampler).
+Image film_denoise_variance(const AovImages& aovs, SamplerKind sampler);
+
+// The sampler an EXR's tritrace.sampler attribute names; Sobol when it has none (what tritrace
+// wrote before it recorded the sampler, and its default). Error(file, reason) for another value.
+SamplerKind recorded_sampler(const std::map<std::string, std::string>& attributes,
+                             const std::string& file);
 
 // The settings of a command that writes an image it did not render (merge, denoise): its output
 // and exposure, with the output checked as render checks its own (check_output) and its folder
