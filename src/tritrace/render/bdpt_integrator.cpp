@@ -10,6 +10,7 @@
 #include <cassert>
 #include <cmath>
 #include <glm/geometric.hpp>
+#include <mutex>
 #include <span>
 #include <string>
 #include <utility>
@@ -61,6 +62,11 @@ struct Vertex {
   mutable glm::vec3 start[2]{};
   float pdf_fwd = 0.0f;
   float pdf_rev = 0.0f;
+  // The MIS weights' partial sum up to this vertex (BdptTracer::prepare_weights): over the
+  // strategies that move the connection to this vertex or one nearer its subpath's start, the
+  // ratio of each one's density to that of the connection just past this vertex. Read only where
+  // this vertex's pdf_rev no longer depends on the connection (three or more vertices from it).
+  float mis_sum = 0.0f;
   float env_pdf_pos = 0.0f;  // an environment vertex's density per area across w_env
   uint32_t prim = 0;
   float u = 0.0f, v = 0.0f;  // barycentrics on the triangle
@@ -244,7 +250,25 @@ class BdptTracer {
   // Light tracing: the (s, 1) connections of the light subpath's vertices to the camera.
   void splat_light_subpath(Vertex* light, Vertex* camera, int nl, Sampler& sampler,
                            SplatBuffer& splats);
+  // The MIS weights' partial sums (Vertex::mis_sum) along both subpaths, once per sample.
+  void prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) const;
+  // The weight of strategy (s, t): O(1) from the partial sums (with the settings' weight_check,
+  // also compared with mis_weight_walk).
   float mis_weight(Vertex* light, Vertex* camera, int s, int t) const;
+  float mis_weight_recursive(const Vertex* light, const Vertex* camera, int s, int t) const;
+  // The ratio walk over the whole path that the recursion replaced: the tests' oracle.
+  float mis_weight_walk(Vertex* light, Vertex* camera, int s, int t) const;
+  // The heuristic's ratio of two strategies' densities across one vertex: (rev / fwd)^2 for the
+  // power heuristic; a zero density (delta scattering, stored as 0) counts as 1.
+  float density_ratio(float rev, float fwd) const {
+    const auto remap = [this](float f) {
+      return f != 0.0f ? (it_.settings_.balance ? f : f * f) : 1.0f;
+    };
+    return remap(rev) / remap(fwd);
+  }
+  // The smallest camera vertex index i whose strategy (s + t - i, i) exists: 1 (light tracing)
+  // or 2.
+  int first_camera_strategy() const { return it_.settings_.light_tracing ? 1 : 2; }
 
   const BdptIntegrator& it_;
   const Scene& scene_;
@@ -546,7 +570,7 @@ bool BdptTracer::visible_to_camera(const Vertex& l, glm::vec3 eye) {
 // connection one vertex multiplies the strategy's density by pdf_rev / pdf_fwd of the vertex that
 // changes sides. The connection's four neighbouring pdf_rev values are set for this path and
 // restored afterwards.
-float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const {
+float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t) const {
   if (s + t == 2) return 1.0f;  // an emitter seen by the camera: (1, 1) is not a strategy here
   const bool balance = it_.settings_.balance;
   const auto remap = [balance](float f) { return f != 0.0f ? (balance ? f : f * f) : 1.0f; };
@@ -607,6 +631,111 @@ float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const 
   }
   if (qs_minus != nullptr) qs_minus->pdf_rev = saved_qs_minus;
   return 1.0f / (1.0f + sum);
+}
+
+// The walk's sums in O(1) per connection (the recursion of D. van Antwerpen, "Recursive MIS
+// computation for streaming BDPT on the GPU", TU Delft 2011, and I. Georgiev, "Implementing
+// Vertex Connection and Merging", 2012, sec. 4 with merging left out), written with the walk's
+// completed ratios so that it keeps the walk's conventions term by term. On the camera side the
+// walk sums, over the strategies (s + t - i, i) with m <= i <= t - 1 (m: first_camera_strategy),
+//   S = sum_i c_i prod_{j=i..t-1} r_j,   r_j = density_ratio(pdf_rev_j, pdf_fwd_j),
+// c_i = 1 where neither camera vertex i nor i - 1 scattered by a delta lobe. With the partial sums
+//   A_k = sum_{i=m..k} c_i prod_{j=i..k} r_j = r_k (A_{k-1} + c_k),   A_{m-1} = 0,
+// and since only r_{t-1}, r_{t-2} and c_{t-1} depend on the connection (the pdf_rev of its two
+// nearest vertices; pt counts as not delta),
+//   S = r'_{t-1} (c'_{t-1} + r'_{t-2} (c_{t-2} + A_{t-3})).
+// The light side is the same with B_k over i >= 0, where vertex 0's "predecessor" is delta for a
+// point light (no camera subpath hits one). prepare_weights stores A_k and B_k at vertex k.
+void BdptTracer::prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) const {
+  const int m = first_camera_strategy();
+  float a = 0.0f;
+  for (int k = 0; k < nc; ++k) {
+    Vertex& x = camera[k];
+    if (k < m) {
+      x.mis_sum = 0.0f;
+      continue;
+    }
+    const float c = !x.delta && !camera[k - 1].delta ? 1.0f : 0.0f;
+    a = a + c > 0.0f ? density_ratio(x.pdf_rev, x.pdf_fwd) * (a + c) : 0.0f;
+    x.mis_sum = a;
+  }
+  float b = 0.0f;
+  for (int k = 0; k < nl; ++k) {
+    Vertex& x = light[k];
+    const bool delta_before = k > 0 ? light[k - 1].delta : light[0].point_light;
+    const float d = !x.delta && !delta_before ? 1.0f : 0.0f;
+    b = b + d > 0.0f ? density_ratio(x.pdf_rev, x.pdf_fwd) * (b + d) : 0.0f;
+    x.mis_sum = b;
+  }
+}
+
+float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera, int s,
+                                       int t) const {
+  if (s + t == 2) return 1.0f;  // an emitter seen by the camera: (1, 1) is not a strategy here
+  const Vertex& pt = camera[t - 1];
+  const Vertex* qs = s > 0 ? &light[s - 1] : nullptr;
+  const Vertex* qs_minus = s > 1 ? &light[s - 2] : nullptr;
+  // The four densities that depend on the connection, as the walk sets them.
+  float pt_rev = 0.0f, pt_minus_rev = 0.0f, qs_rev = 0.0f, qs_minus_rev = 0.0f;
+  if (t == 1) {
+    qs_rev = to_area(camera_pdf(scene_.camera, direction(pt, *qs)), pt, *qs);
+    if (qs_minus != nullptr) qs_minus_rev = pdf_area(*qs, &pt, *qs_minus);
+  } else {
+    const Vertex& pt_minus = camera[t - 2];
+    if (s > 0) {
+      pt_rev = pdf_area(*qs, qs_minus, pt);
+      pt_minus_rev = pdf_area(pt, qs, pt_minus);
+      qs_rev = pdf_area(pt, &pt_minus, *qs);
+      if (qs_minus != nullptr) qs_minus_rev = pdf_area(*qs, &pt, *qs_minus);
+    } else if (infinite(pt)) {
+      pt_rev = it_.environment_pmf_ * it_.environment_dir_pdf(pt.w_env);
+      pt_minus_rev = pdf_area(pt, nullptr, pt_minus);
+    } else {
+      pt_rev = it_.origin_pdf(pt.prim);
+      pt_minus_rev = to_area(emission_pdf(pt, direction(pt, pt_minus)), pt, pt_minus);
+    }
+  }
+  // ratio * (terms), with no ratio at all where the terms are 0 (an overflowed ratio times 0 is
+  // not a NaN here, as the walk never multiplies it in).
+  const auto scaled = [](float ratio, float terms) { return terms > 0.0f ? ratio * terms : 0.0f; };
+  float sum = 0.0f;
+  const int m = first_camera_strategy();
+  if (t - 1 >= m) {
+    const Vertex& pt_minus = camera[t - 2];
+    float inner = 0.0f;
+    if (t - 2 >= m) {
+      const float before = t - 3 >= m ? camera[t - 3].mis_sum : 0.0f;
+      const float c = !pt_minus.delta && !camera[t - 3].delta ? 1.0f : 0.0f;
+      inner = scaled(density_ratio(pt_minus_rev, pt_minus.pdf_fwd), before + c);
+    }
+    sum += scaled(density_ratio(pt_rev, pt.pdf_fwd), inner + (pt_minus.delta ? 0.0f : 1.0f));
+  }
+  if (qs != nullptr) {
+    float inner = 0.0f;
+    if (qs_minus != nullptr) {
+      const float before = s >= 3 ? light[s - 3].mis_sum : 0.0f;
+      const bool delta_before = s >= 3 ? light[s - 3].delta : light[0].point_light;
+      const float d = !qs_minus->delta && !delta_before ? 1.0f : 0.0f;
+      inner = scaled(density_ratio(qs_minus_rev, qs_minus->pdf_fwd), before + d);
+    }
+    const bool delta_before = qs_minus != nullptr ? qs_minus->delta : light[0].point_light;
+    sum += scaled(density_ratio(qs_rev, qs->pdf_fwd), inner + (delta_before ? 0.0f : 1.0f));
+  }
+  return 1.0f / (1.0f + sum);
+}
+
+float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const {
+  const float w = mis_weight_recursive(light, camera, s, t);
+  if (BdptSettings::WeightCheck* check = it_.settings_.weight_check) {
+    const float walked = mis_weight_walk(light, camera, s, t);
+    // A NaN from either, but not both, is a difference that no tolerance passes.
+    const double difference =
+        std::isnan(w) && std::isnan(walked) ? 0.0 : std::abs(static_cast<double>(w) - walked);
+    const std::lock_guard<std::mutex> lock(check->mutex);
+    if (!(difference <= check->max_difference)) check->max_difference = difference;
+    ++check->count;
+  }
+  return w;
 }
 
 void BdptTracer::splat_light_subpath(Vertex* light, Vertex* camera, int nl, Sampler& sampler,
@@ -675,6 +804,7 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
   // The subpaths no longer grow: plain pointers from here.
   Vertex* camera = sub.camera.data();
   Vertex* light = sub.light.data();
+  if (!settings.unweighted) prepare_weights(light, nl, camera, nc);
 
   const bool only = settings.only_s >= 0 && settings.only_t >= 0;
   glm::vec3 total(0.0f);
