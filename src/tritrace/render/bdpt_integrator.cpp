@@ -224,7 +224,9 @@ class BdptTracer {
 
   // The sample's own pixel's radiance; with light tracing, the (s, 1) connections are added to
   // `splats` (not null then).
-  glm::vec3 sample(const Ray& camera_ray, Sampler& sampler, Hit& first_hit, SplatBuffer* splats);
+  // `camera_hit` is the camera ray's first hit (the batch's camera rays are traced together).
+  glm::vec3 sample(const Ray& camera_ray, const Hit& camera_hit, Sampler& sampler,
+                   SplatBuffer* splats);
   uint64_t traced() const { return traced_; }
   // The albedo and normal AOVs of the last sample's camera subpath, as the path tracer writes them
   // (path_integrator.cpp): those of the first surface that is not specular, seen through perfect
@@ -239,17 +241,23 @@ class BdptTracer {
   // `ray`, whose direction has density pdf_dir at the last vertex; beta is the throughput the
   // next vertex receives. `light` selects the adjoint (importance) transport. Returns the count.
   int walk(std::vector<Vertex>& path, int count, int max_vertices, Ray ray, glm::vec3 beta,
-           float pdf_dir, bool light, Sampler& sampler, Hit* first_hit);
+           float pdf_dir, bool light, Sampler& sampler, const Hit* first_hit);
   // Light subpath: returns its vertex count (0 when the scene has no emitter).
   int light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler);
-  // Whether nothing blocks the segment between camera-side vertex c and light-side vertex l.
-  bool visible(const Vertex& c, const Vertex& l);
-  // Whether nothing blocks the segment between surface vertex l and the camera at `eye`.
-  bool visible_to_camera(const Vertex& l, glm::vec3 eye);
-  bool unblocked(glm::vec3 from, glm::vec3 dir, float length);
+  // The shadow ray of the connection between camera-side vertex c and light-side vertex l; false
+  // where nothing fits between its two ends (then nothing can block it).
+  bool shadow_ray(const Vertex& c, const Vertex& l, Ray& r) const;
+  // The same between surface vertex l and the camera at `eye`.
+  bool camera_shadow_ray(const Vertex& l, glm::vec3 eye, Ray& r) const;
+  // Queues connection (s, t) with its unweighted contribution (t = 1: onto pixel (px, py)) and
+  // its shadow ray, if it needs one; flushes the queue when full.
+  void queue(int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray, int px = 0,
+             int py = 0);
+  // Traces the queued shadow rays in one batch query and adds the unblocked connections, weighted,
+  // in the order they were queued (the sums are those of one connection at a time, bit for bit).
+  void flush();
   // Light tracing: the (s, 1) connections of the light subpath's vertices to the camera.
-  void splat_light_subpath(Vertex* light, Vertex* camera, int nl, Sampler& sampler,
-                           SplatBuffer& splats);
+  void splat_light_subpath(int nl);
   // The MIS weights' partial sums (Vertex::mis_sum) along both subpaths, once per sample.
   void prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) const;
   // The weight of strategy (s, t): O(1) from the partial sums (with the settings' weight_check,
@@ -274,6 +282,25 @@ class BdptTracer {
   const Scene& scene_;
   const Accel& accel_;
   uint64_t traced_ = 0;
+  // The current sample's subpaths, its radiance so far, its light image and the splats' rounding.
+  Vertex* light_ = nullptr;
+  Vertex* camera_ = nullptr;
+  glm::vec3 total_{0.0f};
+  SplatBuffer* splats_ = nullptr;
+  float u_round_ = 0.0f;
+  // Connections waiting for their shadow rays.
+  struct Pending {
+    glm::vec3 contribution{0.0f};  // unweighted, if unblocked
+    int s = 0, t = 0;
+    int ray = -1;  // into rays_; -1: no shadow ray
+    int px = 0, py = 0;
+  };
+  static constexpr int kMaxPending = 64;
+  std::array<Pending, kMaxPending> pending_{};
+  std::array<Ray, kMaxPending> rays_{};
+  std::array<uint8_t, kMaxPending> blocked_{};
+  int pending_count_ = 0;
+  int ray_count_ = 0;
   int camera_count_ = 0;
   bool camera_escaped_ = false;
 };
@@ -338,7 +365,8 @@ bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
 }
 
 int BdptTracer::walk(std::vector<Vertex>& path, int count, int max_vertices, Ray ray,
-                     glm::vec3 beta, float pdf_dir, bool light, Sampler& sampler, Hit* first_hit) {
+                     glm::vec3 beta, float pdf_dir, bool light, Sampler& sampler,
+                     const Hit* first_hit) {
   const int roulette_depth = it_.settings_.roulette_depth;
   glm::vec3 rr_beta(1.0f);  // the throughput since the subpath's start, for Russian roulette
   while (count < max_vertices) {
@@ -346,13 +374,15 @@ int BdptTracer::walk(std::vector<Vertex>& path, int count, int max_vertices, Ray
     if (static_cast<size_t>(count) >= path.size()) {
       path.resize(std::min(2 * path.size(), static_cast<size_t>(max_vertices)));
     }
-    // One ray at a time: the accel's incoherent query (a packet of one would cost a third more).
+    // The camera ray's hit is given (traced with the batch's); after it one ray at a time: the
+    // accel's incoherent query (a packet of one would cost a third more).
     Hit hit;
-    accel_.intersect_incoherent(std::span<const Ray>(&ray, 1), std::span<Hit>(&hit, 1));
-    ++traced_;
     if (first_hit != nullptr) {
-      *first_hit = hit;
+      hit = *first_hit;
       first_hit = nullptr;
+    } else {
+      accel_.intersect_incoherent(std::span<const Ray>(&ray, 1), std::span<Hit>(&hit, 1));
+      ++traced_;
     }
     if (!hit.found()) {
       if (!light) camera_escaped_ = true;
@@ -516,24 +546,15 @@ int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampl
   return walk(path, 1, max_vertices, ray, beta, pdf_dir, true, sampler, nullptr);
 }
 
-// One shadow ray: nothing between from and from + dir * length.
-bool BdptTracer::unblocked(glm::vec3 from, glm::vec3 dir, float length) {
-  Ray r;
-  r.origin = from;
-  r.dir = dir;
-  r.tmin = 0.0f;
-  r.tmax = length;
-  ++traced_;
-  uint8_t blocked = 0;
-  accel_.occluded_incoherent(std::span<const Ray>(&r, 1), std::span<uint8_t>(&blocked, 1));
-  return blocked == 0;
-}
-
-bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
+bool BdptTracer::shadow_ray(const Vertex& c, const Vertex& l, Ray& r) const {
   const glm::vec3 w = direction(c, l);
   const glm::vec3 from = ray_start(c, w, it_.offset_);
+  r.origin = from;
+  r.tmin = 0.0f;
   if (infinite(l)) {
-    return unblocked(from, w, kRayTMax);
+    r.dir = w;
+    r.tmax = kRayTMax;
+    return true;
   }
   // A surface vertex's end, as the path tracer's shadow rays end at a light: moved off its
   // surface along its geometric normal only, on the side the ray arrives from, then on by the
@@ -552,17 +573,67 @@ bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
   const glm::vec3 segment = to - from;
   const float length = std::sqrt(glm::dot(segment, segment));
   // Nothing fits between the two offset points (the path tracer's rule).
-  if (!(length > 0.0f && glm::dot(segment, w) > 0.0f)) return true;
-  return unblocked(from, segment * (1.0f / length), length);
+  if (!(length > 0.0f && glm::dot(segment, w) > 0.0f)) return false;
+  r.dir = segment * (1.0f / length);
+  r.tmax = length;
+  return true;
 }
 
-bool BdptTracer::visible_to_camera(const Vertex& l, glm::vec3 eye) {
+bool BdptTracer::camera_shadow_ray(const Vertex& l, glm::vec3 eye, Ray& r) const {
   const glm::vec3 d = eye - l.p;
   const glm::vec3 from = ray_start(l, glm::normalize(d), it_.offset_);
   const glm::vec3 segment = eye - from;
   const float length = std::sqrt(glm::dot(segment, segment));
-  if (!(length > 0.0f)) return true;
-  return unblocked(from, segment * (1.0f / length), length);
+  if (!(length > 0.0f)) return false;
+  r.origin = from;
+  r.dir = segment * (1.0f / length);
+  r.tmin = 0.0f;
+  r.tmax = length;
+  return true;
+}
+
+void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray, int px,
+                       int py) {
+  if (pending_count_ == kMaxPending) flush();
+  Pending& p = pending_[static_cast<size_t>(pending_count_++)];
+  p.contribution = contribution;
+  p.s = s;
+  p.t = t;
+  p.px = px;
+  p.py = py;
+  p.ray = -1;
+  if (has_ray) {
+    p.ray = ray_count_;
+    rays_[static_cast<size_t>(ray_count_++)] = ray;
+  }
+}
+
+void BdptTracer::flush() {
+  const auto n = static_cast<size_t>(ray_count_);
+  if (n > 0) {
+    accel_.occluded_incoherent(std::span<const Ray>(rays_.data(), n),
+                               std::span<uint8_t>(blocked_.data(), n));
+    traced_ += n;
+  }
+  const bool unweighted = it_.settings_.unweighted;
+  for (int k = 0; k < pending_count_; ++k) {
+    const Pending& p = pending_[static_cast<size_t>(k)];
+    if (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)]) continue;
+    const float weight = unweighted ? 1.0f : mis_weight(light_, camera_, p.s, p.t);
+    const glm::vec3 term = p.contribution * weight;
+    // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
+    // dropped rather than let a NaN or infinity into the pixel.
+    if (!std::isfinite(term.x + term.y + term.z)) continue;
+    if (p.t == 1) {
+      splats_->add(p.px, p.py, term, u_round_);
+      // Each further splat shifts the rounding's number by the golden ratio: each stays uniform.
+      u_round_ += 0.618034f;
+      if (u_round_ >= 1.0f) u_round_ -= 1.0f;
+    } else {
+      total_ += term;
+    }
+  }
+  pending_count_ = ray_count_ = 0;
 }
 
 // The power heuristic over the strategies with t >= 2 that can sample the path of light vertices
@@ -738,17 +809,12 @@ float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const 
   return w;
 }
 
-void BdptTracer::splat_light_subpath(Vertex* light, Vertex* camera, int nl, Sampler& sampler,
-                                     SplatBuffer& splats) {
+void BdptTracer::splat_light_subpath(int nl) {
   const BdptSettings& settings = it_.settings_;
   const bool only = settings.only_s >= 0 && settings.only_t >= 0;
-  if (only && settings.only_t != 1) return;
   const Camera& cam = scene_.camera;
-  const Vertex& eye = camera[0];
-  // One number per sample for the splats' stochastic rounding (SplatBuffer::add), drawn after
-  // every dimension the subpaths use; each further splat shifts it by the golden ratio, which
-  // keeps each one uniform.
-  float u_round = sampler.get_1d();
+  const Vertex& eye = camera_[0];
+  const Vertex* light = light_;
   for (int s = 2; s <= nl && s + 1 <= settings.max_depth + 2; ++s) {
     if (only && s != settings.only_s) continue;
     const Vertex& qs = light[s - 1];
@@ -764,17 +830,13 @@ void BdptTracer::splat_light_subpath(Vertex* light, Vertex* camera, int nl, Samp
     const float g = std::abs(glm::dot(qs.ng, w)) / dist2;
     const glm::vec3 contribution = qs.beta * f_light * (g * camera_pdf(cam, -w));
     if (!(max_component(contribution) > 0.0f)) continue;
-    if (!visible_to_camera(qs, eye.p)) continue;
-    const float weight = settings.unweighted ? 1.0f : mis_weight(light, camera, s, 1);
-    const glm::vec3 term = contribution * weight;
-    if (!std::isfinite(term.x + term.y + term.z)) continue;
-    splats.add(px, py, term, u_round);
-    u_round += 0.618034f;
-    if (u_round >= 1.0f) u_round -= 1.0f;
+    Ray ray;
+    const bool has_ray = camera_shadow_ray(qs, eye.p, ray);
+    queue(s, 1, contribution, has_ray, ray, px, py);
   }
 }
 
-glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first_hit,
+glm::vec3 BdptTracer::sample(const Ray& camera_ray, const Hit& camera_hit, Sampler& sampler,
                              SplatBuffer* splats) {
   const BdptSettings& settings = it_.settings_;
   const int max_camera = settings.max_depth + 2;
@@ -791,28 +853,32 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
   c0.point_light = false;
   c0.beta = glm::vec3(1.0f);
   c0.pdf_fwd = c0.pdf_rev = 0.0f;
-  first_hit = Hit{};
   camera_escaped_ = false;
   // The camera's density of the ray: the first camera vertex's pdf_fwd, read by the weights of
   // light tracing (1 stands for it without).
   const float camera_dir_pdf =
       settings.light_tracing ? camera_pdf(scene_.camera, glm::normalize(camera_ray.dir)) : 1.0f;
   const int nc = walk(sub.camera, 1, max_camera, camera_ray, glm::vec3(1.0f), camera_dir_pdf, false,
-                      sampler, &first_hit);
+                      sampler, &camera_hit);
   camera_count_ = nc;
   const int nl = light_subpath(sub.light, max_light, sampler);
   // The subpaths no longer grow: plain pointers from here.
   Vertex* camera = sub.camera.data();
   Vertex* light = sub.light.data();
   if (!settings.unweighted) prepare_weights(light, nl, camera, nc);
+  camera_ = camera;
+  light_ = light;
+  total_ = glm::vec3(0.0f);
+  pending_count_ = ray_count_ = 0;
 
   const bool only = settings.only_s >= 0 && settings.only_t >= 0;
-  glm::vec3 total(0.0f);
   for (int t = 2; t <= nc; ++t) {
     for (int s = 0; s <= nl && s + t <= settings.max_depth + 2; ++s) {
       if (only && (s != settings.only_s || t != settings.only_t)) continue;
       const Vertex& pt = camera[t - 1];
       glm::vec3 contribution(0.0f);
+      Ray ray;
+      bool has_ray = false;
       if (s == 0) {
         if (!pt.emits) continue;
         contribution = pt.beta * emission(scene_, pt, pt.wo);
@@ -833,24 +899,24 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
         const float g = std::abs(glm::dot(pt.ng, w)) * cos_light / dist2;
         contribution = pt.beta * f_camera * (g * f_light) * qs.beta;
         if (!(max_component(contribution) > 0.0f)) continue;
-        if (!visible(pt, qs)) continue;
+        has_ray = shadow_ray(pt, qs, ray);
       }
       if (!(max_component(contribution) > 0.0f)) continue;
-      const float weight = settings.unweighted ? 1.0f : mis_weight(light, camera, s, t);
-      const glm::vec3 term = contribution * weight;
-      // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
-      // dropped rather than let a NaN or infinity into the pixel.
-      if (!std::isfinite(term.x + term.y + term.z)) continue;
-      total += term;
+      queue(s, t, contribution, has_ray, ray);
     }
   }
   // The renderer always gives an integrator that splats its film's light image
   // (SampleOutput::splats); without one the light image is missing, never written out of bounds.
   assert(!settings.light_tracing || splats != nullptr);
-  if (settings.light_tracing && splats != nullptr) {
-    splat_light_subpath(light, camera, nl, sampler, *splats);
+  if (settings.light_tracing && splats != nullptr && !(only && settings.only_t != 1)) {
+    splats_ = splats;
+    // One number per sample for the splats' stochastic rounding (SplatBuffer::add), drawn after
+    // every dimension the subpaths use.
+    u_round_ = sampler.get_1d();
+    splat_light_subpath(nl);
   }
-  return total;
+  flush();
+  return total_;
 }
 
 std::string bdpt_unsupported(const Scene& scene) {
@@ -985,9 +1051,12 @@ uint64_t BdptIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
   const size_t n = batch.rays.size();
   assert(n <= kMaxBatch && batch.samplers.size() == n && out.radiance.size() == n);
   BdptTracer tracer(*this, scene, accel);
+  // The camera rays together, as the path tracer traces them (packets where the accel has them;
+  // the same hits as one at a time, bit for bit).
   std::array<Hit, kMaxBatch> first_hits;
+  accel.intersect(batch.rays, std::span<Hit>(first_hits.data(), n));
   for (size_t i = 0; i < n; ++i) {
-    out.radiance[i] = tracer.sample(batch.rays[i], batch.samplers[i], first_hits[i], out.splats);
+    out.radiance[i] = tracer.sample(batch.rays[i], first_hits[i], batch.samplers[i], out.splats);
     if (!out.albedo.empty() || !out.normal.empty()) {
       glm::vec3 albedo, normal;
       tracer.surface_aovs(albedo, normal);
@@ -998,7 +1067,7 @@ uint64_t BdptIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
   // Depth is the first hit's, whatever it is.
   write_first_hit_aovs(scene, batch.rays, std::span<const Hit>(first_hits.data(), n),
                        SampleOutput{.depth = out.depth});
-  return tracer.traced();
+  return n + tracer.traced();
 }
 
 }  // namespace tritrace
