@@ -706,7 +706,7 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t) c
 
 // The walk's sums in O(1) per connection (the recursion of D. van Antwerpen, "Recursive MIS
 // computation for streaming BDPT on the GPU", TU Delft 2011, and I. Georgiev, "Implementing
-// Vertex Connection and Merging", 2012, sec. 4 with merging left out), written with the walk's
+// Vertex Connection and Merging", 2012, with merging left out), written with the walk's
 // completed ratios so that it keeps the walk's conventions term by term. On the camera side the
 // walk sums, over the strategies (s + t - i, i) with m <= i <= t - 1 (m: first_camera_strategy),
 //   S = sum_i c_i prod_{j=i..t-1} r_j,   r_j = density_ratio(pdf_rev_j, pdf_fwd_j),
