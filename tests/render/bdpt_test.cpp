@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tritrace/accel/bvh/bvh_accel.h"
@@ -551,6 +552,52 @@ TEST(Bdpt, AgreesWithThePathTracerUnderEnvironments) {
     const Image bdpt = render_bdpt(*scene, accel, {}, {.spp = 128, .seed = 1});
     const Image path = render_path(*scene, accel, {.spp = 1024, .seed = 2});
     expect_agree(bdpt, path, 0.01, 16, 0.03, 0.99);
+  }
+}
+
+// The O(1) weight recursion (prepare_weights and mis_weight_recursive in bdpt_integrator.cpp)
+// against the ratio walk over the whole path that it replaced (Veach 1997, sec. 10.2), kept in
+// the integrator as the oracle: every weight of every connection of small renders, on scenes with
+// area and point lights, smooth glass (delta vertices), a smooth coat over diffuse (delta and
+// non-delta lobes in one Bsdf), rough glass, an environment map and a uniform sky, with light
+// tracing on and off and both heuristics. The two differ only in rounding.
+TEST(Bdpt, WeightRecursionEqualsTheRatioWalk) {
+  Scene coated = make_cornell_area({.width = 12, .height = 12});
+  for (Material& m : coated.materials) {
+    if (m.albedo == glm::vec3(0.15f, 0.15f, 0.75f)) {
+      m.type = MaterialType::kPrincipled;
+      m.roughness = 0.0f;
+    } else if (m.albedo == glm::vec3(0.75f)) {
+      m.type = MaterialType::kDielectric;
+      m.roughness = 0.3f;
+      m.albedo = glm::vec3(0.9f);
+    }
+  }
+  Scene open = make_cornell_area({.width = 12, .height = 12});
+  open.environment = glm::vec3(0.4f, 0.5f, 0.6f);
+  const std::vector<std::pair<const char*, Scene>> scenes = {
+      {"cornell-area", make_cornell_area({.width = 12, .height = 12})},
+      {"point light box", make_cornell_box({.width = 12, .height = 12})},
+      {"glass.json", example("glass.json", 12)},
+      {"coat and rough glass", coated},
+      {"open to a uniform sky", open},
+      {"sky.json", example("sky.json", 12)}};
+  for (const auto& [name, scene] : scenes) {
+    const BvhAccel accel(scene.mesh, kDefaultKernel);
+    for (const bool light_tracing : {true, false}) {
+      for (const bool balance : {false, true}) {
+        SCOPED_TRACE(std::string(name) + (light_tracing ? ", light tracing" : ", t >= 2") +
+                     (balance ? ", balance" : ", power"));
+        BdptSettings::WeightCheck check;
+        const BdptSettings settings{
+            .balance = balance, .light_tracing = light_tracing, .weight_check = &check};
+        render_bdpt(scene, accel, settings, {.threads = 1, .spp = 8, .seed = 5});
+        std::printf("  %s %d %d: %llu weights, largest difference %.3g\n", name, light_tracing,
+                    balance, static_cast<unsigned long long>(check.count), check.max_difference);
+        EXPECT_GT(check.count, 1000u);
+        EXPECT_LT(check.max_difference, 1e-5) << check.count << " weights";
+      }
+    }
   }
 }
 

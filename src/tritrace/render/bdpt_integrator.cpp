@@ -10,6 +10,7 @@
 #include <cassert>
 #include <cmath>
 #include <glm/geometric.hpp>
+#include <mutex>
 #include <span>
 #include <string>
 #include <utility>
@@ -61,6 +62,11 @@ struct Vertex {
   mutable glm::vec3 start[2]{};
   float pdf_fwd = 0.0f;
   float pdf_rev = 0.0f;
+  // The MIS weights' partial sum up to this vertex (BdptTracer::prepare_weights): over the
+  // strategies that move the connection to this vertex or one nearer its subpath's start, the
+  // ratio of each one's density to that of the connection just past this vertex. Read only where
+  // this vertex's pdf_rev no longer depends on the connection (three or more vertices from it).
+  float mis_sum = 0.0f;
   float env_pdf_pos = 0.0f;  // an environment vertex's density per area across w_env
   uint32_t prim = 0;
   float u = 0.0f, v = 0.0f;  // barycentrics on the triangle
@@ -218,7 +224,9 @@ class BdptTracer {
 
   // The sample's own pixel's radiance; with light tracing, the (s, 1) connections are added to
   // `splats` (not null then).
-  glm::vec3 sample(const Ray& camera_ray, Sampler& sampler, Hit& first_hit, SplatBuffer* splats);
+  // `camera_hit` is the camera ray's first hit (the batch's camera rays are traced together).
+  glm::vec3 sample(const Ray& camera_ray, const Hit& camera_hit, Sampler& sampler,
+                   SplatBuffer* splats);
   uint64_t traced() const { return traced_; }
   // The albedo and normal AOVs of the last sample's camera subpath, as the path tracer writes them
   // (path_integrator.cpp): those of the first surface that is not specular, seen through perfect
@@ -233,23 +241,66 @@ class BdptTracer {
   // `ray`, whose direction has density pdf_dir at the last vertex; beta is the throughput the
   // next vertex receives. `light` selects the adjoint (importance) transport. Returns the count.
   int walk(std::vector<Vertex>& path, int count, int max_vertices, Ray ray, glm::vec3 beta,
-           float pdf_dir, bool light, Sampler& sampler, Hit* first_hit);
+           float pdf_dir, bool light, Sampler& sampler, const Hit* first_hit);
   // Light subpath: returns its vertex count (0 when the scene has no emitter).
   int light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler);
-  // Whether nothing blocks the segment between camera-side vertex c and light-side vertex l.
-  bool visible(const Vertex& c, const Vertex& l);
-  // Whether nothing blocks the segment between surface vertex l and the camera at `eye`.
-  bool visible_to_camera(const Vertex& l, glm::vec3 eye);
-  bool unblocked(glm::vec3 from, glm::vec3 dir, float length);
+  // The shadow ray of the connection between camera-side vertex c and light-side vertex l; false
+  // where nothing fits between its two ends (then nothing can block it).
+  bool shadow_ray(const Vertex& c, const Vertex& l, Ray& r) const;
+  // The same between surface vertex l and the camera at `eye`.
+  bool camera_shadow_ray(const Vertex& l, glm::vec3 eye, Ray& r) const;
+  // Queues connection (s, t) with its unweighted contribution (t = 1: onto pixel (px, py)) and
+  // its shadow ray, if it needs one; flushes the queue when full.
+  void queue(int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray, int px = 0,
+             int py = 0);
+  // Traces the queued shadow rays in one batch query and adds the unblocked connections, weighted,
+  // in the order they were queued (the sums are those of one connection at a time, bit for bit).
+  void flush();
   // Light tracing: the (s, 1) connections of the light subpath's vertices to the camera.
-  void splat_light_subpath(Vertex* light, Vertex* camera, int nl, Sampler& sampler,
-                           SplatBuffer& splats);
+  void splat_light_subpath(int nl);
+  // The MIS weights' partial sums (Vertex::mis_sum) along both subpaths, once per sample.
+  void prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) const;
+  // The weight of strategy (s, t): O(1) from the partial sums (with the settings' weight_check,
+  // also compared with mis_weight_walk).
   float mis_weight(Vertex* light, Vertex* camera, int s, int t) const;
+  float mis_weight_recursive(const Vertex* light, const Vertex* camera, int s, int t) const;
+  // The ratio walk over the whole path that the recursion replaced: the tests' oracle.
+  float mis_weight_walk(Vertex* light, Vertex* camera, int s, int t) const;
+  // The heuristic's ratio of two strategies' densities across one vertex: (rev / fwd)^2 for the
+  // power heuristic; a zero density (delta scattering, stored as 0) counts as 1.
+  float density_ratio(float rev, float fwd) const {
+    const auto remap = [this](float f) {
+      return f != 0.0f ? (it_.settings_.balance ? f : f * f) : 1.0f;
+    };
+    return remap(rev) / remap(fwd);
+  }
+  // The smallest camera vertex index i whose strategy (s + t - i, i) exists: 1 (light tracing)
+  // or 2.
+  int first_camera_strategy() const { return it_.settings_.light_tracing ? 1 : 2; }
 
   const BdptIntegrator& it_;
   const Scene& scene_;
   const Accel& accel_;
   uint64_t traced_ = 0;
+  // The current sample's subpaths, its radiance so far, its light image and the splats' rounding.
+  Vertex* light_ = nullptr;
+  Vertex* camera_ = nullptr;
+  glm::vec3 total_{0.0f};
+  SplatBuffer* splats_ = nullptr;
+  float u_round_ = 0.0f;
+  // Connections waiting for their shadow rays.
+  struct Pending {
+    glm::vec3 contribution{0.0f};  // unweighted, if unblocked
+    int s = 0, t = 0;
+    int ray = -1;  // into rays_; -1: no shadow ray
+    int px = 0, py = 0;
+  };
+  static constexpr int kMaxPending = 64;
+  std::array<Pending, kMaxPending> pending_{};
+  std::array<Ray, kMaxPending> rays_{};
+  std::array<uint8_t, kMaxPending> blocked_{};
+  int pending_count_ = 0;
+  int ray_count_ = 0;
   int camera_count_ = 0;
   bool camera_escaped_ = false;
 };
@@ -314,7 +365,8 @@ bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
 }
 
 int BdptTracer::walk(std::vector<Vertex>& path, int count, int max_vertices, Ray ray,
-                     glm::vec3 beta, float pdf_dir, bool light, Sampler& sampler, Hit* first_hit) {
+                     glm::vec3 beta, float pdf_dir, bool light, Sampler& sampler,
+                     const Hit* first_hit) {
   const int roulette_depth = it_.settings_.roulette_depth;
   glm::vec3 rr_beta(1.0f);  // the throughput since the subpath's start, for Russian roulette
   while (count < max_vertices) {
@@ -322,13 +374,15 @@ int BdptTracer::walk(std::vector<Vertex>& path, int count, int max_vertices, Ray
     if (static_cast<size_t>(count) >= path.size()) {
       path.resize(std::min(2 * path.size(), static_cast<size_t>(max_vertices)));
     }
-    // One ray at a time: the accel's incoherent query (a packet of one would cost a third more).
+    // The camera ray's hit is given (traced with the batch's); after it one ray at a time: the
+    // accel's incoherent query (a packet of one would cost a third more).
     Hit hit;
-    accel_.intersect_incoherent(std::span<const Ray>(&ray, 1), std::span<Hit>(&hit, 1));
-    ++traced_;
     if (first_hit != nullptr) {
-      *first_hit = hit;
+      hit = *first_hit;
       first_hit = nullptr;
+    } else {
+      accel_.intersect_incoherent(std::span<const Ray>(&ray, 1), std::span<Hit>(&hit, 1));
+      ++traced_;
     }
     if (!hit.found()) {
       if (!light) camera_escaped_ = true;
@@ -492,24 +546,15 @@ int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampl
   return walk(path, 1, max_vertices, ray, beta, pdf_dir, true, sampler, nullptr);
 }
 
-// One shadow ray: nothing between from and from + dir * length.
-bool BdptTracer::unblocked(glm::vec3 from, glm::vec3 dir, float length) {
-  Ray r;
-  r.origin = from;
-  r.dir = dir;
-  r.tmin = 0.0f;
-  r.tmax = length;
-  ++traced_;
-  uint8_t blocked = 0;
-  accel_.occluded_incoherent(std::span<const Ray>(&r, 1), std::span<uint8_t>(&blocked, 1));
-  return blocked == 0;
-}
-
-bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
+bool BdptTracer::shadow_ray(const Vertex& c, const Vertex& l, Ray& r) const {
   const glm::vec3 w = direction(c, l);
   const glm::vec3 from = ray_start(c, w, it_.offset_);
+  r.origin = from;
+  r.tmin = 0.0f;
   if (infinite(l)) {
-    return unblocked(from, w, kRayTMax);
+    r.dir = w;
+    r.tmax = kRayTMax;
+    return true;
   }
   // A surface vertex's end, as the path tracer's shadow rays end at a light: moved off its
   // surface along its geometric normal only, on the side the ray arrives from, then on by the
@@ -528,17 +573,67 @@ bool BdptTracer::visible(const Vertex& c, const Vertex& l) {
   const glm::vec3 segment = to - from;
   const float length = std::sqrt(glm::dot(segment, segment));
   // Nothing fits between the two offset points (the path tracer's rule).
-  if (!(length > 0.0f && glm::dot(segment, w) > 0.0f)) return true;
-  return unblocked(from, segment * (1.0f / length), length);
+  if (!(length > 0.0f && glm::dot(segment, w) > 0.0f)) return false;
+  r.dir = segment * (1.0f / length);
+  r.tmax = length;
+  return true;
 }
 
-bool BdptTracer::visible_to_camera(const Vertex& l, glm::vec3 eye) {
+bool BdptTracer::camera_shadow_ray(const Vertex& l, glm::vec3 eye, Ray& r) const {
   const glm::vec3 d = eye - l.p;
   const glm::vec3 from = ray_start(l, glm::normalize(d), it_.offset_);
   const glm::vec3 segment = eye - from;
   const float length = std::sqrt(glm::dot(segment, segment));
-  if (!(length > 0.0f)) return true;
-  return unblocked(from, segment * (1.0f / length), length);
+  if (!(length > 0.0f)) return false;
+  r.origin = from;
+  r.dir = segment * (1.0f / length);
+  r.tmin = 0.0f;
+  r.tmax = length;
+  return true;
+}
+
+void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray, int px,
+                       int py) {
+  if (pending_count_ == kMaxPending) flush();
+  Pending& p = pending_[static_cast<size_t>(pending_count_++)];
+  p.contribution = contribution;
+  p.s = s;
+  p.t = t;
+  p.px = px;
+  p.py = py;
+  p.ray = -1;
+  if (has_ray) {
+    p.ray = ray_count_;
+    rays_[static_cast<size_t>(ray_count_++)] = ray;
+  }
+}
+
+void BdptTracer::flush() {
+  const auto n = static_cast<size_t>(ray_count_);
+  if (n > 0) {
+    accel_.occluded_incoherent(std::span<const Ray>(rays_.data(), n),
+                               std::span<uint8_t>(blocked_.data(), n));
+    traced_ += n;
+  }
+  const bool unweighted = it_.settings_.unweighted;
+  for (int k = 0; k < pending_count_; ++k) {
+    const Pending& p = pending_[static_cast<size_t>(k)];
+    if (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)]) continue;
+    const float weight = unweighted ? 1.0f : mis_weight(light_, camera_, p.s, p.t);
+    const glm::vec3 term = p.contribution * weight;
+    // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
+    // dropped rather than let a NaN or infinity into the pixel.
+    if (!std::isfinite(term.x + term.y + term.z)) continue;
+    if (p.t == 1) {
+      splats_->add(p.px, p.py, term, u_round_);
+      // Each further splat shifts the rounding's number by the golden ratio: each stays uniform.
+      u_round_ += 0.618034f;
+      if (u_round_ >= 1.0f) u_round_ -= 1.0f;
+    } else {
+      total_ += term;
+    }
+  }
+  pending_count_ = ray_count_ = 0;
 }
 
 // The power heuristic over the strategies with t >= 2 that can sample the path of light vertices
@@ -546,7 +641,7 @@ bool BdptTracer::visible_to_camera(const Vertex& l, glm::vec3 eye) {
 // connection one vertex multiplies the strategy's density by pdf_rev / pdf_fwd of the vertex that
 // changes sides. The connection's four neighbouring pdf_rev values are set for this path and
 // restored afterwards.
-float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const {
+float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t) const {
   if (s + t == 2) return 1.0f;  // an emitter seen by the camera: (1, 1) is not a strategy here
   const bool balance = it_.settings_.balance;
   const auto remap = [balance](float f) { return f != 0.0f ? (balance ? f : f * f) : 1.0f; };
@@ -609,17 +704,117 @@ float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const 
   return 1.0f / (1.0f + sum);
 }
 
-void BdptTracer::splat_light_subpath(Vertex* light, Vertex* camera, int nl, Sampler& sampler,
-                                     SplatBuffer& splats) {
+// The walk's sums in O(1) per connection (the recursion of D. van Antwerpen, "Recursive MIS
+// computation for streaming BDPT on the GPU", TU Delft 2011, and I. Georgiev, "Implementing
+// Vertex Connection and Merging", 2012, with merging left out), written with the walk's
+// completed ratios so that it keeps the walk's conventions term by term. On the camera side the
+// walk sums, over the strategies (s + t - i, i) with m <= i <= t - 1 (m: first_camera_strategy),
+//   S = sum_i c_i prod_{j=i..t-1} r_j,   r_j = density_ratio(pdf_rev_j, pdf_fwd_j),
+// c_i = 1 where neither camera vertex i nor i - 1 scattered by a delta lobe. With the partial sums
+//   A_k = sum_{i=m..k} c_i prod_{j=i..k} r_j = r_k (A_{k-1} + c_k),   A_{m-1} = 0,
+// and since only r_{t-1}, r_{t-2} and c_{t-1} depend on the connection (the pdf_rev of its two
+// nearest vertices; pt counts as not delta),
+//   S = r'_{t-1} (c'_{t-1} + r'_{t-2} (c_{t-2} + A_{t-3})).
+// The light side is the same with B_k over i >= 0, where vertex 0's "predecessor" is delta for a
+// point light (no camera subpath hits one). prepare_weights stores A_k and B_k at vertex k.
+void BdptTracer::prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) const {
+  const int m = first_camera_strategy();
+  float a = 0.0f;
+  for (int k = 0; k < nc; ++k) {
+    Vertex& x = camera[k];
+    if (k < m) {
+      x.mis_sum = 0.0f;
+      continue;
+    }
+    const float c = !x.delta && !camera[k - 1].delta ? 1.0f : 0.0f;
+    a = a + c > 0.0f ? density_ratio(x.pdf_rev, x.pdf_fwd) * (a + c) : 0.0f;
+    x.mis_sum = a;
+  }
+  float b = 0.0f;
+  for (int k = 0; k < nl; ++k) {
+    Vertex& x = light[k];
+    const bool delta_before = k > 0 ? light[k - 1].delta : light[0].point_light;
+    const float d = !x.delta && !delta_before ? 1.0f : 0.0f;
+    b = b + d > 0.0f ? density_ratio(x.pdf_rev, x.pdf_fwd) * (b + d) : 0.0f;
+    x.mis_sum = b;
+  }
+}
+
+float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera, int s,
+                                       int t) const {
+  if (s + t == 2) return 1.0f;  // an emitter seen by the camera: (1, 1) is not a strategy here
+  const Vertex& pt = camera[t - 1];
+  const Vertex* qs = s > 0 ? &light[s - 1] : nullptr;
+  const Vertex* qs_minus = s > 1 ? &light[s - 2] : nullptr;
+  // The four densities that depend on the connection, as the walk sets them.
+  float pt_rev = 0.0f, pt_minus_rev = 0.0f, qs_rev = 0.0f, qs_minus_rev = 0.0f;
+  if (t == 1) {
+    qs_rev = to_area(camera_pdf(scene_.camera, direction(pt, *qs)), pt, *qs);
+    if (qs_minus != nullptr) qs_minus_rev = pdf_area(*qs, &pt, *qs_minus);
+  } else {
+    const Vertex& pt_minus = camera[t - 2];
+    if (s > 0) {
+      pt_rev = pdf_area(*qs, qs_minus, pt);
+      pt_minus_rev = pdf_area(pt, qs, pt_minus);
+      qs_rev = pdf_area(pt, &pt_minus, *qs);
+      if (qs_minus != nullptr) qs_minus_rev = pdf_area(*qs, &pt, *qs_minus);
+    } else if (infinite(pt)) {
+      pt_rev = it_.environment_pmf_ * it_.environment_dir_pdf(pt.w_env);
+      pt_minus_rev = pdf_area(pt, nullptr, pt_minus);
+    } else {
+      pt_rev = it_.origin_pdf(pt.prim);
+      pt_minus_rev = to_area(emission_pdf(pt, direction(pt, pt_minus)), pt, pt_minus);
+    }
+  }
+  // ratio * (terms), with no ratio at all where the terms are 0 (an overflowed ratio times 0 is
+  // not a NaN here, as the walk never multiplies it in).
+  const auto scaled = [](float ratio, float terms) { return terms > 0.0f ? ratio * terms : 0.0f; };
+  float sum = 0.0f;
+  const int m = first_camera_strategy();
+  if (t - 1 >= m) {
+    const Vertex& pt_minus = camera[t - 2];
+    float inner = 0.0f;
+    if (t - 2 >= m) {
+      const float before = t - 3 >= m ? camera[t - 3].mis_sum : 0.0f;
+      const float c = !pt_minus.delta && !camera[t - 3].delta ? 1.0f : 0.0f;
+      inner = scaled(density_ratio(pt_minus_rev, pt_minus.pdf_fwd), before + c);
+    }
+    sum += scaled(density_ratio(pt_rev, pt.pdf_fwd), inner + (pt_minus.delta ? 0.0f : 1.0f));
+  }
+  if (qs != nullptr) {
+    float inner = 0.0f;
+    if (qs_minus != nullptr) {
+      const float before = s >= 3 ? light[s - 3].mis_sum : 0.0f;
+      const bool delta_before = s >= 3 ? light[s - 3].delta : light[0].point_light;
+      const float d = !qs_minus->delta && !delta_before ? 1.0f : 0.0f;
+      inner = scaled(density_ratio(qs_minus_rev, qs_minus->pdf_fwd), before + d);
+    }
+    const bool delta_before = qs_minus != nullptr ? qs_minus->delta : light[0].point_light;
+    sum += scaled(density_ratio(qs_rev, qs->pdf_fwd), inner + (delta_before ? 0.0f : 1.0f));
+  }
+  return 1.0f / (1.0f + sum);
+}
+
+float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const {
+  const float w = mis_weight_recursive(light, camera, s, t);
+  if (BdptSettings::WeightCheck* check = it_.settings_.weight_check) {
+    const float walked = mis_weight_walk(light, camera, s, t);
+    // A NaN from either, but not both, is a difference that no tolerance passes.
+    const double difference =
+        std::isnan(w) && std::isnan(walked) ? 0.0 : std::abs(static_cast<double>(w) - walked);
+    const std::lock_guard<std::mutex> lock(check->mutex);
+    if (!(difference <= check->max_difference)) check->max_difference = difference;
+    ++check->count;
+  }
+  return w;
+}
+
+void BdptTracer::splat_light_subpath(int nl) {
   const BdptSettings& settings = it_.settings_;
   const bool only = settings.only_s >= 0 && settings.only_t >= 0;
-  if (only && settings.only_t != 1) return;
   const Camera& cam = scene_.camera;
-  const Vertex& eye = camera[0];
-  // One number per sample for the splats' stochastic rounding (SplatBuffer::add), drawn after
-  // every dimension the subpaths use; each further splat shifts it by the golden ratio, which
-  // keeps each one uniform.
-  float u_round = sampler.get_1d();
+  const Vertex& eye = camera_[0];
+  const Vertex* light = light_;
   for (int s = 2; s <= nl && s + 1 <= settings.max_depth + 2; ++s) {
     if (only && s != settings.only_s) continue;
     const Vertex& qs = light[s - 1];
@@ -635,17 +830,13 @@ void BdptTracer::splat_light_subpath(Vertex* light, Vertex* camera, int nl, Samp
     const float g = std::abs(glm::dot(qs.ng, w)) / dist2;
     const glm::vec3 contribution = qs.beta * f_light * (g * camera_pdf(cam, -w));
     if (!(max_component(contribution) > 0.0f)) continue;
-    if (!visible_to_camera(qs, eye.p)) continue;
-    const float weight = settings.unweighted ? 1.0f : mis_weight(light, camera, s, 1);
-    const glm::vec3 term = contribution * weight;
-    if (!std::isfinite(term.x + term.y + term.z)) continue;
-    splats.add(px, py, term, u_round);
-    u_round += 0.618034f;
-    if (u_round >= 1.0f) u_round -= 1.0f;
+    Ray ray;
+    const bool has_ray = camera_shadow_ray(qs, eye.p, ray);
+    queue(s, 1, contribution, has_ray, ray, px, py);
   }
 }
 
-glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first_hit,
+glm::vec3 BdptTracer::sample(const Ray& camera_ray, const Hit& camera_hit, Sampler& sampler,
                              SplatBuffer* splats) {
   const BdptSettings& settings = it_.settings_;
   const int max_camera = settings.max_depth + 2;
@@ -662,27 +853,32 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
   c0.point_light = false;
   c0.beta = glm::vec3(1.0f);
   c0.pdf_fwd = c0.pdf_rev = 0.0f;
-  first_hit = Hit{};
   camera_escaped_ = false;
   // The camera's density of the ray: the first camera vertex's pdf_fwd, read by the weights of
   // light tracing (1 stands for it without).
   const float camera_dir_pdf =
       settings.light_tracing ? camera_pdf(scene_.camera, glm::normalize(camera_ray.dir)) : 1.0f;
   const int nc = walk(sub.camera, 1, max_camera, camera_ray, glm::vec3(1.0f), camera_dir_pdf, false,
-                      sampler, &first_hit);
+                      sampler, &camera_hit);
   camera_count_ = nc;
   const int nl = light_subpath(sub.light, max_light, sampler);
   // The subpaths no longer grow: plain pointers from here.
   Vertex* camera = sub.camera.data();
   Vertex* light = sub.light.data();
+  if (!settings.unweighted) prepare_weights(light, nl, camera, nc);
+  camera_ = camera;
+  light_ = light;
+  total_ = glm::vec3(0.0f);
+  pending_count_ = ray_count_ = 0;
 
   const bool only = settings.only_s >= 0 && settings.only_t >= 0;
-  glm::vec3 total(0.0f);
   for (int t = 2; t <= nc; ++t) {
     for (int s = 0; s <= nl && s + t <= settings.max_depth + 2; ++s) {
       if (only && (s != settings.only_s || t != settings.only_t)) continue;
       const Vertex& pt = camera[t - 1];
       glm::vec3 contribution(0.0f);
+      Ray ray;
+      bool has_ray = false;
       if (s == 0) {
         if (!pt.emits) continue;
         contribution = pt.beta * emission(scene_, pt, pt.wo);
@@ -703,24 +899,24 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, Sampler& sampler, Hit& first
         const float g = std::abs(glm::dot(pt.ng, w)) * cos_light / dist2;
         contribution = pt.beta * f_camera * (g * f_light) * qs.beta;
         if (!(max_component(contribution) > 0.0f)) continue;
-        if (!visible(pt, qs)) continue;
+        has_ray = shadow_ray(pt, qs, ray);
       }
       if (!(max_component(contribution) > 0.0f)) continue;
-      const float weight = settings.unweighted ? 1.0f : mis_weight(light, camera, s, t);
-      const glm::vec3 term = contribution * weight;
-      // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
-      // dropped rather than let a NaN or infinity into the pixel.
-      if (!std::isfinite(term.x + term.y + term.z)) continue;
-      total += term;
+      queue(s, t, contribution, has_ray, ray);
     }
   }
   // The renderer always gives an integrator that splats its film's light image
   // (SampleOutput::splats); without one the light image is missing, never written out of bounds.
   assert(!settings.light_tracing || splats != nullptr);
-  if (settings.light_tracing && splats != nullptr) {
-    splat_light_subpath(light, camera, nl, sampler, *splats);
+  if (settings.light_tracing && splats != nullptr && !(only && settings.only_t != 1)) {
+    splats_ = splats;
+    // One number per sample for the splats' stochastic rounding (SplatBuffer::add), drawn after
+    // every dimension the subpaths use.
+    u_round_ = sampler.get_1d();
+    splat_light_subpath(nl);
   }
-  return total;
+  flush();
+  return total_;
 }
 
 std::string bdpt_unsupported(const Scene& scene) {
@@ -855,9 +1051,12 @@ uint64_t BdptIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
   const size_t n = batch.rays.size();
   assert(n <= kMaxBatch && batch.samplers.size() == n && out.radiance.size() == n);
   BdptTracer tracer(*this, scene, accel);
+  // The camera rays together, as the path tracer traces them (packets where the accel has them;
+  // the same hits as one at a time, bit for bit).
   std::array<Hit, kMaxBatch> first_hits;
+  accel.intersect(batch.rays, std::span<Hit>(first_hits.data(), n));
   for (size_t i = 0; i < n; ++i) {
-    out.radiance[i] = tracer.sample(batch.rays[i], batch.samplers[i], first_hits[i], out.splats);
+    out.radiance[i] = tracer.sample(batch.rays[i], first_hits[i], batch.samplers[i], out.splats);
     if (!out.albedo.empty() || !out.normal.empty()) {
       glm::vec3 albedo, normal;
       tracer.surface_aovs(albedo, normal);
@@ -868,7 +1067,7 @@ uint64_t BdptIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
   // Depth is the first hit's, whatever it is.
   write_first_hit_aovs(scene, batch.rays, std::span<const Hit>(first_hits.data(), n),
                        SampleOutput{.depth = out.depth});
-  return tracer.traced();
+  return n + tracer.traced();
 }
 
 }  // namespace tritrace

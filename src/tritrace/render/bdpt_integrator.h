@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,15 @@ struct BdptSettings {
   // connection projects to. Off: only t >= 2, each sample's contribution stays in its pixel, and
   // the weights cover exactly those strategies (the first version's image).
   bool light_tracing = true;
+  // For tests: every MIS weight is also computed by the ratio walk over the whole path (Veach
+  // 1997, sec. 10.2; the first version's weights, which the O(1) recursion replaced), and the
+  // largest absolute difference between the two is recorded here. The image is the recursion's.
+  struct WeightCheck {
+    std::mutex mutex;
+    double max_difference = 0.0;
+    uint64_t count = 0;
+  };
+  WeightCheck* weight_check = nullptr;
 };
 
 // Why bdpt cannot render `scene` correctly yet (empty when it can): the caller refuses it.
