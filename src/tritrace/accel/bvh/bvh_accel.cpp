@@ -278,11 +278,7 @@ inline constexpr size_t kChunk = 256;
 // Trees at least this big (nodes and blocks) are traversed interleaved.
 inline constexpr size_t kInterleaveBytes = size_t{1} << 20;
 
-// Asks for the first cache lines of a node or a triangle block: the next step's memory.
-inline void prefetch_next(const WideBvh& tree, uint32_t ref) {
-  prefetch(tree, ref);
-}
-
+// One slot of the interleaved closest-hit traversal: a ray's state between its steps.
 struct ClosestRay {
   RayBoxSetup setup;
   WatertightRay wt;
@@ -294,6 +290,7 @@ struct ClosestRay {
   StackEntry stack[kStackSize];
 };
 
+// The same for the any-hit traversal.
 struct AnyRay {
   RayBoxSetup setup;
   WatertightRay wt;
@@ -317,7 +314,7 @@ template <int Kz>
     if (mask) {
       if (std::has_single_bit(mask)) {
         s.ref = node.child[std::countr_zero(mask)];
-        prefetch_next(tree, s.ref);
+        prefetch(tree, s.ref);
         return true;
       }
       assert(s.sp + std::popcount(mask) <= kStackSize);
@@ -331,7 +328,7 @@ template <int Kz>
         for (; j > 0 && top[j - 1].t < e.t; --j) top[j] = top[j - 1];
         top[j] = e;
       }
-      for (int i = 0; i < n; ++i) prefetch_next(tree, top[i].ref);
+      for (int i = 0; i < n; ++i) prefetch(tree, top[i].ref);
       s.sp += n - 1;
       s.ref = top[n - 1].ref;
       return true;
@@ -360,7 +357,7 @@ template <int Kz>
     while (mask) {
       assert(s.sp < kStackSize);
       const uint32_t child = node.child[std::countr_zero(mask)];
-      prefetch_next(tree, child);
+      prefetch(tree, child);
       s.stack[s.sp++] = child;
       mask &= mask - 1;
     }
