@@ -42,7 +42,7 @@ class BvhAccel final : public Accel {
   bvh::WideBvh bvh_;
   Kernel kernel_;
   bool packets_;
-  bool interleave_ = false;  // incoherent rays traced several at a time (bvh_accel.cpp)
+  [[maybe_unused]] bool interleave_ = false;  // incoherent rays several at a time (AVX2 builds)
 };
 
 }  // namespace tritrace
