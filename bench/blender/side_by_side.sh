@@ -1,7 +1,7 @@
 #!/bin/sh
 # tritrace against Blender Cycles on cornell-area, side by side in one session: for each of REPS
-# rounds, tritrace then Cycles at each spp, interleaved so that a change in the machine's load
-# falls on both. Wall times by /usr/bin/time; the load average before every run; the render time
+# rounds, tritrace (its own BVH), tritrace with Embree (--accel embree) and Cycles at each spp,
+# interleaved so that a change in the machine's load falls on all three. Wall times by /usr/bin/time; the load average before every run; the render time
 # each renderer reports. Writes OUTDIR/log.txt and the images (PFM; Cycles also EXR).
 #
 #   bench/blender/side_by_side.sh OUTDIR [REPS] [SPP...]     (defaults: 3 rounds, 256 and 1024 spp)
@@ -41,6 +41,13 @@ for r in $(seq "$reps"); do
       --width $size --height $size --spp "$spp" --max-depth $bounces --threads $threads \
       -o "$f.pfm" >"$f.out" 2>&1
     note "tritrace spp $spp rep $r load $l $(cat "$f.time") | $(grep rendered "$f.out")"
+
+    f="$out/tritrace-embree_${spp}_r$r"
+    l=$(load)
+    /usr/bin/time -f 'wall_s %e cpu_s %U+%S' -o "$f.time" "$root/build/tritrace" render --scene cornell-area \
+      --width $size --height $size --spp "$spp" --max-depth $bounces --threads $threads \
+      --accel embree -o "$f.pfm" >"$f.out" 2>&1
+    note "tritrace-embree spp $spp rep $r load $l $(cat "$f.time") | $(grep rendered "$f.out")"
 
     f="$out/cycles_${spp}_r$r"
     l=$(load)

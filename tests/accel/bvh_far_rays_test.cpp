@@ -26,20 +26,24 @@ struct Agreement {
   int hits = 0;
 };
 
-// Closest hits and occlusion of `rays` through brute force and through both BVH traversals.
+// Closest hits and occlusion of `rays` through brute force and through the BVH's traversals:
+// packets, single rays, and single rays interleaved (several in flight).
 Agreement compare_with_brute(const TriangleMesh& mesh, const std::vector<Ray>& rays,
                              Kernel kernel = kDefaultKernel) {
   const BruteForceAccel brute(mesh, kernel);
   const BvhAccel packets(mesh, kernel, {}, BvhTraversal::kAuto);
   const BvhAccel single(mesh, kernel, {}, BvhTraversal::kSingle);
-  std::vector<Hit> want(rays.size()), got_p(rays.size()), got_s(rays.size());
-  std::vector<uint8_t> occ(rays.size()), occ_p(rays.size()), occ_s(rays.size());
+  const BvhAccel interleaved(mesh, kernel, {}, BvhTraversal::kSingleInterleaved);
+  std::vector<Hit> want(rays.size()), got_p(rays.size()), got_s(rays.size()), got_i(rays.size());
+  std::vector<uint8_t> occ(rays.size()), occ_p(rays.size()), occ_s(rays.size()), occ_i(rays.size());
   brute.intersect(rays, want);
   packets.intersect(rays, got_p);
   single.intersect(rays, got_s);
+  interleaved.intersect(rays, got_i);
   brute.occluded(rays, occ);
   packets.occluded(rays, occ_p);
   single.occluded(rays, occ_s);
+  interleaved.occluded(rays, occ_i);
   auto same = [](const Hit& a, const Hit& b) {
     return a.prim == b.prim && std::memcmp(&a.t, &b.t, sizeof(float)) == 0 &&
            std::memcmp(&a.u, &b.u, sizeof(float)) == 0 &&
@@ -48,14 +52,16 @@ Agreement compare_with_brute(const TriangleMesh& mesh, const std::vector<Ray>& r
   Agreement out;
   for (size_t i = 0; i < rays.size(); ++i) {
     out.hits += want[i].found();
-    const bool ok = same(want[i], got_p[i]) && same(want[i], got_s[i]) && occ[i] == occ_p[i] &&
-                    occ[i] == occ_s[i];
+    const bool ok = same(want[i], got_p[i]) && same(want[i], got_s[i]) && same(want[i], got_i[i]) &&
+                    occ[i] == occ_p[i] && occ[i] == occ_s[i] && occ[i] == occ_i[i];
     if (!ok && ++out.mismatches <= 5) {
       ADD_FAILURE() << "ray " << i << " from (" << rays[i].origin.x << ", " << rays[i].origin.y
                     << ", " << rays[i].origin.z << "): brute prim " << want[i].prim << " t "
                     << want[i].t << " occ " << int(occ[i]) << "; packets prim " << got_p[i].prim
                     << " t " << got_p[i].t << " occ " << int(occ_p[i]) << "; single prim "
-                    << got_s[i].prim << " t " << got_s[i].t << " occ " << int(occ_s[i]);
+                    << got_s[i].prim << " t " << got_s[i].t << " occ " << int(occ_s[i])
+                    << "; interleaved prim " << got_i[i].prim << " t " << got_i[i].t << " occ "
+                    << int(occ_i[i]);
     }
   }
   return out;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
 #include <random>
 #include <set>
 #include <tuple>
@@ -125,6 +126,63 @@ TEST(BvhSingleRayTraversal, SameHitsBitForBit) {
                        BvhTraversal::kSingle);
   expect_same_as_brute(random_soup(3000, 7), Kernel::kMollerTrumbore, 4000, 8,
                        BvhTraversal::kSingle);
+}
+
+// The watertight kernel's single-ray path traces a batch's rays several at a time, interleaved
+// (bvh_accel.cpp); every ray must still get brute force's answer, across the 256-ray chunks the
+// batch is cut into and whatever the rays' dominant axes.
+TEST(BvhSingleRayTraversal, WatertightInterleavedSameHitsBitForBit) {
+  expect_same_as_brute(make_cornell_box().mesh, Kernel::kWatertight, 20000, 15,
+                       BvhTraversal::kSingleInterleaved);
+  expect_same_as_brute(make_terrain_scene(20000).mesh, Kernel::kWatertight, 4000, 16,
+                       BvhTraversal::kSingleInterleaved);
+  expect_same_as_brute(random_soup(3000, 17), Kernel::kWatertight, 4000, 18,
+                       BvhTraversal::kSingleInterleaved);
+  expect_same_as_brute(make_terrain_scene(20000).mesh, Kernel::kWatertight, 4000, 19,
+                       BvhTraversal::kSingleInterleaved, /*coherent=*/true);
+}
+
+// Rays that hit nothing by definition (NaN, infinite, empty interval) in the middle of a batch
+// leave their neighbours' answers alone, through intersect_incoherent and occluded_incoherent.
+TEST(BvhSingleRayTraversal, UntraceableRaysInsideABatch) {
+  const TriangleMesh mesh = make_terrain_scene(5000).mesh;
+  const BruteForceAccel brute(mesh, Kernel::kWatertight);
+  const BvhAccel accel(mesh, Kernel::kWatertight, {}, BvhTraversal::kSingleInterleaved);
+  std::vector<Ray> rays = awkward_rays(mesh, 700, 21);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  for (size_t i = 0; i < rays.size(); i += 37) {
+    switch (i % 3) {
+      case 0:
+        rays[i].dir.x = nan;
+        break;
+      case 1:
+        rays[i].origin.z = inf;
+        break;
+      default:
+        rays[i].tmin = rays[i].tmax + 1.0f;
+    }
+  }
+  std::vector<Hit> want(rays.size()), got(rays.size(), Hit{0.5f, 0.1f, 0.1f, 3});
+  std::vector<uint8_t> want_occ(rays.size()), got_occ(rays.size(), 7);
+  brute.intersect(rays, want);
+  brute.occluded(rays, want_occ);
+  accel.intersect_incoherent(rays, got);
+  accel.occluded_incoherent(rays, got_occ);
+  int hits = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    hits += want[i].found();
+    if (i % 37 == 0) {
+      EXPECT_FALSE(got[i].found()) << i;
+      EXPECT_EQ(got_occ[i], 0) << i;
+    }
+    EXPECT_EQ(want[i].prim, got[i].prim) << i;
+    EXPECT_EQ(want[i].t, got[i].t) << i;
+    EXPECT_EQ(want[i].u, got[i].u) << i;
+    EXPECT_EQ(want[i].v, got[i].v) << i;
+    EXPECT_EQ(want_occ[i], got_occ[i]) << i;
+  }
+  EXPECT_GT(hits, 100);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllKernels, BvhVsBrute,

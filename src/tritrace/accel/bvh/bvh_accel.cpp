@@ -182,6 +182,244 @@ bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray) {
   }
 }
 
+#if defined(__AVX2__)
+// Interleaved traversal of a batch of incoherent rays with the watertight kernel. On a big mesh a
+// single ray spends most of its time waiting for the next node or leaf block to arrive from
+// memory, one fetch after the other. So kInFlight rays are traversed side by side: each ray takes
+// one step (one node or one leaf block), asks for the memory of its next step without waiting
+// (prefetch) and hands over to the next ray, whose memory has arrived meanwhile. This is the
+// "asynchronous memory access chaining" of Kocberber et al., "Asynchronous Memory Access
+// Chaining", VLDB 2015, applied to BVH traversal. Every ray is still traversed alone, in the
+// order closest_hit_from and any_hit use, so the answers are theirs bit for bit.
+inline constexpr int kInFlight = 8;
+// Rays are taken in chunks, grouped by their dominant axis (the watertight kernel's kz, a template
+// argument of the block test) so that the leaf test has no switch per block.
+inline constexpr size_t kChunk = 256;
+// Trees at least this big (nodes and blocks) are traversed interleaved.
+inline constexpr size_t kInterleaveBytes = size_t{1} << 20;
+
+// One slot of the interleaved closest-hit traversal: a ray's state between its steps.
+struct ClosestRay {
+  RayBoxSetup setup;
+  WatertightRay wt;
+  Hit best;
+  float tmin, tmax;
+  uint32_t ref;
+  int sp;
+  uint32_t index;
+  StackEntry stack[kStackSize];
+};
+
+// The same for the any-hit traversal.
+struct AnyRay {
+  RayBoxSetup setup;
+  WatertightRay wt;
+  float tmin, tmax;
+  uint32_t ref;
+  int sp;
+  uint32_t index;
+  uint32_t stack[kStackSize];
+};
+
+// One step of closest_hit_from for ray s: a leaf block or a node. Returns false once the ray is
+// done (s.best is its answer).
+template <int Kz>
+[[gnu::always_inline]] inline bool closest_step(const WideBvh& tree, ClosestRay& s) {
+  if (s.ref & kLeafBit) {
+    bvh::block_watertight_axis<Kz>(tree.blocks[s.ref & ~kLeafBit], s.wt, &s.best);
+  } else {
+    const WideNode& node = tree.nodes[s.ref];
+    alignas(32) float tnear[kWidth];
+    uint32_t mask = intersect_boxes(node, s.setup, s.tmin, std::min(s.best.t, s.tmax), tnear);
+    if (mask) {
+      if (std::has_single_bit(mask)) {
+        s.ref = node.child[std::countr_zero(mask)];
+        prefetch(tree, s.ref);
+        return true;
+      }
+      assert(s.sp + std::popcount(mask) <= kStackSize);
+      StackEntry* top = s.stack + s.sp;
+      int n = 0;
+      while (mask) {
+        const int i = std::countr_zero(mask);
+        mask &= mask - 1;
+        const StackEntry e{node.child[i], tnear[i]};
+        int j = n++;
+        for (; j > 0 && top[j - 1].t < e.t; --j) top[j] = top[j - 1];
+        top[j] = e;
+      }
+      for (int i = 0; i < n; ++i) prefetch(tree, top[i].ref);
+      s.sp += n - 1;
+      s.ref = top[n - 1].ref;
+      return true;
+    }
+  }
+  do {
+    if (s.sp == 0) return false;
+    --s.sp;
+  } while (s.stack[s.sp].t > s.best.t);
+  s.ref = s.stack[s.sp].ref;
+  return true;
+}
+
+// One step of any_hit for ray s. Returns false once the ray is done; `hit` says how.
+template <int Kz>
+[[gnu::always_inline]] inline bool any_step(const WideBvh& tree, AnyRay& s, bool& hit) {
+  if (s.ref & kLeafBit) {
+    if (bvh::block_watertight_axis<Kz>(tree.blocks[s.ref & ~kLeafBit], s.wt, nullptr)) {
+      hit = true;
+      return false;
+    }
+  } else {
+    const WideNode& node = tree.nodes[s.ref];
+    alignas(32) float tnear[kWidth];
+    uint32_t mask = intersect_boxes(node, s.setup, s.tmin, s.tmax, tnear);
+    while (mask) {
+      assert(s.sp < kStackSize);
+      const uint32_t child = node.child[std::countr_zero(mask)];
+      prefetch(tree, child);
+      s.stack[s.sp++] = child;
+      mask &= mask - 1;
+    }
+  }
+  if (s.sp == 0) {
+    hit = false;
+    return false;
+  }
+  s.ref = s.stack[--s.sp];
+  return true;
+}
+
+// Traces rays[order[0..n)], all with dominant axis Kz, kInFlight at a time. Start(slot, index)
+// readies a slot for a ray and Step(slot) advances it (false: done, and Finish(slot) stores it).
+template <typename Slot, typename Start, typename Step, typename Finish>
+[[gnu::always_inline]] inline void interleave(Slot* slots, const uint16_t* order, size_t n,
+                                              Start&& start, Step&& step, Finish&& finish) {
+  int live[kInFlight];
+  int count = 0;
+  size_t next = 0;
+  for (; count < kInFlight && next < n; ++count) {
+    live[count] = count;
+    start(slots[count], order[next++]);
+  }
+  while (count > 0) {
+    for (int k = 0; k < count;) {
+      Slot& s = slots[live[k]];
+      if (step(s)) {
+        ++k;
+        continue;
+      }
+      finish(s);
+      if (next < n) {
+        start(s, order[next++]);
+        ++k;
+      } else {
+        live[k] = live[--count];
+      }
+    }
+  }
+}
+
+// Orders one chunk's traceable rays by dominant axis: order[first[kz] .. first[kz + 1]). Rays
+// that hit nothing by definition (see traceable) are left out; the caller answers them.
+struct ChunkOrder {
+  uint16_t order[kChunk];
+  size_t first[4];
+  WatertightRay wt[kChunk];
+};
+
+inline void order_chunk(std::span<const Ray> rays, ChunkOrder& c) {
+  size_t count[3] = {0, 0, 0};
+  uint8_t axis[kChunk];
+  for (size_t i = 0; i < rays.size(); ++i) {
+    c.wt[i] = prepare_watertight(rays[i]);
+    axis[i] = traceable(rays[i]) ? static_cast<uint8_t>(c.wt[i].kz) : 3;
+    if (axis[i] < 3) ++count[axis[i]];
+  }
+  c.first[0] = 0;
+  for (int a = 0; a < 3; ++a) c.first[a + 1] = c.first[a] + count[a];
+  size_t at[3] = {c.first[0], c.first[1], c.first[2]};
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (axis[i] < 3) c.order[at[axis[i]]++] = static_cast<uint16_t>(i);
+  }
+}
+
+template <int Kz>
+void closest_interleaved(const WideBvh& tree, std::span<const Ray> rays, const ChunkOrder& c,
+                         ClosestRay* slots, std::span<Hit> hits) {
+  interleave(
+      slots, c.order + c.first[Kz], c.first[Kz + 1] - c.first[Kz],
+      [&](ClosestRay& s, uint32_t i) {
+        const Ray& ray = rays[i];
+        s.setup = box_setup(ray);
+        s.wt = c.wt[i];
+        s.best = Hit{};
+        s.tmin = ray.tmin;
+        s.tmax = ray.tmax;
+        s.ref = 0;
+        s.sp = 0;
+        s.index = i;
+      },
+      [&](ClosestRay& s) { return closest_step<Kz>(tree, s); },
+      [&](ClosestRay& s) { hits[s.index] = s.best; });
+}
+
+template <int Kz>
+void any_interleaved(const WideBvh& tree, std::span<const Ray> rays, const ChunkOrder& c,
+                     AnyRay* slots, std::span<uint8_t> occluded) {
+  bool hit = false;
+  interleave(
+      slots, c.order + c.first[Kz], c.first[Kz + 1] - c.first[Kz],
+      [&](AnyRay& s, uint32_t i) {
+        const Ray& ray = rays[i];
+        s.setup = box_setup(ray);
+        s.wt = c.wt[i];
+        s.tmin = ray.tmin;
+        s.tmax = ray.tmax;
+        s.ref = 0;
+        s.sp = 0;
+        s.index = i;
+      },
+      [&](AnyRay& s) { return any_step<Kz>(tree, s, hit); },
+      [&](AnyRay& s) { occluded[s.index] = hit ? 1 : 0; });
+}
+
+void closest_hits_interleaved(const WideBvh& tree, std::span<const Ray> rays, std::span<Hit> hits) {
+  ChunkOrder c;
+  ClosestRay slots[kInFlight];
+  for (size_t first = 0; first < rays.size(); first += kChunk) {
+    const size_t n = std::min(kChunk, rays.size() - first);
+    const std::span<const Ray> chunk = rays.subspan(first, n);
+    const std::span<Hit> out = hits.subspan(first, n);
+    order_chunk(chunk, c);
+    for (size_t i = 0; i < n; ++i) {
+      if (!traceable(chunk[i])) out[i] = Hit{};
+    }
+    closest_interleaved<0>(tree, chunk, c, slots, out);
+    closest_interleaved<1>(tree, chunk, c, slots, out);
+    closest_interleaved<2>(tree, chunk, c, slots, out);
+  }
+}
+
+void any_hits_interleaved(const WideBvh& tree, std::span<const Ray> rays,
+                          std::span<uint8_t> occluded) {
+  ChunkOrder c;
+  AnyRay slots[kInFlight];
+  for (size_t first = 0; first < rays.size(); first += kChunk) {
+    const size_t n = std::min(kChunk, rays.size() - first);
+    const std::span<const Ray> chunk = rays.subspan(first, n);
+    const std::span<uint8_t> out = occluded.subspan(first, n);
+    order_chunk(chunk, c);
+    for (size_t i = 0; i < n; ++i) {
+      if (!traceable(chunk[i])) out[i] = 0;
+    }
+    any_interleaved<0>(tree, chunk, c, slots, out);
+    any_interleaved<1>(tree, chunk, c, slots, out);
+    any_interleaved<2>(tree, chunk, c, slots, out);
+  }
+}
+#endif
+
 // Calls fn(rays, out) on consecutive packets of at most bvh::kPacketSize rays.
 template <typename Out, typename Fn>
 void for_each_packet(std::span<const Ray> rays, std::span<Out> out, Fn&& fn) {
@@ -198,7 +436,15 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConf
     : mesh_(mesh),
       bvh_(bvh::build_wide_bvh(mesh, config)),
       kernel_(kernel),
-      packets_(traversal == BvhTraversal::kAuto && bvh::has_packet_kernel(kernel)) {}
+      packets_(traversal == BvhTraversal::kAuto && bvh::has_packet_kernel(kernel)) {
+#if defined(__AVX2__)
+  // Interleaving pays where a ray waits on memory; a tree that stays in the caches is traversed
+  // faster one ray at a time (see docs/PERFORMANCE.md, issue 27).
+  interleave_ = kernel_ == Kernel::kWatertight && !bvh_.nodes.empty() &&
+                (traversal == BvhTraversal::kSingleInterleaved ||
+                 bvh_.node_bytes() + bvh_.block_bytes() >= kInterleaveBytes);
+#endif
+}
 
 BvhAccel::BvhAccel(const TriangleMesh& mesh, bvh::WideBvh tree, Kernel kernel,
                    BvhTraversal traversal)
@@ -232,6 +478,12 @@ void BvhAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) 
 }
 
 void BvhAccel::intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const {
+#if defined(__AVX2__)
+  if (interleave_ && rays.size() > 1) {
+    closest_hits_interleaved(bvh_, rays, hits);
+    return;
+  }
+#endif
   with_kernel(kernel_, [&]<Kernel K>() {
     const TriangleArrays tris = mesh_.arrays();
     for (size_t i = 0; i < rays.size(); ++i) hits[i] = closest_hit<K>(bvh_, tris, rays[i]);
@@ -239,6 +491,12 @@ void BvhAccel::intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hi
 }
 
 void BvhAccel::occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+#if defined(__AVX2__)
+  if (interleave_ && rays.size() > 1) {
+    any_hits_interleaved(bvh_, rays, occluded);
+    return;
+  }
+#endif
   with_kernel(kernel_, [&]<Kernel K>() {
     const TriangleArrays tris = mesh_.arrays();
     for (size_t i = 0; i < rays.size(); ++i) occluded[i] = any_hit<K>(bvh_, tris, rays[i]) ? 1 : 0;

@@ -13,6 +13,10 @@ namespace tritrace {
 enum class BvhTraversal {
   kAuto,    // packets of coherent rays where the kernel has a packet version, else single rays
   kSingle,  // one ray at a time
+  // One ray at a time, and the incoherent queries' rays interleaved (several in flight, see
+  // bvh_accel.cpp) whatever the tree's size, where the others interleave on big trees only. For
+  // tests: the answers are the same either way.
+  kSingleInterleaved,
 };
 
 class BvhAccel final : public Accel {
@@ -42,6 +46,7 @@ class BvhAccel final : public Accel {
   bvh::WideBvh bvh_;
   Kernel kernel_;
   bool packets_;
+  [[maybe_unused]] bool interleave_ = false;  // incoherent rays several at a time (AVX2 builds)
 };
 
 }  // namespace tritrace
