@@ -20,6 +20,8 @@
 #include "buffer_cache.h"
 #include "convert.h"
 #include "denoise_arrays.h"
+#include "query_scene.h"
+#include "ray_input.h"
 #include "ray_queries.h"
 #include "scene_data.h"
 #include "tritrace/accel/make_accel.h"
@@ -64,29 +66,6 @@ void warn_dropped(const SceneData& data, const std::string& subject) {
                               " degenerate and " + std::to_string(s.dropped_non_finite) +
                               " non-finite triangles";
   if (PyErr_WarnEx(PyExc_RuntimeWarning, message.c_str(), 2) != 0) throw py::error_already_set();
-}
-
-std::string shape_text(const py::array& a) {
-  std::string s = "(";
-  for (py::ssize_t i = 0; i < a.ndim(); ++i) {
-    s += (i ? ", " : "") + std::to_string(a.shape(i));
-  }
-  return s + (a.ndim() == 1 ? ",)" : ")");
-}
-
-std::vector<py::ssize_t> leading_shape(const py::array& a) {
-  return std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim() - 1);
-}
-
-size_t element_count(const std::vector<py::ssize_t>& shape) {
-  size_t n = 1;
-  for (py::ssize_t s : shape) n *= static_cast<size_t>(s);
-  return n;
-}
-
-std::vector<py::ssize_t> with_last(std::vector<py::ssize_t> shape, py::ssize_t last) {
-  shape.push_back(last);
-  return shape;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -326,89 +305,6 @@ py::array_t<float> hit_normals(Hits& hits) {
   }
   hits.normal = normal;
   return normal;
-}
-
-// The checked inputs of a ray query, kept alive while it runs.
-struct RayInput {
-  py::array_t<float> origins, directions;
-  std::optional<py::array_t<float>> tmin_array, tmax_array;  // none: one number for all rays
-  float tmin = 0.0f, tmax = std::numeric_limits<float>::infinity();
-  std::vector<py::ssize_t> shape;  // the rays' shape: the arrays' leading dimensions
-
-  // Pointers into the members: taken where the RayInput stays, not where it was made.
-  RayArrays arrays() const {
-    RayArrays a;
-    a.count = element_count(shape);
-    a.origins = origins.data();
-    a.origin_stride = origins.ndim() == 1 ? 0 : 3;
-    a.directions = directions.data();
-    a.direction_stride = directions.ndim() == 1 ? 0 : 3;
-    a.tmin = tmin_array ? tmin_array->data() : &tmin;
-    a.tmin_stride = tmin_array ? 1 : 0;
-    a.tmax = tmax_array ? tmax_array->data() : &tmax;
-    a.tmax_stride = tmax_array ? 1 : 0;
-    return a;
-  }
-};
-
-py::array_t<float> ray_vectors(const char* name, const py::object& value) {
-  py::array_t<float> a = float32_array(name, value);
-  if (a.ndim() < 1 || a.shape(a.ndim() - 1) != 3) {
-    throw py::value_error(std::string(name) + ": must have shape (..., 3), got " + shape_text(a));
-  }
-  return a;
-}
-
-// tmin or tmax: a number for every ray, or an array of the rays' shape (whose values the ray
-// loop checks).
-void ray_interval(const char* name, const py::object& value, const std::vector<py::ssize_t>& shape,
-                  bool is_tmin, float& scalar, std::optional<py::array_t<float>>& per_ray) {
-  const bool sequence = py::isinstance<py::array>(value) || py::isinstance<py::list>(value) ||
-                        py::isinstance<py::tuple>(value);
-  std::optional<double> one;
-  py::array_t<float> array;
-  if (!sequence) {
-    one = number_arg(name, value);
-  } else {
-    array = float32_array(name, value);
-    if (array.ndim() == 0) one = array.at();
-  }
-  if (one) {
-    if (is_tmin && !(*one >= 0.0)) {
-      throw py::value_error(std::string(name) + ": must be a number >= 0, got " +
-                            format_double(*one));
-    }
-    if (std::isnan(*one)) throw py::value_error(std::string(name) + ": must not be NaN");
-    scalar = static_cast<float>(*one);
-    return;
-  }
-  const std::vector<py::ssize_t> got(array.shape(), array.shape() + array.ndim());
-  if (got != shape) {
-    std::string want = "(";
-    for (size_t i = 0; i < shape.size(); ++i) want += (i ? ", " : "") + std::to_string(shape[i]);
-    want += shape.size() == 1 ? ",)" : ")";
-    throw py::value_error(std::string(name) + ": must be a number or an array of the rays' shape " +
-                          want + ", got " + shape_text(array));
-  }
-  per_ray = array;
-}
-
-RayInput ray_input(const py::object& origins, const py::object& directions, const py::object& tmin,
-                   const py::object& tmax) {
-  RayInput in;
-  in.origins = ray_vectors("origins", origins);
-  in.directions = ray_vectors("directions", directions);
-  const bool one_origin = in.origins.ndim() == 1;
-  const bool one_direction = in.directions.ndim() == 1;
-  if (!one_origin && !one_direction && leading_shape(in.origins) != leading_shape(in.directions)) {
-    throw py::value_error("origins and directions: shapes " + shape_text(in.origins) + " and " +
-                          shape_text(in.directions) +
-                          " do not match (give both as (..., 3), or either as (3,) for all rays)");
-  }
-  in.shape = one_origin ? leading_shape(in.directions) : leading_shape(in.origins);
-  ray_interval("tmin", tmin, in.shape, true, in.tmin, in.tmin_array);
-  ray_interval("tmax", tmax, in.shape, false, in.tmax, in.tmax_array);
-  return in;
 }
 
 Coherence coherence_arg(const py::object& coherent) {
@@ -847,6 +743,8 @@ milliseconds, rays, threads: what was rendered and how.)")
                std::to_string(f.image.shape(0)) + ", " + f.integrator + ", " +
                std::to_string(f.spp) + " spp>";
       });
+
+  register_query_scene(m);
 
   m.def("denoise", &denoise_arrays, "color"_a, "albedo"_a = none, "normal"_a = none,
         "depth"_a = none, "variance"_a = none, py::kw_only(), "search_radius"_a = 7,

@@ -201,6 +201,54 @@ class Accel:
     @property
     def build_ms(self) -> float: ...
 
+class FirstHits(TypedDict):
+    t: npt.NDArray[np.float32]
+    geometry_ids: npt.NDArray[np.int32]
+    primitive_ids: npt.NDArray[np.int32]
+    primitive_uvs: npt.NDArray[np.float32]
+    primitive_normals: npt.NDArray[np.float32]
+
+class QueryScene:
+    """Several triangle meshes in one BVH for geometric queries.
+
+    QueryScene() is empty; add(vertices, triangles) appends a mesh and returns its geometry id (0,
+    1, 2, ... in the order added). Every query answers with the geometry id and the triangle's
+    index in that geometry's triangles array. The BVH (watertight kernel) is built on the first
+    query after an add(). Queries release the GIL, use every core and may run from several
+    threads at once.
+    """
+
+    def __init__(self) -> None: ...
+    def add(self, vertices: npt.ArrayLike, triangles: npt.ArrayLike) -> int:
+        """Appends a mesh; returns its geometry id.
+
+        vertices: (N, 3) numbers (converted to float32; each must be finite); triangles: (M, 3)
+        integer indices into vertices. Zero-area triangles are kept, so that triangle indices
+        stay yours: rays never hit them. ValueError naming the argument for a bad shape, value or
+        index.
+        """
+    @property
+    def geometry_count(self) -> int: ...
+    @property
+    def triangle_count(self) -> int: ...
+    def intersect(
+        self,
+        origins: _Rays,
+        directions: _Rays,
+        tmin: _Interval = 0.0,
+        tmax: _Interval = float("inf"),
+    ) -> FirstHits:
+        """The first hit of each ray within [tmin, tmax].
+
+        origins and directions: arrays of shape (..., 3), or (3,) for one shared by every ray;
+        tmin and tmax: numbers or arrays of the rays' shape; t is in units of each direction's
+        length. Returns arrays of the rays' shape: t (inf on a miss), geometry_ids and
+        primitive_ids (-1 on a miss), primitive_uvs (..., 2) barycentric weights of the
+        triangle's second and third vertices, primitive_normals (..., 3) unit normal
+        normalize(cross(b - a, c - a)) of the triangle (a, b, c) as given (0 on a miss). A bad
+        ray raises ValueError naming the argument and the first such ray.
+        """
+
 class Frame:
     """A rendered image and its AOVs.
 

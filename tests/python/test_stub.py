@@ -28,7 +28,7 @@ def stub_top_level():
 
 
 # Helper types that exist only in the stub.
-STUB_ONLY = {"CameraInfo", "LightInfo", "SpotLightInfo", "DirectionalLightInfo"}
+STUB_ONLY = {"CameraInfo", "LightInfo", "SpotLightInfo", "DirectionalLightInfo", "FirstHits"}
 
 
 def test_stub_and_module_have_the_same_public_names():
@@ -92,7 +92,7 @@ def test_functions_have_the_stubs_parameters(name):
     check_signature(getattr(tritrace, name), stub_top_level()[name])
 
 
-@pytest.mark.parametrize("name", ["Scene", "Accel", "Hits", "Frame"])
+@pytest.mark.parametrize("name", ["Scene", "Accel", "Hits", "Frame", "QueryScene"])
 def test_classes_have_the_stubs_members(name):
     node = stub_top_level()[name]
     cls = getattr(tritrace, name)
@@ -113,7 +113,8 @@ def test_everything_public_has_a_docstring():
         value = getattr(tritrace, name)
         if callable(value):
             assert value.__doc__ and len(value.__doc__) > 40, name
-    for cls in (tritrace.Scene, tritrace.Accel, tritrace.Frame, tritrace.Hits):
+    for cls in (tritrace.Scene, tritrace.Accel, tritrace.Frame, tritrace.Hits,
+                tritrace.QueryScene):
         assert len(cls.__doc__) > 40
         for name, value in vars(cls).items():
             if not name.startswith("_") and isinstance(value, property) and cls in (

@@ -10,6 +10,7 @@
 #include <bit>
 #include <cassert>
 #include <cmath>
+#include <utility>
 
 #if defined(__AVX2__)
 #include <immintrin.h>
@@ -277,6 +278,13 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConf
                    BvhTraversal traversal)
     : mesh_(mesh),
       bvh_(bvh::build_wide_bvh(mesh, config)),
+      kernel_(kernel),
+      packets_(traversal == BvhTraversal::kAuto && bvh::has_packet_kernel(kernel)) {}
+
+BvhAccel::BvhAccel(const TriangleMesh& mesh, bvh::WideBvh tree, Kernel kernel,
+                   BvhTraversal traversal)
+    : mesh_(mesh),
+      bvh_(std::move(tree)),
       kernel_(kernel),
       packets_(traversal == BvhTraversal::kAuto && bvh::has_packet_kernel(kernel)) {}
 

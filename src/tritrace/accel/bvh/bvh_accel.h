@@ -21,6 +21,10 @@ class BvhAccel final : public Accel {
   // vertices).
   BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConfig& config = {},
            BvhTraversal traversal = BvhTraversal::kAuto);
+  // Over a tree that build_wide_bvh made from `mesh`, for a caller that adjusts its triangle
+  // blocks first (GeometrySet keeps zero-area triangles out of every hit that way).
+  BvhAccel(const TriangleMesh& mesh, bvh::WideBvh tree, Kernel kernel,
+           BvhTraversal traversal = BvhTraversal::kAuto);
 
   using Accel::intersect;
   using Accel::occluded;

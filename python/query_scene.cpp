@@ -1,0 +1,145 @@
+// tritrace.QueryScene's bindings: arguments checked and converted here, the work done by the
+// library's GeometrySet and the module's parallel ray loop with the GIL released.
+#include "query_scene.h"
+
+#include <pybind11/numpy.h>
+
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "convert.h"
+#include "ray_input.h"
+#include "ray_queries.h"
+
+namespace tritrace::python {
+namespace {
+
+using namespace pybind11::literals;
+
+// Results are built in chunks of this many rays over all cores.
+constexpr size_t kResultChunk = size_t{1} << 14;
+
+uint32_t add_geometry(QueryScene& self, const py::object& vertices_object,
+                      const py::object& triangles_object) {
+  const py::array_t<float> vertices = float32_array("vertices", vertices_object);
+  if (vertices.ndim() != 2 || vertices.shape(1) != 3) {
+    throw py::value_error("vertices: must have shape (N, 3), got " + shape_text(vertices));
+  }
+  const py::array_t<int64_t> triangles = int64_array("triangles", triangles_object);
+  if (triangles.ndim() != 2 || triangles.shape(1) != 3) {
+    throw py::value_error("triangles: must have shape (M, 3), got " + shape_text(triangles));
+  }
+  const auto vertex_count = static_cast<int64_t>(vertices.shape(0));
+  const auto triangle_count = static_cast<size_t>(triangles.shape(0));
+  const int64_t* index = triangles.data();
+  std::vector<glm::uvec3> tris(triangle_count);
+  for (size_t i = 0; i < triangle_count; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      const int64_t k = index[3 * i + static_cast<size_t>(c)];
+      if (k < 0 || k >= vertex_count) {
+        throw py::value_error("triangles: triangle " + std::to_string(i) + " has vertex index " +
+                              std::to_string(k) + ", but there are " +
+                              std::to_string(vertex_count) + " vertices");
+      }
+      tris[i][c] = static_cast<uint32_t>(k);
+    }
+  }
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
+  const std::span<const glm::vec3> points(reinterpret_cast<const glm::vec3*>(vertices.data()),
+                                          static_cast<size_t>(vertex_count));
+  try {
+    py::gil_scoped_release nogil;
+    return self.add(points, tris);
+  } catch (const Error& e) {
+    raise_value_error(e);
+  }
+}
+
+py::dict intersect(const QueryScene& self, const py::object& origins, const py::object& directions,
+                   const py::object& tmin, const py::object& tmax) {
+  const RayInput in = ray_input(origins, directions, tmin, tmax);
+  const size_t n = element_count(in.shape);
+  py::array_t<float> t(in.shape);
+  py::array_t<int32_t> geometry_ids(in.shape), primitive_ids(in.shape);
+  py::array_t<float> uvs(with_last(in.shape, 2)), normals(with_last(in.shape, 3));
+  float* t_out = t.mutable_data();
+  int32_t* geometry_out = geometry_ids.mutable_data();
+  int32_t* prim_out = primitive_ids.mutable_data();
+  float* uv_out = uvs.mutable_data();
+  float* normal_out = normals.mutable_data();
+  std::optional<RayProblem> problem;
+  {
+    py::gil_scoped_release nogil;
+    std::vector<float> u(n), v(n);
+    self.read([&](const GeometrySet& set) {
+      problem = trace_closest(set.accel(), in.arrays(),
+                              HitArrays{t_out, prim_out, u.data(), v.data(), false},
+                              Coherence::kAuto, {}, false);
+      if (problem) return;
+      // The concatenated triangle as (geometry, triangle), and the caller's counter-clockwise
+      // normal: the mesh stores the lab's normalize(cross(e2, e1)), its opposite.
+      const auto& stored_normals = set.mesh().normal();
+      parallel_chunks(n, kResultChunk, [&](size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) {
+          glm::vec3 normal(0.0f);
+          int32_t geometry = -1;
+          if (prim_out[i] >= 0) {
+            const auto prim = static_cast<uint32_t>(prim_out[i]);
+            const GeometrySet::Location at = set.locate(prim);
+            geometry = static_cast<int32_t>(at.geometry);
+            prim_out[i] = static_cast<int32_t>(at.prim);
+            normal = glm::vec3(0.0f) - stored_normals[prim];  // +0, not -0, for 0
+          }
+          geometry_out[i] = geometry;
+          uv_out[2 * i] = u[i];
+          uv_out[2 * i + 1] = v[i];
+          normal_out[3 * i] = normal.x;
+          normal_out[3 * i + 1] = normal.y;
+          normal_out[3 * i + 2] = normal.z;
+        }
+      });
+    });
+  }
+  if (problem) throw py::value_error(problem->reason);
+  return py::dict("t"_a = t, "geometry_ids"_a = geometry_ids, "primitive_ids"_a = primitive_ids,
+                  "primitive_uvs"_a = uvs, "primitive_normals"_a = normals);
+}
+
+}  // namespace
+
+QuerySceneClass register_query_scene(py::module_& m) {
+  const double inf = std::numeric_limits<double>::infinity();
+  QuerySceneClass cls(m, "QueryScene", R"(Several triangle meshes in one BVH for geometric queries.
+
+QueryScene() is empty; add(vertices, triangles) appends a mesh and returns its geometry id (0, 1,
+2, ... in the order added). Every query answers with the geometry id and the triangle's index in
+that geometry's triangles array. The BVH (watertight kernel) is built on the first query after an
+add(). Queries release the GIL, use every core and may run from several threads at once.)");
+  cls.def(py::init([] { return std::make_shared<QueryScene>(); }))
+      .def("add", &add_geometry, "vertices"_a, "triangles"_a,
+           R"(Appends a mesh; returns its geometry id.
+
+vertices: (N, 3) numbers (converted to float32; each must be finite); triangles: (M, 3) integer
+indices into vertices. Zero-area triangles are kept, so that triangle indices stay yours: rays
+never hit them. ValueError naming the argument for a bad shape, value or index.)")
+      .def_property_readonly("geometry_count", &QueryScene::geometry_count,
+                             "How many meshes were added.")
+      .def_property_readonly("triangle_count", &QueryScene::triangle_count,
+                             "How many triangles all meshes hold together.")
+      .def("intersect", &intersect, "origins"_a, "directions"_a, "tmin"_a = 0.0, "tmax"_a = inf,
+           R"(The first hit of each ray within [tmin, tmax].
+
+origins and directions: arrays of shape (..., 3), or (3,) for one shared by every ray; tmin and
+tmax: numbers or arrays of the rays' shape; t is in units of each direction's length. Returns a
+dict of arrays of the rays' shape: "t" (float32, inf on a miss), "geometry_ids" and
+"primitive_ids" (int32, -1 on a miss), "primitive_uvs" (..., 2) float32 barycentric weights of
+the triangle's second and third vertices, "primitive_normals" (..., 3) float32 unit normal
+normalize(cross(b - a, c - a)) of the triangle (a, b, c) as given (0 on a miss). A ray with a
+non-finite origin or direction, a zero direction, a negative or NaN tmin or a NaN tmax raises
+ValueError naming the first one.)");
+  return cls;
+}
+
+}  // namespace tritrace::python

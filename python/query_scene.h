@@ -1,0 +1,58 @@
+// tritrace.QueryScene: several meshes from NumPy arrays in one BVH, for the geometric queries that
+// robotics, lidar simulation and mesh processing ask of a mesh (the shape of Open3D's
+// RaycastingScene): each answer names the geometry (the id add() returned) and its triangle.
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
+
+#include "tritrace/accel/geometry_set.h"
+
+namespace tritrace::python {
+
+namespace py = pybind11;
+
+class QueryScene {
+ public:
+  // The geometries, as a query reads them: built, and with no add() running meanwhile. Call with
+  // the GIL released (a build can take seconds, and an add() may be waiting for the lock).
+  template <typename Fn>
+  decltype(auto) read(Fn&& fn) const {
+    for (;;) {
+      {
+        std::shared_lock lock(mutex_);
+        if (set_.built()) return fn(static_cast<const GeometrySet&>(set_));
+      }
+      std::unique_lock lock(mutex_);
+      set_.build();
+    }
+  }
+  // Adds a geometry (GeometrySet::add); call with the GIL released.
+  uint32_t add(std::span<const glm::vec3> vertices, std::span<const glm::uvec3> triangles) {
+    std::unique_lock lock(mutex_);
+    return set_.add(vertices, triangles);
+  }
+  size_t geometry_count() const {
+    std::shared_lock lock(mutex_);
+    return set_.geometry_count();
+  }
+  size_t triangle_count() const {
+    std::shared_lock lock(mutex_);
+    return set_.triangle_count();
+  }
+
+ private:
+  mutable GeometrySet set_;  // built lazily by read()
+  mutable std::shared_mutex mutex_;
+};
+
+using QuerySceneClass = py::class_<QueryScene, std::shared_ptr<QueryScene>>;
+
+// Adds tritrace.QueryScene with its constructor, add() and the ray queries to `m`, and returns the
+// class so that other files can add their queries to it.
+QuerySceneClass register_query_scene(py::module_& m);
+
+}  // namespace tritrace::python
