@@ -76,30 +76,48 @@ inline uint32_t box_distances(const float* lo_x, const float* hi_x, const float*
 #endif
 }
 
-// The triangles of a block whose own boxes are within the bound (NaN padding lanes never are).
-inline uint32_t block_candidates(const TriangleBlock& b, const glm::vec3& q, float bound) {
+// The lanes of a block to evaluate exactly: triangles whose own boxes are within the bound (NaN
+// padding lanes never are), and every lane whose three corners are one point. Those may be
+// zero-area triangles that GeometrySet collapsed onto their first corner so that rays miss them
+// (geometry_set.h): their real corners, read from the mesh, may be nearer than that point.
+inline uint32_t block_candidates(const TriangleBlock& b, const glm::vec3& q, float bound,
+                                 uint32_t& collapsed) {
   alignas(32) float lo[3][kWidth], hi[3][kWidth], d2[kWidth];
-  for (int a = 0; a < 3; ++a) {
-    for (int i = 0; i < kWidth; ++i) {
+  collapsed = 0;
+  for (int i = 0; i < kWidth; ++i) {
+    bool point = true;
+    for (int a = 0; a < 3; ++a) {
       const float x0 = b.vertex[0][a][i], x1 = b.vertex[1][a][i], x2 = b.vertex[2][a][i];
       lo[a][i] = std::min(std::min(x0, x1), x2);
       hi[a][i] = std::max(std::max(x0, x1), x2);
+      point = point && x1 == x0 && x2 == x0;
     }
+    collapsed |= point ? 1u << i : 0u;
   }
-  return box_distances(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2], q, bound, d2);
+  return box_distances(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2], q, bound, d2) | collapsed;
 }
 
-inline void visit_block(const TriangleBlock& b, const glm::vec3& q, Best& best) {
-  uint32_t mask = block_candidates(b, q, best.bound);
+inline void visit_block(const TriangleBlock& b, const TriangleMesh& mesh, const glm::vec3& q,
+                        Best& best) {
+  uint32_t collapsed;
+  uint32_t mask = block_candidates(b, q, best.bound, collapsed);
   const glm::dvec3 p(q);
   while (mask) {
     const int i = std::countr_zero(mask);
     mask &= mask - 1;
-    if (b.prim[i] == kNoHit) continue;
+    const uint32_t prim = b.prim[i];
+    if (prim == kNoHit) continue;
+    if (collapsed >> i & 1u) {
+      best.offer(
+          closest_point_on_triangle(p, glm::dvec3(mesh.v0()[prim]), glm::dvec3(mesh.v1()[prim]),
+                                    glm::dvec3(mesh.v2()[prim])),
+          prim);
+      continue;
+    }
     const glm::dvec3 v0(b.vertex[0][0][i], b.vertex[0][1][i], b.vertex[0][2][i]);
     const glm::dvec3 v1(b.vertex[1][0][i], b.vertex[1][1][i], b.vertex[1][2][i]);
     const glm::dvec3 v2(b.vertex[2][0][i], b.vertex[2][1][i], b.vertex[2][2][i]);
-    best.offer(closest_point_on_triangle(p, v0, v1, v2), b.prim[i]);
+    best.offer(closest_point_on_triangle(p, v0, v1, v2), prim);
   }
 }
 
@@ -140,7 +158,6 @@ bool finite(const glm::vec3& q) {
 }  // namespace
 
 ClosestPoint closest_point(const WideBvh& tree, const TriangleMesh& mesh, const glm::vec3& query) {
-  (void)mesh;  // the blocks hold the exact vertices
   if (tree.nodes.empty() || !finite(query)) return {};
   Best best;
   StackEntry stack[kStackSize];
@@ -149,7 +166,7 @@ ClosestPoint closest_point(const WideBvh& tree, const TriangleMesh& mesh, const 
   alignas(32) float d2[kWidth];
   for (;;) {
     if (ref & kLeafBit) {
-      visit_block(tree.blocks[ref & ~kLeafBit], query, best);
+      visit_block(tree.blocks[ref & ~kLeafBit], mesh, query, best);
     } else {
       const WideNode& node = tree.nodes[ref];
       uint32_t mask = box_distances(node.lo_x, node.hi_x, node.lo_y, node.hi_y, node.lo_z,

@@ -25,7 +25,9 @@ struct ClosestPoint {
   float u = 0.0f, v = 0.0f;
 };
 
-// The point of `mesh` nearest to `query` (`tree` built over `mesh`). Among triangles at exactly
+// The point of `mesh` nearest to `query` (`tree` built over `mesh`; the vertices are read from its
+// blocks, except for blocks lanes whose corners are all equal, read from `mesh`, which is how
+// GeometrySet's tree holds zero-area triangles). Among triangles at exactly
 // the same distance (in double) the one with the lowest index wins, as in a brute-force loop.
 [[nodiscard]] ClosestPoint closest_point(const WideBvh& tree, const TriangleMesh& mesh,
                                          const glm::vec3& query);
