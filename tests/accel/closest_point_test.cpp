@@ -12,6 +12,7 @@
 
 #include "query_meshes.h"
 #include "test_rays.h"
+#include "tritrace/accel/distance_queries.h"
 #include "tritrace/geometry/point_triangle_distance.h"
 
 namespace tritrace {
@@ -181,6 +182,55 @@ TEST(ClosestPoint, DegenerateTrianglesAreSegments) {
   c = bvh::closest_point(tree, m, glm::vec3(5, 5, 7));
   EXPECT_EQ(c.prim, 1u);
   EXPECT_FLOAT_EQ(c.distance, 2.0f);
+}
+
+// GeometrySet collapses zero-area triangles onto their first corner in its tree so that rays miss
+// them; closest points must still see the whole segment.
+TEST(ClosestPoint, GeometrySetSeesZeroAreaTrianglesWhole) {
+  GeometrySet set;
+  const std::vector<glm::vec3> quad = {{10, 10, 0}, {11, 10, 0}, {11, 11, 0}};
+  set.add(quad, std::vector<glm::uvec3>{{0, 1, 2}});
+  const std::vector<glm::vec3> segment = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+  set.add(segment, std::vector<glm::uvec3>{{0, 1, 2}});
+  set.build();
+  const std::vector<glm::vec3> points = {{1.5f, 0.6f, 0.8f}, {10.5f, 10.25f, -2}};
+  std::vector<SurfacePoint> got(points.size());
+  closest_points(set, points, got);
+  EXPECT_EQ(got[0].geometry, 1u);
+  EXPECT_EQ(got[0].prim, 0u);
+  EXPECT_FLOAT_EQ(got[0].distance, 1.0f);
+  EXPECT_FLOAT_EQ(got[0].point.x, 1.5f);
+  EXPECT_EQ(got[0].normal, glm::vec3(0.0f));
+  EXPECT_EQ(got[1].geometry, 0u);
+  EXPECT_FLOAT_EQ(got[1].distance, 2.0f);
+  // Counter-clockwise seen from +z: the caller's normal is +z.
+  EXPECT_EQ(got[1].normal, glm::vec3(0, 0, 1));
+  EXPECT_FLOAT_EQ(got[1].u, 0.25f);  // (10.5, 10.25) = 0.25 a + 0.5 b + 0.25 c
+  EXPECT_FLOAT_EQ(got[1].v, 0.25f);
+}
+
+TEST(ClosestPoint, InsideTestCountsEdgesPerGeometryAndSignsDistances) {
+  GeometrySet set;
+  const IndexedMesh box = box_mesh(glm::dvec3(-1), glm::dvec3(1));
+  std::vector<glm::vec3> v(box.vertices.begin(), box.vertices.end());
+  std::vector<glm::uvec3> t;
+  for (const auto& f : box.triangles) t.emplace_back(f[0], f[1], f[2]);
+  set.add(v, t);
+  t.pop_back();
+  for (auto& p : v) p += glm::vec3(5, 0, 0);
+  set.add(v, t);
+  set.build();
+  const InsideTest inside(set);
+  ASSERT_EQ(inside.edges().size(), 2u);
+  EXPECT_TRUE(inside.edges()[0].closed());
+  EXPECT_EQ(inside.edges()[1].boundary, 3u);
+  const std::vector<glm::vec3> points = {{0, 0, 0.5f}, {3, 0, 0}, {5, 0, 0}};
+  std::vector<float> sdf(points.size());
+  inside.signed_distance(set, points, sdf);
+  EXPECT_FLOAT_EQ(sdf[0], -0.5f);
+  EXPECT_FLOAT_EQ(sdf[1], 1.0f);
+  EXPECT_FLOAT_EQ(sdf[2], -1.0f);  // 11 of 12 triangles: winding number 11/12
+  EXPECT_NEAR(inside.winding_number(set, points[2]), 11.0 / 12.0, 1e-9);
 }
 
 }  // namespace
