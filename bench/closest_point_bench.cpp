@@ -12,6 +12,7 @@
 // POINTS (default 1000000) are uniform in the mesh's bounding box grown by 10% on each side.
 #include <embree3/rtcore.h>
 #include <pmmintrin.h>
+#include <sys/resource.h>
 #include <xmmintrin.h>
 
 #include <algorithm>
@@ -38,6 +39,15 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// User + system CPU seconds of the whole process so far: on a machine shared with other work, the
+// CPU time of a phase is a steadier measure than its wall time.
+double cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec) + double(u.ru_stime.tv_sec) +
+         1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
 double median(std::vector<double> v) {
@@ -180,14 +190,18 @@ int main(int argc, char** argv) {
       }
     });
   };
-  std::vector<double> t_ours, t_theirs;
+  std::vector<double> t_ours, t_theirs, cpu_ours, cpu_theirs;
   for (int round = 0; round < rounds; ++round) {
+    double cpu = cpu_seconds();
     start = Clock::now();
     run_tritrace();
     t_ours.push_back(seconds_since(start));
+    cpu_ours.push_back(cpu_seconds() - cpu);
+    cpu = cpu_seconds();
     start = Clock::now();
     run_embree();
     t_theirs.push_back(seconds_since(start));
+    cpu_theirs.push_back(cpu_seconds() - cpu);
   }
   size_t differ = 0;
   for (size_t i = 0; i < count; ++i) {
@@ -198,22 +212,31 @@ int main(int argc, char** argv) {
       "closest points: tritrace %.3f s (%.2f Mpoints/s), Embree rtcPointQuery %.3f s "
       "(%.2f Mpoints/s), tritrace / Embree time %.3f; distances differ at %zu points\n",
       a, count / a * 1e-6, b, count / b * 1e-6, a / b, differ);
+  const double ca = median(cpu_ours), cb = median(cpu_theirs);
+  std::printf(
+      "  CPU time: tritrace %.3f s (%.2f us per point), Embree %.3f s (%.2f us per point), "
+      "tritrace / Embree %.3f\n",
+      ca, ca / count * 1e6, cb, cb / count * 1e6, ca / cb);
 
   start = Clock::now();
   const bvh::WindingNumber winding(tree, mesh);
   std::printf("winding-number expansions: %.3f s\n", seconds_since(start));
   std::vector<uint8_t> inside(count);
-  std::vector<double> t_inside;
+  std::vector<double> t_inside, cpu_inside;
   for (int round = 0; round < rounds; ++round) {
+    const double cpu = cpu_seconds();
     start = Clock::now();
     winding.inside(tree, points, inside);
     t_inside.push_back(seconds_since(start));
+    cpu_inside.push_back(cpu_seconds() - cpu);
   }
   size_t n_inside = 0;
   for (uint8_t x : inside) n_inside += x;
   const double c = median(t_inside);
-  std::printf("occupancy (winding number): %.3f s (%.2f Mpoints/s), %zu inside\n", c,
-              count / c * 1e-6, n_inside);
+  std::printf(
+      "occupancy (winding number): %.3f s (%.2f Mpoints/s, CPU %.2f us per point), %zu "
+      "inside\n",
+      c, count / c * 1e-6, median(cpu_inside) / count * 1e6, n_inside);
   rtcReleaseScene(scene);
   rtcReleaseDevice(device);
   return differ == 0 ? 0 : 1;
