@@ -306,6 +306,13 @@ void parallel_chunks(size_t count, size_t chunk,
   group.wait();
 }
 
+std::optional<RayProblem> for_each_ray_batch(
+    const RayArrays& rays,
+    const std::function<void(std::span<const Ray> batch, size_t first)>& fn) {
+  static_assert(kChunk == kRayChunk);
+  return for_each_batch(rays, fn);
+}
+
 std::optional<RayProblem> trace_closest(const Accel& accel, const RayArrays& rays,
                                         const HitArrays& out, Coherence coherence,
                                         std::span<const uint32_t> triangle_ids, bool swap_uv) {

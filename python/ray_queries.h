@@ -64,6 +64,17 @@ std::optional<RayProblem> trace_closest(const Accel& accel, const RayArrays& ray
 std::optional<RayProblem> trace_occluded(const Accel& accel, const RayArrays& rays, uint8_t* out,
                                          Coherence coherence);
 
+// Rays are handed out in chunks of this many (the renderer's batch size, kMaxBatch): batch k of
+// for_each_ray_batch starts at ray k * kRayChunk.
+inline constexpr size_t kRayChunk = 256;
+
+// fn(batch, first) for consecutive batches of at most kRayChunk rays, first the index of the
+// batch's first ray, on every core of the current TBB arena: the rays loaded and checked as the
+// queries above load them. Returns the first problem (the lowest index) when a ray cannot be
+// traced; fn may then have run for some batches.
+std::optional<RayProblem> for_each_ray_batch(
+    const RayArrays& rays, const std::function<void(std::span<const Ray> batch, size_t first)>& fn);
+
 // body(begin, end) over [0, count) in consecutive chunks of at most `chunk` items, handed to every
 // thread of the current TBB arena from a shared counter (as the renderer hands out tiles); on the
 // calling thread alone when there is a single chunk.

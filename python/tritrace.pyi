@@ -208,6 +208,14 @@ class FirstHits(TypedDict):
     primitive_uvs: npt.NDArray[np.float32]
     primitive_normals: npt.NDArray[np.float32]
 
+class Intersections(TypedDict):
+    ray_splits: npt.NDArray[np.int64]
+    ray_ids: npt.NDArray[np.int32]
+    t: npt.NDArray[np.float32]
+    geometry_ids: npt.NDArray[np.int32]
+    primitive_ids: npt.NDArray[np.int32]
+    primitive_uvs: npt.NDArray[np.float32]
+
 class ClosestPoints(TypedDict):
     points: npt.NDArray[np.float32]
     geometry_ids: npt.NDArray[np.int32]
@@ -254,6 +262,33 @@ class QueryScene:
         triangle's second and third vertices, primitive_normals (..., 3) unit normal
         normalize(cross(b - a, c - a)) of the triangle (a, b, c) as given (0 on a miss). A bad
         ray raises ValueError naming the argument and the first such ray.
+        """
+    def count_intersections(
+        self,
+        origins: _Rays,
+        directions: _Rays,
+        tmin: _Interval = 0.0,
+        tmax: _Interval = float("inf"),
+    ) -> npt.NDArray[np.int32]:
+        """How many triangles each ray crosses within [tmin, tmax], an array of the rays' shape.
+
+        Each crossing counts once, also through an edge or vertex shared by several triangles:
+        the count along a line through a closed mesh is even, and its parity from a point says
+        whether the point is inside. A ray that only grazes an edge or touches a vertex counts 0
+        or 2 there; triangles seen edge-on and zero-area triangles are never crossed.
+        """
+    def list_intersections(
+        self,
+        origins: _Rays,
+        directions: _Rays,
+        tmin: _Interval = 0.0,
+        tmax: _Interval = float("inf"),
+    ) -> Intersections:
+        """Every crossing of each ray within [tmin, tmax], as count_intersections() counts them.
+
+        Flat arrays, ray by ray (rays in C order of their shape) and by increasing t: ray i's
+        crossings are [ray_splits[i], ray_splits[i + 1]); ray_ids names each crossing's ray;
+        primitive_uvs are the barycentric weights of the triangle's second and third vertices.
         """
     def closest_points(self, points: npt.ArrayLike) -> ClosestPoints:
         """The nearest surface point to each query point.

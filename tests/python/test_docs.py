@@ -4,14 +4,15 @@ import os
 import pathlib
 import re
 
+import numpy as np
 import pytest
 
 DOC = pathlib.Path(__file__).resolve().parents[2] / "docs" / "PYTHON.md"
 EXAMPLES = re.findall(r"```python\n(.*?)```", DOC.read_text(), re.S)
 
 
-def test_the_doc_has_its_six_examples():
-    assert len(EXAMPLES) == 6
+def test_the_doc_has_its_seven_examples():
+    assert len(EXAMPLES) == 7
 
 
 @pytest.mark.parametrize("index", range(len(EXAMPLES)))
@@ -33,7 +34,16 @@ def test_example_runs(index, tmp_path, capsys):
         volume = float(out.split("volume ")[1].split()[0])
         assert abs(volume - 1.125) < 0.03  # 200000 samples: a standard error of 0.008
         return
-    if index == 0:
+    if "list_intersections" in EXAMPLES[index]:  # the lidar with multiple returns
+        assert "twice (glass, then what is behind it)" in capsys.readouterr().out
+        returns = namespace["returns"]
+        assert returns.shape == (16, 1800, 2)
+        assert 0 < namespace["double"].mean() < 0.5
+        # Where the beam returns twice, the glass (at x = 3) is the first return.
+        first = returns[..., 0][namespace["double"]]
+        cos = np.abs(namespace["directions"][..., 0][namespace["double"]])
+        np.testing.assert_allclose(first * cos, 3.0, rtol=1e-5)
+    elif index == 0:
         assert "returns, nearest" in capsys.readouterr().out
         assert namespace["depth"].shape == (500, 2000)
         assert namespace["points"].shape == (500, 2000, 3)

@@ -154,3 +154,192 @@ def test_bad_rays_raise_value_error_naming_the_argument():
         scene.intersect(np.zeros((2, 2)), [0, 0, 1])
     with pytest.raises(ValueError, match="^tmin: must be a number >= 0"):
         scene.intersect(np.zeros(3), [0, 0, 1], tmin=-1)
+
+
+def grid_box(n):
+    """The box [0, n]^3, each face an n x n grid of squares split along alternating diagonals:
+    (vertices, triangles) with integer coordinates."""
+    index = {}
+    vertices, triangles = [], []
+
+    def vertex(p):
+        if p not in index:
+            index[p] = len(vertices)
+            vertices.append(p)
+        return index[p]
+
+    for axis in range(3):
+        for side in (0, n):
+            for i in range(n):
+                for j in range(n):
+                    def at(di, dj):
+                        p = [0, 0, 0]
+                        p[axis], p[(axis + 1) % 3], p[(axis + 2) % 3] = side, i + di, j + dj
+                        return vertex(tuple(p))
+                    a, b, c, d = at(0, 0), at(1, 0), at(1, 1), at(0, 1)
+                    triangles += [(a, b, c), (a, c, d)] if (i + j) % 2 == 0 else \
+                        [(a, b, d), (b, c, d)]
+    return np.array(vertices, np.float64), np.array(triangles)
+
+
+def dyadic_directions():
+    """Directions from grid points whose shear is exact: components in {0, +-1, +-2} with the
+    dominant one's ratio to the others a power of two."""
+    out = []
+    for d in np.ndindex(5, 5, 5):
+        d = np.array(d) - 2
+        if not d.any() or (np.abs(d).max() == 2 and (np.abs(d) % 2).sum() == 0):
+            continue
+        out.append(d)
+    return np.array(out, np.float32)
+
+
+def test_rays_through_grid_edges_and_vertices_cross_a_closed_box_once_from_inside():
+    n = 3
+    scene = tritrace.QueryScene()
+    scene.add(*grid_box(n))
+    points = np.array(list(np.ndindex(n - 1, n - 1, n - 1)), np.float32) + 1  # interior grid
+    directions = dyadic_directions()
+    origins = np.repeat(points, len(directions), axis=0)
+    dirs = np.tile(directions, (len(points), 1))
+    counts = scene.count_intersections(origins, dirs)
+    assert counts.dtype == np.int32
+    np.testing.assert_array_equal(counts, 1)
+    # The same lines from far outside: in and out, two crossings each.
+    counts = scene.count_intersections(origins - 8 * dirs, dirs)
+    np.testing.assert_array_equal(counts, 2)
+
+
+def test_parity_from_random_points_says_inside_or_outside():
+    n = 2
+    scene = tritrace.QueryScene()
+    scene.add(*grid_box(n))
+    rng = np.random.default_rng(4)
+    points = rng.uniform(-0.5, n + 0.5, (4000, 3)).astype(np.float32)
+    directions = rng.normal(size=(4000, 3)).astype(np.float32)
+    # Half the rays aimed at grid vertices, where the crossing is on shared edges.
+    targets = rng.integers(0, n + 1, (2000, 3)).astype(np.float32)
+    directions[:2000] = targets - points[:2000]
+    keep = np.abs(directions).max(axis=1) > 0
+    points, directions = points[keep], directions[keep]
+    inside = np.all((points > 0) & (points < n), axis=1)
+    near_surface = np.any(np.abs(points - np.round(points / n) * n) < 1e-3, axis=1)
+    counts = scene.count_intersections(points, directions)
+    sure = ~near_surface
+    np.testing.assert_array_equal(counts[sure] % 2, inside[sure].astype(np.int32))
+    np.testing.assert_array_equal(counts[sure & inside], 1)  # convex: exactly one way out
+    assert inside.sum() > 500 and (~inside).sum() > 500
+
+
+def test_lists_match_a_double_precision_brute_force():
+    rng = np.random.default_rng(5)
+    meshes = []
+    for centre in ([0, 0, 0], [0.3, 0.2, 0]):
+        vertices = rng.uniform(-1, 1, (80, 3)) + centre
+        meshes.append((vertices, rng.integers(0, 80, (60, 3))))
+    scene = tritrace.QueryScene()
+    for vertices, triangles in meshes:
+        scene.add(vertices, triangles)
+    origins = rng.uniform(-3, 3, (500, 3)).astype(np.float32)
+    directions = (rng.uniform(-0.5, 0.5, (500, 3)) - origins / 3).astype(np.float32)
+    result = scene.list_intersections(origins, directions)
+    counts = scene.count_intersections(origins, directions)
+    splits = result["ray_splits"]
+    assert splits.dtype == np.int64 and len(splits) == 501 and splits[0] == 0
+    np.testing.assert_array_equal(np.diff(splits), counts)
+    np.testing.assert_array_equal(result["ray_ids"], np.repeat(np.arange(500), counts))
+    # The oracle: every crossing in double, per ray sorted by t.
+    crossings = [[] for _ in range(500)]
+    unsure = np.zeros(500, bool)
+    o, d = origins.astype(np.float64), directions.astype(np.float64)
+    for g, (vertices, triangles) in enumerate(meshes):
+        v = np.asarray(vertices, np.float32).astype(np.float64)
+        for k, (a, b, c) in enumerate(triangles):
+            e1, e2 = v[b] - v[a], v[c] - v[a]
+            p = np.cross(d, e2)
+            det = p @ e1
+            with np.errstate(divide="ignore", invalid="ignore"):
+                s = o - v[a]
+                u = np.einsum("ij,ij->i", s, p) / det
+                w = np.einsum("ij,ij->i", d, np.cross(s, e1)) / det
+                t = np.cross(s, e1) @ e2 / det
+            margin = np.minimum(np.minimum(u, w), 1 - u - w)
+            unsure |= (t > 0) & (np.abs(margin) < 1e-6)
+            for i in np.nonzero((det != 0) & (margin >= 0) & (t >= 0))[0]:
+                crossings[i].append((t[i], g, k))
+    compared = 0
+    for i in range(500):
+        want = sorted(crossings[i])
+        ts = [c[0] for c in want]
+        if unsure[i] or np.any(np.diff(ts) < 1e-5):
+            continue
+        got = slice(splits[i], splits[i + 1])
+        np.testing.assert_array_equal(result["geometry_ids"][got], [c[1] for c in want])
+        np.testing.assert_array_equal(result["primitive_ids"][got], [c[2] for c in want])
+        np.testing.assert_allclose(result["t"][got], ts, rtol=1e-5, atol=1e-6)
+        compared += len(want)
+    assert compared > 500
+    # Each crossing's uv are the barycentrics of its point on its triangle.
+    points = origins[result["ray_ids"]] + result["t"][:, None] * directions[result["ray_ids"]]
+    for i in range(0, len(points), 37):
+        g, k = result["geometry_ids"][i], result["primitive_ids"][i]
+        vertices, triangles = meshes[g]
+        a, b, c = np.asarray(vertices, np.float32)[triangles[k]]
+        uv = result["primitive_uvs"][i]
+        np.testing.assert_allclose(a + uv[0] * (b - a) + uv[1] * (c - a), points[i], atol=1e-4)
+
+
+def test_intervals_and_shapes_of_all_hits():
+    scene = tritrace.QueryScene()
+    scene.add(*unit_quad(1))
+    scene.add(*unit_quad(2))
+    origins = np.zeros((2, 3, 3))
+    origins[..., :2] = 0.25
+    counts = scene.count_intersections(origins, [0, 0, 1], tmax=1.5)
+    assert counts.shape == (2, 3) and np.all(counts == 1)
+    result = scene.list_intersections(origins, [0, 0, 1])
+    assert len(result["ray_splits"]) == 7 and len(result["t"]) == 12
+    np.testing.assert_array_equal(result["t"], np.tile([1, 2], 6))
+    np.testing.assert_array_equal(result["geometry_ids"], np.tile([0, 1], 6))
+    assert result["primitive_uvs"].shape == (12, 2)
+    empty = tritrace.QueryScene().list_intersections(np.zeros((0, 3)), [0, 0, 1])
+    assert list(empty["ray_splits"]) == [0] and len(empty["t"]) == 0
+
+
+def test_bad_rays_for_all_hits_raise_value_error_naming_the_argument():
+    scene = tritrace.QueryScene()
+    scene.add(*unit_quad(1))
+    for query in (scene.count_intersections, scene.list_intersections):
+        with pytest.raises(ValueError, match="^origins: ray 1 is not finite"):
+            query([[0, 0, 0], [0, np.nan, 0]], [0, 0, 1])
+        with pytest.raises(ValueError, match="^tmax: must not be NaN"):
+            query(np.zeros(3), [0, 0, 1], tmax=np.nan)
+        with pytest.raises(ValueError, match="^directions: must have shape"):
+            query(np.zeros(3), [0, 1])
+
+
+def test_threads_query_while_another_adds():
+    import threading
+    scene = tritrace.QueryScene()
+    scene.add(*grid_box(2))
+    rng = np.random.default_rng(9)
+    origins = rng.uniform(0.1, 1.9, (20000, 3)).astype(np.float32)   # inside the box
+    directions = rng.normal(size=(20000, 3)).astype(np.float32)
+    failures = []
+
+    def query():
+        for _ in range(10):
+            counts = scene.count_intersections(origins, directions)
+            hits = scene.intersect(origins, directions)
+            if not (np.all(counts == 1) and np.all(hits["geometry_ids"] == 0)):
+                failures.append("a query saw a wrong answer")
+
+    threads = [threading.Thread(target=query) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for k in range(20):  # far from the box: no answer above changes
+        scene.add(*unit_quad(100 + k))
+    for t in threads:
+        t.join()
+    assert not failures
+    assert scene.geometry_count == 21

@@ -55,7 +55,10 @@ class GeometrySet {
   const TriangleMesh& mesh() const { return *mesh_; }
   // The accel and its tree; built() must be true. The tree's triangle blocks hold each zero-area
   // triangle with its three corners collapsed onto its first, so that no kernel ever reports a hit
-  // on one; its box in the tree is the real triangle's. Read the real vertices from mesh().
+  // on one; its box in the tree is the real triangle's. Read the real vertices from mesh(). (A
+  // build without AVX2, which x86-64 builds always have, tests leaves against mesh() instead, so
+  // there a ray may in rare cases hit a zero-area triangle opened by rounding; the all-hits
+  // queries never do.)
   const BvhAccel& accel() const { return *accel_; }
   const bvh::WideBvh& tree() const { return accel_->tree(); }
 
