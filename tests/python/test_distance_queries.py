@@ -222,3 +222,28 @@ def test_bad_points_are_refused_naming_the_argument():
         scene.occupancy([np.inf, 0, 0])
     with pytest.raises(TypeError, match="points"):
         scene.signed_distance("here")
+
+
+def test_threads_share_one_scene_and_its_lazy_inside_test():
+    import threading
+
+    vertices, triangles = icosphere(2, 1.0)
+    scene = tritrace.QueryScene()
+    scene.add(vertices, triangles)
+    points = np.random.default_rng(4).uniform(-1.5, 1.5, (2000, 3))
+    results = [None] * 6
+    barrier = threading.Barrier(len(results))
+
+    def work(k):
+        barrier.wait()  # all threads ask at once: one builds the BVH and the inside test
+        results[k] = (scene.occupancy(points), scene.distance(points))
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(len(results))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    want_inside, want_distance = scene.occupancy(points), scene.distance(points)
+    for inside, distance in results:
+        np.testing.assert_array_equal(inside, want_inside)
+        np.testing.assert_array_equal(distance, want_distance)
