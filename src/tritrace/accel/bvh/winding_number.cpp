@@ -98,7 +98,7 @@ void clear(WindingSlots& w, int s) {
   w.far2[s] = std::numeric_limits<float>::infinity();
 }
 
-// The second-order expansion of one slot at query q (Barill et al. 2018, eq. 15-17 with the
+// The second-order expansion of one slot at query q (Barill et al. 2018, sec. 3, with the
 // kernel's gradient and Hessian written out): with r = c - q, the dipole N . r / (4 pi |r|^3) and
 // the first-moment term (tr(M) / |r|^3 - 3 r^T M r / |r|^5) / (4 pi).
 inline double expansion(const WindingSlots& w, int s, const glm::dvec3& q) {
@@ -131,7 +131,9 @@ double triangle_winding(const glm::dvec3& p, const glm::dvec3& a, const glm::dve
 
 WindingNumber::WindingNumber(const WideBvh& tree, const TriangleMesh& mesh, float far_ratio,
                              bool first_order_only) {
-  (void)mesh;  // the blocks hold the exact vertices
+  // The blocks hold the exact vertices (GeometrySet's zero-area triangles collapsed to a point,
+  // which subtend no solid angle either way).
+  (void)mesh;
   slots_.resize(tree.nodes.size());
   // The moments of each node's whole subtree, for its parent's slot.
   std::vector<Moments> subtree(tree.nodes.size());
