@@ -20,6 +20,7 @@
 #include "buffer_cache.h"
 #include "convert.h"
 #include "denoise_arrays.h"
+#include "distance_queries.h"
 #include "query_scene.h"
 #include "ray_input.h"
 #include "ray_queries.h"
@@ -744,7 +745,8 @@ milliseconds, rays, threads: what was rendered and how.)")
                std::to_string(f.spp) + " spp>";
       });
 
-  register_query_scene(m);
+  QuerySceneClass query_scene = register_query_scene(m);
+  register_distance_queries(query_scene);
 
   m.def("denoise", &denoise_arrays, "color"_a, "albedo"_a = none, "normal"_a = none,
         "depth"_a = none, "variance"_a = none, py::kw_only(), "search_radius"_a = 7,

@@ -9,6 +9,7 @@
 #include <mutex>
 #include <shared_mutex>
 
+#include "tritrace/accel/distance_queries.h"
 #include "tritrace/accel/geometry_set.h"
 
 namespace tritrace::python {
@@ -30,9 +31,26 @@ class QueryScene {
       set_.build();
     }
   }
+  // The same with the set's inside test (distance_queries.h), made on first use after a build.
+  template <typename Fn>
+  decltype(auto) read_inside(Fn&& fn) const {
+    for (;;) {
+      {
+        std::shared_lock lock(mutex_);
+        if (set_.built() && inside_) {
+          return fn(static_cast<const GeometrySet&>(set_),
+                    static_cast<const InsideTest&>(*inside_));
+        }
+      }
+      std::unique_lock lock(mutex_);
+      set_.build();
+      if (!inside_) inside_ = std::make_unique<InsideTest>(set_);
+    }
+  }
   // Adds a geometry (GeometrySet::add); call with the GIL released.
   uint32_t add(std::span<const glm::vec3> vertices, std::span<const glm::uvec3> triangles) {
     std::unique_lock lock(mutex_);
+    inside_.reset();
     return set_.add(vertices, triangles);
   }
   size_t geometry_count() const {
@@ -45,7 +63,8 @@ class QueryScene {
   }
 
  private:
-  mutable GeometrySet set_;  // built lazily by read()
+  mutable GeometrySet set_;                     // built lazily by read()
+  mutable std::unique_ptr<InsideTest> inside_;  // made lazily by read_inside(), dropped by add()
   mutable std::shared_mutex mutex_;
 };
 

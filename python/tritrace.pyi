@@ -216,6 +216,13 @@ class Intersections(TypedDict):
     primitive_ids: npt.NDArray[np.int32]
     primitive_uvs: npt.NDArray[np.float32]
 
+class ClosestPoints(TypedDict):
+    points: npt.NDArray[np.float32]
+    geometry_ids: npt.NDArray[np.int32]
+    primitive_ids: npt.NDArray[np.int32]
+    primitive_uvs: npt.NDArray[np.float32]
+    primitive_normals: npt.NDArray[np.float32]
+
 class QueryScene:
     """Several triangle meshes in one BVH for geometric queries.
 
@@ -282,6 +289,32 @@ class QueryScene:
         Flat arrays, ray by ray (rays in C order of their shape) and by increasing t: ray i's
         crossings are [ray_splits[i], ray_splits[i + 1]); ray_ids names each crossing's ray;
         primitive_uvs are the barycentric weights of the triangle's second and third vertices.
+        """
+    def closest_points(self, points: npt.ArrayLike) -> ClosestPoints:
+        """The nearest surface point to each query point.
+
+        points: array of shape (..., 3) (converted to float32; every value finite). Returns arrays
+        of the points' leading shape: points (..., 3), the nearest point on any geometry;
+        geometry_ids and primitive_ids of its triangle; primitive_uvs (..., 2) barycentric
+        weights of the triangle's second and third vertices there; primitive_normals (..., 3)
+        unit normal normalize(cross(b - a, c - a)) of the triangle (a, b, c) as given (0 for a
+        zero-area one). Exact (Ericson's regions in double); ties go to the triangle added first.
+        An empty scene gives points at inf and ids -1. ValueError naming points for a bad shape
+        or a value that is not finite.
+        """
+    def distance(self, points: npt.ArrayLike) -> npt.NDArray[np.float32]:
+        """The distance to the nearest surface point, of the points' leading shape."""
+    def signed_distance(self, points: npt.ArrayLike) -> npt.NDArray[np.float32]:
+        """distance() negative inside, positive outside, +0 on the surface.
+
+        Inside: the generalised winding number of all geometries (Jacobson et al. 2013, evaluated
+        hierarchically after Barill et al. 2018, exactly near the surface) above 1/2 in
+        magnitude, whichever way a closed mesh's triangles face. A RuntimeWarning names every
+        geometry with boundary, non-manifold or inconsistently oriented edges.
+        """
+    def occupancy(self, points: npt.ArrayLike) -> npt.NDArray[np.float32]:
+        """1.0 inside, 0.0 outside (signed_distance's inside), of the points' leading shape;
+        the same RuntimeWarning for geometries that are not closed.
         """
 
 class Frame:

@@ -11,8 +11,8 @@ DOC = pathlib.Path(__file__).resolve().parents[2] / "docs" / "PYTHON.md"
 EXAMPLES = re.findall(r"```python\n(.*?)```", DOC.read_text(), re.S)
 
 
-def test_the_doc_has_its_five_examples():
-    assert len(EXAMPLES) == 5
+def test_the_doc_has_its_seven_examples():
+    assert len(EXAMPLES) == 7
 
 
 @pytest.mark.parametrize("index", range(len(EXAMPLES)))
@@ -24,6 +24,16 @@ def test_example_runs(index, tmp_path, capsys):
         exec(compile(EXAMPLES[index], f"PYTHON.md example {index + 1}", "exec"), namespace)
     finally:
         os.chdir(cwd)
+    if "signed_distance" in EXAMPLES[index]:
+        assert namespace["sdf"].shape == (48, 48, 48)
+        out = capsys.readouterr().out
+        assert float(out.split("smooth torus ")[1]) < 0.005  # the tessellation's error only
+        return
+    if "occupancy" in EXAMPLES[index]:
+        out = capsys.readouterr().out
+        volume = float(out.split("volume ")[1].split()[0])
+        assert abs(volume - 1.125) < 0.03  # 200000 samples: a standard error of 0.008
+        return
     if "list_intersections" in EXAMPLES[index]:  # the lidar with multiple returns
         assert "twice (glass, then what is behind it)" in capsys.readouterr().out
         returns = namespace["returns"]

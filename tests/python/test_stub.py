@@ -29,7 +29,7 @@ def stub_top_level():
 
 # Helper types that exist only in the stub.
 STUB_ONLY = {"CameraInfo", "LightInfo", "SpotLightInfo", "DirectionalLightInfo", "FirstHits",
-             "Intersections"}
+             "Intersections", "ClosestPoints"}
 
 
 def test_stub_and_module_have_the_same_public_names():
