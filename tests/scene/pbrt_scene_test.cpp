@@ -387,6 +387,59 @@ TEST(PbrtScene, LensRadiusAndFocalDistanceMakeTheThinLens) {
       "s.pbrt:1:1: \"float focaldistance\" must be a finite number greater than 0");
 }
 
+// pbrt-v4's orthographic camera maps camera-space [-1, 1] to the film's shorter side (its default
+// screen window), so the image spans 2 camera-space units there; ortho_scale is world units per
+// pixel.
+TEST(PbrtScene, OrthographicCameraSpansTwoUnitsOnTheShorterSide) {
+  const std::string look = "LookAt 0 0 -5  0 0 0  0 1 0\n";
+  const LoadedScene wide = parse(look +
+                                 "Camera \"orthographic\"\n"
+                                 "Film \"rgb\" \"integer xresolution\" 64 "
+                                 "\"integer yresolution\" 48\nWorldBegin\n");
+  EXPECT_TRUE(wide.warnings.empty()) << wide.warnings.front();
+  ASSERT_TRUE(wide.scene.camera.is_orthographic());
+  EXPECT_FLOAT_EQ(wide.scene.camera.ortho_scale(), 2.0f / 48);
+  // Parallel rays along the view axis, from the image plane through the camera's position.
+  const Ray centre = wide.scene.camera.primary_ray(32, 24);
+  const Ray corner = wide.scene.camera.primary_ray(0, 0);
+  EXPECT_NEAR(glm::length(centre.dir - glm::vec3(0, 0, 1)), 0.0f, 1e-6f);
+  EXPECT_NEAR(glm::length(corner.dir - centre.dir), 0.0f, 1e-6f);
+  EXPECT_NEAR(std::abs(corner.origin.y - centre.origin.y), 1.0f, 1e-5f);
+  EXPECT_NEAR(std::abs(corner.origin.x - centre.origin.x), 64.0f / 48, 1e-5f);
+  // A tall film: [-1, 1] across its width, 2 * 64 / 48 units from top to bottom.
+  const LoadedScene tall = parse(look +
+                                 "Camera \"orthographic\"\n"
+                                 "Film \"rgb\" \"integer xresolution\" 48 "
+                                 "\"integer yresolution\" 64\nWorldBegin\n");
+  EXPECT_FLOAT_EQ(tall.scene.camera.ortho_scale(), 2.0f / 48);
+  // A screen window sets the height; Scale 2 before the LookAt makes camera-space units half a
+  // world unit (as it halves lensradius), and the view half as tall.
+  const LoadedScene window =
+      parse(look + "Camera \"orthographic\" \"float screenwindow\" [-3 3 -2 2]\nWorldBegin\n");
+  EXPECT_FLOAT_EQ(window.scene.camera.ortho_scale(), 4.0f / 720);
+  const LoadedScene scaled =
+      parse("Scale 2 2 2\n" + look + "Camera \"orthographic\"\nWorldBegin\n");
+  EXPECT_FLOAT_EQ(scaled.scene.camera.ortho_scale(), 1.0f / 720);
+  EXPECT_EQ(error_of([&] {
+              parse("Camera \"orthographic\" \"float screenwindow\" [1 -1 0 1]\nWorldBegin\n");
+            }),
+            "s.pbrt:1:23: \"float screenwindow\" takes four numbers x0 x1 y0 y1 with x0 < x1, y0 < "
+            "y1");
+}
+
+// assimp's pbrt exporter writes pbrt-v3's two-number blackbody (temperature, scale).
+TEST(PbrtScene, BlackbodyTakesPbrtV3sScaleToo) {
+  const LoadedScene one = parse("WorldBegin\nLightSource \"infinite\" \"blackbody L\" [6000]\n");
+  const LoadedScene two = parse("WorldBegin\nLightSource \"infinite\" \"blackbody L\" [6000 2]\n");
+  EXPECT_GT(one.scene.environment.x, 0.0f);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_FLOAT_EQ(two.scene.environment[c], 2.0f * one.scene.environment[c]);
+  }
+  EXPECT_NE(
+      error_of([] { parse("WorldBegin\nLightSource \"infinite\" \"blackbody L\" [6000 1 2]\n"); }),
+      "(no error)");
+}
+
 TEST(PbrtScene, TheLastTransformWrittenAppliesFirst) {
   // Rotate 90 about z takes (1, 0, 0) to (0, 1, 0), then Translate to (2, 1, 0).
   const LoadedScene loaded = parse(

@@ -470,8 +470,27 @@ class Interpreter {
     camera_from_world_ = gs_.ctm;
     camera_at_ = d.at;
     named_spaces_["camera"] = glm::inverse(gs_.ctm);
-    if (type != "perspective") {
+    orthographic_ = type == "orthographic";
+    if (type != "perspective" && !orthographic_) {
       warn(d.at, "Camera \"" + type + "\" approximated by a perspective camera");
+    }
+    screen_half_height_.reset();
+    const PbrtParam* window = p.find("screenwindow");
+    if (window && !orthographic_) {
+      warn(window->at, "screenwindow of a perspective camera ignored (fov sets the view)");
+    } else if (window) {
+      // [x0 x1 y0 y1] in screen space (camera space for the orthographic camera): tritrace's
+      // cameras centre the image on the view axis and take their width from the film's aspect,
+      // so only the window's height is kept.
+      const auto& v = window->numbers;
+      if (v.size() != 4 || !(v[3] > v[2]) || !(v[1] > v[0])) {
+        fail(window->at,
+             "\"float screenwindow\" takes four numbers x0 x1 y0 y1 with x0 < x1, y0 < y1");
+      }
+      if (v[0] != -v[1] || v[2] != -v[3]) {
+        warn(window->at, "an off-centre screenwindow approximated by a centred one");
+      }
+      screen_half_height_ = (v[3] - v[2]) / 2.0;
     }
     fov_ = p.get_float("fov", kPbrtFov);
     if (!(fov_ > 0.0 && fov_ < 180.0))
@@ -1223,6 +1242,17 @@ class Interpreter {
     }
     // Camera::look_at's right is cross(forward, up); pbrt's is the camera's +x.
     c.mirror_x = glm::dot(glm::cross(forward, up), right) < 0.0;
+    if (orthographic_) {
+      // pbrt-v4's default screen window spans [-1, 1] on the film's shorter side; camera-space
+      // lengths become world lengths by the camera transform's scale along y.
+      const double half_height = screen_half_height_.value_or(
+          c.height <= c.width ? 1.0 : static_cast<double>(c.height) / c.width);
+      const double scale = glm::length(dvec3(world_from_camera * glm::dvec4(0, 1, 0, 0)));
+      c.ortho_half_height = static_cast<float>(half_height * scale);
+      if (!std::isfinite(*c.ortho_half_height) || !(*c.ortho_half_height > 0.0f)) {
+        fail(camera_at_, "the orthographic camera's view is beyond float range");
+      }
+    }
     // The field of view spans the shorter side; tritrace takes the vertical one.
     const double half = fov_ * std::numbers::pi / 360.0;
     c.vertical_fov_degrees =
@@ -1272,6 +1302,8 @@ class Interpreter {
   dmat4 camera_from_world_{1.0};
   PbrtLocation camera_at_;
   double fov_ = kPbrtFov;
+  bool orthographic_ = false;
+  std::optional<double> screen_half_height_;  // from "screenwindow"
   double lens_radius_ = 0.0;
   double focal_distance_ = kPbrtFocalDistance;
   std::map<std::string, uint32_t> named_materials_;
