@@ -18,6 +18,7 @@
 #include <tuple>
 #include <vector>
 
+#include "tritrace/accel/make_accel.h"
 #include "tritrace/error.h"
 #include "tritrace/image/image_io.h"
 #include "tritrace/job/render_job.h"
@@ -425,6 +426,43 @@ TEST(PbrtScene, OrthographicCameraSpansTwoUnitsOnTheShorterSide) {
             }),
             "s.pbrt:1:23: \"float screenwindow\" takes four numbers x0 x1 y0 y1 with x0 < x1, y0 < "
             "y1");
+}
+
+// A shape's "float alpha" is pbrt-v4's stochastic alpha test: the blend mode with that alpha, for
+// this shape only. Rays through the quad pass 70% of the time at alpha 0.3 (within 4 binomial
+// standard deviations over 4096 rays), and always at alpha 0.
+TEST(PbrtScene, ShapeAlphaMakesTheShapeStochasticallyTransparent) {
+  const std::string quad =
+      "\"point3 P\" [0 0 0  1 0 0  1 1 0  0 1 0] \"integer indices\" [0 1 2 0 2 3]\n";
+  const LoadedScene loaded = parse(
+      "WorldBegin\nMaterial \"diffuse\"\n"
+      "Shape \"trianglemesh\" \"float alpha\" 0.3 " +
+      quad + "Translate 2 0 0\nShape \"trianglemesh\" " + quad +
+      "Translate 2 0 0\nShape \"trianglemesh\" \"float alpha\" 0 " + quad);
+  EXPECT_TRUE(loaded.warnings.empty()) << loaded.warnings.front();
+  const Scene& s = loaded.scene;
+  ASSERT_EQ(s.mesh.size(), 6u);
+  const Material& blended = s.materials[s.material_of(0)];
+  EXPECT_EQ(blended.alpha_mode, AlphaMode::kBlend);
+  EXPECT_FLOAT_EQ(blended.alpha, 0.3f);
+  EXPECT_EQ(s.materials[s.material_of(2)].alpha_mode, AlphaMode::kOpaque);
+  const auto accel = make_accel(AccelKind::kBvh, s, kDefaultKernel);
+  auto passing = [&](float x0) {
+    int n = 0;
+    for (int j = 0; j < 64; ++j) {
+      for (int i = 0; i < 64; ++i) {
+        const Ray r{{x0 + (i + 0.5f) / 64, (j + 0.25f) / 64, -1.0f}, {0, 0, 1}};
+        n += !accel->intersect(r).found();
+      }
+    }
+    return n;
+  };
+  EXPECT_NEAR(passing(0.0f) / 4096.0, 0.7, 4.0 * std::sqrt(0.21 / 4096));
+  EXPECT_EQ(passing(2.0f), 0);
+  EXPECT_EQ(passing(4.0f), 4096);
+  EXPECT_EQ(
+      error_of([&] { parse("WorldBegin\nShape \"trianglemesh\" \"float alpha\" 2 " + quad); }),
+      "s.pbrt:2:1: \"float alpha\" must be from 0 to 1");
 }
 
 // assimp's pbrt exporter writes pbrt-v3's two-number blackbody (temperature, scale).

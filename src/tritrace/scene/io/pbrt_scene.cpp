@@ -797,7 +797,33 @@ class Interpreter {
     return add_material(m);
   }
 
+  // A shape's "float alpha": pbrt-v4 ignores a hit on it where a hash of the ray is above alpha
+  // (every hit at alpha 0), which is tritrace's blend mode with a constant alpha. An alpha
+  // texture is warned and ignored.
+  float shape_alpha(const PbrtParams& p, const PbrtToken& d) {
+    if (!p.texture_name("alpha").empty()) {
+      warn(d.at, "shape \"texture alpha\" (textured cut-outs) ignored");
+      return 1.0f;
+    }
+    const double a = p.get_float("alpha", 1.0);
+    if (!(a >= 0.0 && a <= 1.0)) fail(d.at, "\"float alpha\" must be from 0 to 1");
+    return static_cast<float>(a);
+  }
+
   uint32_t current_material() {
+    const uint32_t surface = current_surface_material();
+    if (shape_alpha_ >= 1.0f) return surface;
+    const auto key = std::make_pair(surface, shape_alpha_);
+    if (const auto it = blended_.find(key); it != blended_.end()) return it->second;
+    Material m = out_.scene.materials[surface];
+    m.alpha_mode = AlphaMode::kBlend;
+    m.alpha = shape_alpha_;
+    const uint32_t index = add_material(m);
+    blended_[key] = index;
+    return index;
+  }
+
+  uint32_t current_surface_material() {
     if (gs_.material < 0) {
       if (default_material_ < 0) {
         Material m;
@@ -1101,6 +1127,7 @@ class Interpreter {
 
   void shape(const std::string& type, const PbrtParams& p, const PbrtToken& d) {
     const std::string what = "Shape \"" + type + "\"";
+    shape_alpha_ = shape_alpha(p, d);
     if (type == "trianglemesh" || type == "bilinearmesh" || type == "loopsubdiv") {
       const auto positions = vectors<glm::vec3>(p, "P", {"point3"}, 3, d);
       auto normals = vectors<glm::vec3>(p, "N", {"normal"}, 3, d);
@@ -1195,10 +1222,11 @@ class Interpreter {
                               p.get_float("zmax", 1.0), p.get_float("phimax", 360.0));
       add_analytic(m);
     } else {
+      shape_alpha_ = 1.0f;
       warn(d.at, what + " not supported: skipped");
       return;
     }
-    if (p.find("alpha")) warn(d.at, "shape \"alpha\" (cut-outs) ignored");
+    shape_alpha_ = 1.0f;
     p.find("emissionfilename");
     warn_unused(p, what);
   }
@@ -1302,6 +1330,8 @@ class Interpreter {
   dmat4 camera_from_world_{1.0};
   PbrtLocation camera_at_;
   double fov_ = kPbrtFov;
+  float shape_alpha_ = 1.0f;                                // the current shape's "float alpha"
+  std::map<std::pair<uint32_t, float>, uint32_t> blended_;  // (material, alpha) -> its blend
   bool orthographic_ = false;
   std::optional<double> screen_half_height_;  // from "screenwindow"
   double lens_radius_ = 0.0;
