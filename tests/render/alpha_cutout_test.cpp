@@ -8,6 +8,7 @@
 
 #include "../accel/alpha_scene.h"
 #include "tritrace/accel/make_accel.h"
+#include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/path_integrator.h"
 #include "tritrace/render/renderer.h"
 
@@ -45,6 +46,32 @@ TEST(AlphaCutout, CameraSeesTheWallThroughTheTransparentShare) {
   const auto accel = make_accel(AccelKind::kBvh, s, kDefaultKernel);
   const Image image = render(s, *accel, PathIntegrator(s, {.max_depth = 1}), {.spp = 4, .seed = 3});
   EXPECT_NEAR(mean_red(image), kTransparentShare, 1e-6);
+}
+
+// The lab integrator's camera ray through each pixel's corner, x = k / 50 on the quad for column
+// k of a 50-pixel orthographic view of [0, 1]^2: the wall shows where 2/8 < k / 50 < 5/8, which is
+// k = 13 ... 31, 19 columns (no corner falls on a border). Lit by the ambient term only, each
+// pixel is its surface's albedo times the ambient.
+TEST(AlphaCutout, LabIntegratorSeesThroughTheMaskToo) {
+  Scene s = alpha_test::quad_before_wall(AlphaMode::kMask, true);
+  s.materials[0].albedo = glm::vec3(0.5f);
+  s.materials[1].albedo = glm::vec3(0.25f);
+  s.ambient = glm::vec3(1.0f);
+  s.camera =
+      Camera::look_at(50, 50, {0.5f, 0.5f, 0.0f}, {0.5f, 0.5f, 1.0f}, {0.0f, -1.0f, 0.0f}, 50)
+          .orthographic(1.0f / 50);
+  const auto accel = make_accel(AccelKind::kBvh, s, kDefaultKernel);
+  const Image image = render(s, *accel, LabIntegrator(), {});
+  for (int y = 0; y < 50; ++y) {
+    for (int x = 0; x < 50; ++x) {
+      const float u = s.camera.primary_ray(x, y).origin.x;
+      const bool wall = u > 2.0f / 8 && u < 5.0f / 8;
+      EXPECT_FLOAT_EQ(image.at(x, y).x, wall ? 0.5f : 0.25f) << x << ", " << y;
+    }
+  }
+  int wall_columns = 0;
+  for (int x = 0; x < 50; ++x) wall_columns += image.at(x, 25).x == 0.5f;
+  EXPECT_EQ(wall_columns, 19);
 }
 
 // The scene for shadows: a floor (albedo 0.5) at y = 2 under a black quad at y = 1 with the
