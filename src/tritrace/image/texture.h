@@ -53,6 +53,7 @@ class Texture {
   bool has_alpha() const { return !alpha_.empty(); }
   // The alpha channel at uv, filtered as lookup filters colour; 1 without a channel.
   float alpha(glm::vec2 uv, WrapMode s, WrapMode t) const;
+  const std::vector<float>& alpha_texels() const { return alpha_; }
   // Gives the texture an alpha channel: width * height values in [0, 1], row by row from the top.
   void set_alpha(std::vector<float> alpha) { alpha_ = std::move(alpha); }
 
