@@ -55,10 +55,13 @@ bool AlphaTestedAccel::transparent(const Ray& ray, const Hit& hit) const {
 }
 
 void AlphaTestedAccel::skip_transparent(std::span<const Ray> rays, std::span<Hit> hits) const {
+  // Most batches have no transparent hit: they leave before the arrays below are set up.
+  size_t next = 0;
+  while (next < rays.size() && !transparent(rays[next], hits[next])) ++next;
+  if (next == rays.size()) return;
   Ray again[kChunk];
   Hit found[kChunk];
   uint32_t which[kChunk];
-  size_t next = 0;
   while (next < rays.size()) {
     // Gather up to kChunk rays whose hit is transparent, then trace them until none is.
     size_t n = 0;
@@ -87,10 +90,12 @@ void AlphaTestedAccel::resolve_occluded(std::span<const Ray> rays,
                                         std::span<uint8_t> occluded) const {
   // The rays that something blocks: whether that is only transparent surfaces decides the closest
   // hit, skipped past while transparent.
+  size_t next = 0;
+  while (next < rays.size() && !occluded[next]) ++next;
+  if (next == rays.size()) return;
   Ray blocked[kChunk];
   Hit hits[kChunk];
   uint32_t which[kChunk];
-  size_t next = 0;
   while (next < rays.size()) {
     size_t n = 0;
     for (; next < rays.size() && n < kChunk; ++next) {
