@@ -7,6 +7,8 @@ packages=(
   build-essential cmake pkg-config git
   libglm-dev libtbb-dev libcli11-dev libstb-dev libembree-dev nlohmann-json3-dev
   libassimp-dev assimp-testmodels
+  # The assimp command: its pbrt exporter writes the pbrt-v4 files the loader is tested against.
+  assimp-utils
   # The native OBJ/MTL reader (scene/io/obj_reader.h); without it OBJ goes through assimp.
   libtinyobjloader-dev
   # OpenEXR 3.1 for .exr output (float or half RGB with AOV layers).

@@ -44,6 +44,29 @@ TEST(RenderIdentity, MaterialFieldsChangeIt) {
   expect_changes_identity([](Scene& s) { s.materials[0].transmission = 0.5f; });
 }
 
+TEST(RenderIdentity, AlphaModesAndTextureAlphaChangeIt) {
+  expect_changes_identity([](Scene& s) { s.materials[0].alpha_mode = AlphaMode::kMask; });
+  auto blend = [](float alpha, float cutoff) {
+    return [=](Scene& s) {
+      s.materials[0].alpha_mode = AlphaMode::kBlend;
+      s.materials[0].alpha = alpha;
+      s.materials[0].alpha_cutoff = cutoff;
+    };
+  };
+  Scene a = make_cornell_area(), b = a, c = a;
+  blend(0.5f, 0.5f)(a);
+  blend(0.25f, 0.5f)(b);
+  blend(0.5f, 0.75f)(c);
+  EXPECT_NE(identity_of(a), identity_of(b));
+  EXPECT_NE(identity_of(a), identity_of(c));
+  // A texture's alpha channel.
+  Scene opaque = make_cornell_area();
+  opaque.textures.emplace_back(1, 1, std::vector<glm::vec3>{glm::vec3(0.5f)});
+  Scene cut = opaque;
+  cut.textures[0].set_alpha({0.0f});
+  EXPECT_NE(identity_of(opaque), identity_of(cut));
+}
+
 TEST(RenderIdentity, SpotAndDirectionalLightsChangeIt) {
   const SpotLight spot{.position = {0.0f, -0.9f, 0.0f},
                        .direction = {0.0f, 1.0f, 0.0f},

@@ -445,7 +445,7 @@ Scene bent_and_textured(int side, float bend) {
             &normals, &uvs);
   }
   s.mesh = out;
-  TextureImage image{.width = 4, .height = 3, .rgb = {}};
+  TextureImage image{.width = 4, .height = 3, .rgb = {}, .alpha = {}};
   for (int k = 0; k < 36; ++k) image.rgb.push_back(static_cast<uint8_t>(40 + 37 * k % 200));
   s.textures = {Texture::from_srgb8(image)};
   for (Material& m : s.materials) {

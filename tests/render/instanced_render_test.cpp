@@ -109,7 +109,7 @@ Scene smooth_textured(Scene s) {
   };
   bend(s.mesh);
   for (TriangleMesh& p : s.prototypes) bend(p);
-  TextureImage image{.width = 4, .height = 3, .rgb = {}};
+  TextureImage image{.width = 4, .height = 3, .rgb = {}, .alpha = {}};
   for (int k = 0; k < 36; ++k) image.rgb.push_back(static_cast<uint8_t>(40 + 37 * k % 200));
   s.textures = {Texture::from_srgb8(image)};
   for (const TriangleMesh& p : s.prototypes) {

@@ -18,6 +18,7 @@
 #include <tuple>
 #include <vector>
 
+#include "tritrace/accel/make_accel.h"
 #include "tritrace/error.h"
 #include "tritrace/image/image_io.h"
 #include "tritrace/job/render_job.h"
@@ -385,6 +386,96 @@ TEST(PbrtScene, LensRadiusAndFocalDistanceMakeTheThinLens) {
   EXPECT_EQ(
       error_of([] { parse("Camera \"perspective\" \"float focaldistance\" 0\nWorldBegin\n"); }),
       "s.pbrt:1:1: \"float focaldistance\" must be a finite number greater than 0");
+}
+
+// pbrt-v4's orthographic camera maps camera-space [-1, 1] to the film's shorter side (its default
+// screen window), so the image spans 2 camera-space units there; ortho_scale is world units per
+// pixel.
+TEST(PbrtScene, OrthographicCameraSpansTwoUnitsOnTheShorterSide) {
+  const std::string look = "LookAt 0 0 -5  0 0 0  0 1 0\n";
+  const LoadedScene wide = parse(look +
+                                 "Camera \"orthographic\"\n"
+                                 "Film \"rgb\" \"integer xresolution\" 64 "
+                                 "\"integer yresolution\" 48\nWorldBegin\n");
+  EXPECT_TRUE(wide.warnings.empty()) << wide.warnings.front();
+  ASSERT_TRUE(wide.scene.camera.is_orthographic());
+  EXPECT_FLOAT_EQ(wide.scene.camera.ortho_scale(), 2.0f / 48);
+  // Parallel rays along the view axis, from the image plane through the camera's position.
+  const Ray centre = wide.scene.camera.primary_ray(32, 24);
+  const Ray corner = wide.scene.camera.primary_ray(0, 0);
+  EXPECT_NEAR(glm::length(centre.dir - glm::vec3(0, 0, 1)), 0.0f, 1e-6f);
+  EXPECT_NEAR(glm::length(corner.dir - centre.dir), 0.0f, 1e-6f);
+  EXPECT_NEAR(std::abs(corner.origin.y - centre.origin.y), 1.0f, 1e-5f);
+  EXPECT_NEAR(std::abs(corner.origin.x - centre.origin.x), 64.0f / 48, 1e-5f);
+  // A tall film: [-1, 1] across its width, 2 * 64 / 48 units from top to bottom.
+  const LoadedScene tall = parse(look +
+                                 "Camera \"orthographic\"\n"
+                                 "Film \"rgb\" \"integer xresolution\" 48 "
+                                 "\"integer yresolution\" 64\nWorldBegin\n");
+  EXPECT_FLOAT_EQ(tall.scene.camera.ortho_scale(), 2.0f / 48);
+  // A screen window sets the height; Scale 2 before the LookAt makes camera-space units half a
+  // world unit (as it halves lensradius), and the view half as tall.
+  const LoadedScene window =
+      parse(look + "Camera \"orthographic\" \"float screenwindow\" [-3 3 -2 2]\nWorldBegin\n");
+  EXPECT_FLOAT_EQ(window.scene.camera.ortho_scale(), 4.0f / 720);
+  const LoadedScene scaled =
+      parse("Scale 2 2 2\n" + look + "Camera \"orthographic\"\nWorldBegin\n");
+  EXPECT_FLOAT_EQ(scaled.scene.camera.ortho_scale(), 1.0f / 720);
+  EXPECT_EQ(error_of([&] {
+              parse("Camera \"orthographic\" \"float screenwindow\" [1 -1 0 1]\nWorldBegin\n");
+            }),
+            "s.pbrt:1:23: \"float screenwindow\" takes four numbers x0 x1 y0 y1 with x0 < x1, y0 < "
+            "y1");
+}
+
+// A shape's "float alpha" is pbrt-v4's stochastic alpha test: the blend mode with that alpha, for
+// this shape only. Rays through the quad pass 70% of the time at alpha 0.3 (within 4 binomial
+// standard deviations over 4096 rays), and always at alpha 0.
+TEST(PbrtScene, ShapeAlphaMakesTheShapeStochasticallyTransparent) {
+  const std::string quad =
+      "\"point3 P\" [0 0 0  1 0 0  1 1 0  0 1 0] \"integer indices\" [0 1 2 0 2 3]\n";
+  const LoadedScene loaded = parse(
+      "WorldBegin\nMaterial \"diffuse\"\n"
+      "Shape \"trianglemesh\" \"float alpha\" 0.3 " +
+      quad + "Translate 2 0 0\nShape \"trianglemesh\" " + quad +
+      "Translate 2 0 0\nShape \"trianglemesh\" \"float alpha\" 0 " + quad);
+  EXPECT_TRUE(loaded.warnings.empty()) << loaded.warnings.front();
+  const Scene& s = loaded.scene;
+  ASSERT_EQ(s.mesh.size(), 6u);
+  const Material& blended = s.materials[s.material_of(0)];
+  EXPECT_EQ(blended.alpha_mode, AlphaMode::kBlend);
+  EXPECT_FLOAT_EQ(blended.alpha, 0.3f);
+  EXPECT_EQ(s.materials[s.material_of(2)].alpha_mode, AlphaMode::kOpaque);
+  const auto accel = make_accel(AccelKind::kBvh, s, kDefaultKernel);
+  auto passing = [&](float x0) {
+    int n = 0;
+    for (int j = 0; j < 64; ++j) {
+      for (int i = 0; i < 64; ++i) {
+        const Ray r{{x0 + (i + 0.5f) / 64, (j + 0.25f) / 64, -1.0f}, {0, 0, 1}};
+        n += !accel->intersect(r).found();
+      }
+    }
+    return n;
+  };
+  EXPECT_NEAR(passing(0.0f) / 4096.0, 0.7, 4.0 * std::sqrt(0.21 / 4096));
+  EXPECT_EQ(passing(2.0f), 0);
+  EXPECT_EQ(passing(4.0f), 4096);
+  EXPECT_EQ(
+      error_of([&] { parse("WorldBegin\nShape \"trianglemesh\" \"float alpha\" 2 " + quad); }),
+      "s.pbrt:2:1: \"float alpha\" must be from 0 to 1");
+}
+
+// assimp's pbrt exporter writes pbrt-v3's two-number blackbody (temperature, scale).
+TEST(PbrtScene, BlackbodyTakesPbrtV3sScaleToo) {
+  const LoadedScene one = parse("WorldBegin\nLightSource \"infinite\" \"blackbody L\" [6000]\n");
+  const LoadedScene two = parse("WorldBegin\nLightSource \"infinite\" \"blackbody L\" [6000 2]\n");
+  EXPECT_GT(one.scene.environment.x, 0.0f);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_FLOAT_EQ(two.scene.environment[c], 2.0f * one.scene.environment[c]);
+  }
+  EXPECT_NE(
+      error_of([] { parse("WorldBegin\nLightSource \"infinite\" \"blackbody L\" [6000 1 2]\n"); }),
+      "(no error)");
 }
 
 TEST(PbrtScene, TheLastTransformWrittenAppliesFirst) {

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <string>
 
+#include "tritrace/accel/alpha_tested_accel.h"
 #include "tritrace/accel/brute_force.h"
 #include "tritrace/accel/bvh/bvh_accel.h"
 #include "tritrace/accel/instanced_accel.h"
@@ -146,8 +147,11 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kern
   return accel;
 }
 
-std::unique_ptr<Accel> make_accel(AccelKind kind, const Scene& scene, Kernel kernel,
-                                  AccelInfo* info, bvh::BuildMethod build) {
+namespace {
+
+// The structure over the scene's triangles, opaque all (make_accel below adds the alpha test).
+std::unique_ptr<Accel> make_scene_structure(AccelKind kind, const Scene& scene, Kernel kernel,
+                                            AccelInfo* info, bvh::BuildMethod build) {
   if (!scene.has_instances()) return make_accel(kind, scene.mesh, kernel, info, build);
   if (is_embree(kind)) {
     throw Error("--accel", std::string(accel_name(kind)) +
@@ -172,6 +176,15 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const Scene& scene, Kernel ker
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (info) *info = total;
   return accel;
+}
+
+}  // namespace
+
+std::unique_ptr<Accel> make_accel(AccelKind kind, const Scene& scene, Kernel kernel,
+                                  AccelInfo* info, bvh::BuildMethod build) {
+  std::unique_ptr<Accel> accel = make_scene_structure(kind, scene, kernel, info, build);
+  if (!has_alpha_tested_materials(scene)) return accel;
+  return std::make_unique<AlphaTestedAccel>(scene, std::move(accel));
 }
 
 }  // namespace tritrace

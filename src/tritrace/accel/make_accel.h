@@ -64,7 +64,9 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kern
 // The structure for a whole scene (which must outlive it): make_accel over scene.mesh when it has
 // no instances, else an InstancedAccel with one structure of `kind` per prototype (brute: every
 // instance in turn, the oracle; bvh, bvh-single: a binned SAH tree over the instances). Embree
-// backends refuse instanced scenes: Error("--accel", ...).
+// backends refuse instanced scenes: Error("--accel", ...). When a material of the scene is
+// alpha_tested (cut-outs, stochastic transparency), that structure is wrapped in an
+// AlphaTestedAccel; otherwise it is returned as it is.
 std::unique_ptr<Accel> make_accel(AccelKind kind, const Scene& scene, Kernel kernel,
                                   AccelInfo* info = nullptr,
                                   bvh::BuildMethod build = bvh::BuildMethod::kBinnedSah);

@@ -165,6 +165,8 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
     h.add_value(t.width());
     h.add_value(t.height());
     h.add_vector(t.texels());
+    // Alpha channels only where present, so that other scenes' identities stay as they were.
+    if (t.has_alpha()) h.add_vector(t.alpha_texels());
   }
   for (const Material& mat : scene.materials) {
     h.add_value(mat.albedo);
@@ -181,6 +183,11 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
       h.add_value(r.index);
       h.add_value(static_cast<uint8_t>(r.wrap_s));
       h.add_value(static_cast<uint8_t>(r.wrap_t));
+    }
+    if (mat.alpha_mode != AlphaMode::kOpaque) {  // likewise only where a material has one
+      h.add_value(static_cast<uint8_t>(mat.alpha_mode));
+      h.add_value(mat.alpha);
+      h.add_value(mat.alpha_cutoff);
     }
   }
   for (const PointLight& l : scene.lights) {

@@ -53,22 +53,51 @@ Texture Texture::from_srgb8(const TextureImage& image) {
     texels[i] = {linear[image.rgb[3 * i]], linear[image.rgb[3 * i + 1]],
                  linear[image.rgb[3 * i + 2]]};
   }
-  return Texture(image.width, image.height, std::move(texels));
+  Texture texture(image.width, image.height, std::move(texels));
+  if (!image.alpha.empty()) {
+    std::vector<float> alpha(image.alpha.size());
+    for (size_t i = 0; i < alpha.size(); ++i) alpha[i] = image.alpha[i] / 255.0f;
+    texture.set_alpha(std::move(alpha));
+  }
+  return texture;
 }
 
-glm::vec3 Texture::lookup(glm::vec2 uv, WrapMode s, WrapMode t) const {
+Texture::Footprint Texture::footprint(glm::vec2 uv, WrapMode s, WrapMode t) const {
   const double x = texel_coordinate(uv.x, width_);
   const double y = texel_coordinate(1.0f - uv.y, height_);
   const double x0 = std::floor(x), y0 = std::floor(y);
-  const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
   const int64_t ix = static_cast<int64_t>(x0), iy = static_cast<int64_t>(y0);
-  const int x_lo = static_cast<int>(wrap(ix, width_, s)),
-            x_hi = static_cast<int>(wrap(ix + 1, width_, s));
-  const int y_lo = static_cast<int>(wrap(iy, height_, t)),
-            y_hi = static_cast<int>(wrap(iy + 1, height_, t));
-  const glm::vec3 top = (1.0f - fx) * texel(x_lo, y_lo) + fx * texel(x_hi, y_lo);
-  const glm::vec3 bottom = (1.0f - fx) * texel(x_lo, y_hi) + fx * texel(x_hi, y_hi);
-  return (1.0f - fy) * top + fy * bottom;
+  return {static_cast<size_t>(wrap(ix, width_, s)),
+          static_cast<size_t>(wrap(ix + 1, width_, s)),
+          static_cast<size_t>(wrap(iy, height_, t)),
+          static_cast<size_t>(wrap(iy + 1, height_, t)),
+          static_cast<float>(x - x0),
+          static_cast<float>(y - y0)};
+}
+
+glm::vec3 Texture::lookup(glm::vec2 uv, WrapMode s, WrapMode t) const {
+  const Footprint f = footprint(uv, s, t);
+  const auto at = [&](size_t x, size_t y) -> const glm::vec3& {
+    return texels_[y * static_cast<size_t>(width_) + x];
+  };
+  const glm::vec3 top = (1.0f - f.fx) * at(f.x_lo, f.y_lo) + f.fx * at(f.x_hi, f.y_lo);
+  const glm::vec3 bottom = (1.0f - f.fx) * at(f.x_lo, f.y_hi) + f.fx * at(f.x_hi, f.y_hi);
+  return (1.0f - f.fy) * top + f.fy * bottom;
+}
+
+float Texture::alpha(glm::vec2 uv, WrapMode s, WrapMode t) const {
+  if (alpha_.empty()) return 1.0f;
+  const Footprint f = footprint(uv, s, t);
+  const auto at = [&](size_t x, size_t y) { return alpha_[y * static_cast<size_t>(width_) + x]; };
+  const float top = (1.0f - f.fx) * at(f.x_lo, f.y_lo) + f.fx * at(f.x_hi, f.y_lo);
+  const float bottom = (1.0f - f.fx) * at(f.x_lo, f.y_hi) + f.fx * at(f.x_hi, f.y_hi);
+  return (1.0f - f.fy) * top + f.fy * bottom;
+}
+
+void drop_opaque_alpha(TextureImage& image) {
+  if (std::all_of(image.alpha.begin(), image.alpha.end(), [](uint8_t a) { return a == 255; })) {
+    image.alpha.clear();
+  }
 }
 
 TextureImage decode_texture_image(std::span<const uint8_t> bytes, const std::string& subject) {
@@ -86,10 +115,25 @@ TextureImage decode_texture_image(std::span<const uint8_t> bytes, const std::str
   } catch (const Error& e) {
     throw Error(subject, "cannot read texture: " + e.reason());
   }
-  uint8_t* data =
-      stbi_load_from_memory(bytes.data(), static_cast<int>(bytes.size()), &w, &h, &channels, 3);
+  // Grey + alpha and RGBA files keep their alpha channel.
+  const bool has_alpha = channels == 2 || channels == 4;
+  const int wanted = has_alpha ? 4 : 3;
+  uint8_t* data = stbi_load_from_memory(bytes.data(), static_cast<int>(bytes.size()), &w, &h,
+                                        &channels, wanted);
   if (!data) throw Error(subject, std::string("cannot read texture: ") + stbi_failure_reason());
-  TextureImage image{w, h, std::vector<uint8_t>(data, data + static_cast<size_t>(w) * h * 3)};
+  const size_t texels = static_cast<size_t>(w) * static_cast<size_t>(h);
+  TextureImage image{w, h, {}, {}};
+  if (has_alpha) {
+    image.rgb.resize(texels * 3);
+    image.alpha.resize(texels);
+    for (size_t i = 0; i < texels; ++i) {
+      for (size_t c = 0; c < 3; ++c) image.rgb[3 * i + c] = data[4 * i + c];
+      image.alpha[i] = data[4 * i + 3];
+    }
+    drop_opaque_alpha(image);
+  } else {
+    image.rgb.assign(data, data + texels * 3);
+  }
   stbi_image_free(data);
   return image;
 }

@@ -20,6 +20,9 @@ struct TextureImage {
   int width = 0;
   int height = 0;
   std::vector<uint8_t> rgb;  // width * height * 3 bytes
+  // width * height bytes of coverage (0 transparent, 255 opaque), or empty where the image has
+  // no alpha channel or every texel is opaque.
+  std::vector<uint8_t> alpha;
 };
 
 // The IEC 61966-2-1 sRGB transfer curve, encoded [0, 1] to linear [0, 1].
@@ -30,7 +33,8 @@ class Texture {
   Texture() = default;
   // `texels` row by row from the top, width * height of them; width, height >= 1.
   Texture(int width, int height, std::vector<glm::vec3> texels);
-  // An 8-bit colour image: each byte b decoded as srgb_to_linear(b / 255).
+  // An 8-bit colour image: each byte b decoded as srgb_to_linear(b / 255); its alpha bytes, when
+  // it has them, as b / 255 (alpha is linear).
   static Texture from_srgb8(const TextureImage& image);
 
   int width() const { return width_; }
@@ -45,11 +49,31 @@ class Texture {
   // its centre at ((x + 0.5) / width, 1 - (y + 0.5) / height). `s` wraps u, `t` wraps v.
   glm::vec3 lookup(glm::vec2 uv, WrapMode s, WrapMode t) const;
 
+  // Whether the texture has an alpha channel (one texel below 1).
+  bool has_alpha() const { return !alpha_.empty(); }
+  // The alpha channel at uv, filtered as lookup filters colour; 1 without a channel.
+  float alpha(glm::vec2 uv, WrapMode s, WrapMode t) const;
+  const std::vector<float>& alpha_texels() const { return alpha_; }
+  // Gives the texture an alpha channel: width * height values in [0, 1], row by row from the top.
+  void set_alpha(std::vector<float> alpha) { alpha_ = std::move(alpha); }
+
  private:
+  // The texels bilinear filtering at uv blends (columns x_lo, x_hi, rows y_lo, y_hi, wrapped) and
+  // the fractions fx, fy of the way from the low to the high ones.
+  struct Footprint {
+    size_t x_lo, x_hi, y_lo, y_hi;
+    float fx, fy;
+  };
+  Footprint footprint(glm::vec2 uv, WrapMode s, WrapMode t) const;
+
   int width_ = 0;
   int height_ = 0;
   std::vector<glm::vec3> texels_;
+  std::vector<float> alpha_;  // empty: opaque
 };
+
+// Empties image.alpha when every byte of it is 255 (an opaque image needs no alpha test).
+void drop_opaque_alpha(TextureImage& image);
 
 // Decodes an image file's bytes (PNG, JPEG, BMP, TGA ... through stb_image) to 8-bit RGB. Throws
 // Error(subject, "cannot read texture: <reason>") for bytes it cannot decode, a side longer than

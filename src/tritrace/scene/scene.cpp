@@ -169,3 +169,34 @@ Scene flattened(const Scene& scene) {
 }
 
 }  // namespace tritrace
+
+namespace tritrace {
+
+bool alpha_tested(const Scene& scene, const Material& material) {
+  if (material.alpha_mode == AlphaMode::kOpaque) return false;
+  const TextureRef& t = material.albedo_texture;
+  const bool texture_alpha = t.present() && static_cast<size_t>(t.index) < scene.textures.size() &&
+                             scene.textures[static_cast<size_t>(t.index)].has_alpha();
+  // A mask whose factor passes the cutoff and that has no alpha texture is opaque everywhere.
+  if (!texture_alpha) {
+    return material.alpha_mode == AlphaMode::kMask ? material.alpha < material.alpha_cutoff
+                                                   : material.alpha < 1.0f;
+  }
+  return true;
+}
+
+bool has_alpha_tested_materials(const Scene& scene) {
+  for (const Material& m : scene.materials) {
+    if (alpha_tested(scene, m)) return true;
+  }
+  return false;
+}
+
+float material_alpha(const Scene& scene, const Material& material, glm::vec2 uv) {
+  const TextureRef& t = material.albedo_texture;
+  if (!t.present()) return material.alpha;
+  return material.alpha *
+         scene.textures[static_cast<size_t>(t.index)].alpha(uv, t.wrap_s, t.wrap_t);
+}
+
+}  // namespace tritrace

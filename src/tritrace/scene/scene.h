@@ -37,6 +37,12 @@ struct TextureRef {
   bool present() const { return index >= 0; }
 };
 
+// How a material's alpha (Material::alpha times its base colour texture's alpha) hides parts of its
+// surface, as glTF's alphaMode: kOpaque ignores alpha; kMask is a cut-out, transparent where alpha
+// < alpha_cutoff; kBlend is stochastic transparency, each ray passing with probability 1 - alpha
+// (accel/alpha_tested_accel.h). Rays of every kind pass through the transparent parts.
+enum class AlphaMode : uint8_t { kOpaque, kMask, kBlend };
+
 // A surface material that may also emit light.
 struct Material {
   glm::vec3 albedo{0.75f};  // diffuse reflectance rho (or F0, or transmission tint), linear RGB
@@ -62,6 +68,9 @@ struct Material {
   // emissiveTexture times emissiveFactor). The lab integrator ignores them.
   TextureRef albedo_texture{};
   TextureRef emission_texture{};
+  AlphaMode alpha_mode = AlphaMode::kOpaque;
+  float alpha = 1.0f;         // glTF's base colour factor's alpha, in [0, 1]
+  float alpha_cutoff = 0.5f;  // kMask only
 
   bool emits() const { return emission.x > 0.0f || emission.y > 0.0f || emission.z > 0.0f; }
   bool is_diffuse() const { return type == MaterialType::kDiffuse; }
@@ -310,6 +319,15 @@ Bounds3 scene_bounds(const Scene& scene);
 // have vertex normals and the scene's own mesh has none, the flattened mesh gives its own
 // triangles their face normals at the corners, and shades them smooth.)
 Scene flattened(const Scene& scene);
+// Whether `material` hides any part of its surface: a mask or blend mode with an alpha factor
+// below 1 or a base colour texture with an alpha channel (alpha_tested_accel.h tests its hits).
+bool alpha_tested(const Scene& scene, const Material& material);
+// Whether any material of `scene` is alpha_tested.
+bool has_alpha_tested_materials(const Scene& scene);
+// The alpha of `material` at texture coordinates uv: Material::alpha times the base colour
+// texture's alpha there (1 for a texture without an alpha channel).
+float material_alpha(const Scene& scene, const Material& material, glm::vec2 uv);
+
 // `factor` times the texture `ref` at texture coordinates uv, or `factor` alone without a texture.
 inline glm::vec3 textured(const Scene& scene, const TextureRef& ref, glm::vec3 factor,
                           glm::vec2 uv) {

@@ -2,6 +2,7 @@
 // hostile file can nest nodes deeply), checks every face index, and converts materials.
 #include "tritrace/scene/io/mesh_import.h"
 
+#include <assimp/GltfMaterial.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -135,11 +136,14 @@ class TextureTable {
     } catch (const Error& e) {
       throw Error(what, "cannot read texture: " + e.reason());
     }
-    TextureImage image{static_cast<int>(t.mWidth), static_cast<int>(t.mHeight), {}};
+    TextureImage image{static_cast<int>(t.mWidth), static_cast<int>(t.mHeight), {}, {}};
     image.rgb.reserve(static_cast<size_t>(t.mWidth) * t.mHeight * 3);
+    image.alpha.reserve(static_cast<size_t>(t.mWidth) * t.mHeight);
     for (size_t i = 0; i < static_cast<size_t>(t.mWidth) * t.mHeight; ++i) {
       image.rgb.insert(image.rgb.end(), {t.pcData[i].r, t.pcData[i].g, t.pcData[i].b});
+      image.alpha.push_back(t.pcData[i].a);
     }
+    drop_opaque_alpha(image);
     return image;
   }
 
@@ -149,6 +153,30 @@ class TextureTable {
   ImportedMesh& out_;
   std::map<std::string, int32_t> embedded_;
 };
+
+// glTF's alphaMode, alphaCutoff and the base colour factor's alpha (assimp keeps all three; its
+// base colour texture is the albedo texture, whose alpha channel the alpha test also reads). The
+// alpha mode of other formats stays opaque: OBJ's dissolve maps to glass (material_mapping.h).
+void read_alpha_mode(const aiMaterial& m, Material& out) {
+  aiString mode;
+  if (m.Get(AI_MATKEY_GLTF_ALPHAMODE, mode) != AI_SUCCESS) return;
+  const std::string name = mode.C_Str();
+  if (name == "MASK") {
+    out.alpha_mode = AlphaMode::kMask;
+  } else if (name == "BLEND") {
+    out.alpha_mode = AlphaMode::kBlend;
+  } else {
+    return;  // "OPAQUE" (glTF's default): alpha is ignored
+  }
+  aiColor4D base;
+  if (m.Get(AI_MATKEY_BASE_COLOR, base) == AI_SUCCESS && std::isfinite(base.a)) {
+    out.alpha = std::clamp(base.a, 0.0f, 1.0f);
+  }
+  if (const std::optional<float> cutoff = get_float(m, AI_MATKEY_GLTF_ALPHACUTOFF);
+      cutoff && std::isfinite(*cutoff)) {
+    out.alpha_cutoff = std::max(*cutoff, 0.0f);
+  }
+}
 
 // assimp's keys, as they are, for the one mapping (material_mapping.h).
 Material convert_material(const aiMaterial& m, TextureTable& textures) {
@@ -166,7 +194,9 @@ Material convert_material(const aiMaterial& m, TextureTable& textures) {
   keys.transmission = get_float(m, AI_MATKEY_TRANSMISSION_FACTOR);
   keys.albedo_texture = textures.find(m, {aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
   keys.emission_texture = textures.find(m, {aiTextureType_EMISSIVE});
-  return map_material(keys);
+  Material out = map_material(keys);
+  read_alpha_mode(m, out);
+  return out;
 }
 
 void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t material,
@@ -435,6 +465,7 @@ void put_mesh(const ImportedMesh& mesh, Bytes& b) {
     b.put<int32_t>(t.width);
     b.put<int32_t>(t.height);
     b.put_array(t.rgb);
+    b.put_array(t.alpha);
   }
 }
 
@@ -465,8 +496,10 @@ ImportedMesh from_bytes(std::span<const uint8_t> bytes, const std::string& subje
       t.width = in.get<int32_t>();
       t.height = in.get<int32_t>();
       t.rgb = in.get_array<uint8_t>();
-      if (t.width <= 0 || t.height <= 0 ||
-          t.rgb.size() != static_cast<size_t>(t.width) * static_cast<size_t>(t.height) * 3) {
+      t.alpha = in.get_array<uint8_t>();
+      const size_t texels = static_cast<size_t>(t.width) * static_cast<size_t>(t.height);
+      if (t.width <= 0 || t.height <= 0 || t.rgb.size() != texels * 3 ||
+          (!t.alpha.empty() && t.alpha.size() != texels)) {
         throw std::runtime_error("texture");
       }
       mesh.textures.push_back(std::move(t));

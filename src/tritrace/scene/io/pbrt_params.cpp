@@ -182,10 +182,15 @@ std::optional<glm::vec3> PbrtParams::get_rgb(std::string_view name) const {
     return glm::vec3(glm::dvec3(v[0], v[1], v[2]));
   }
   if (p->type == "blackbody") {
-    if (v.size() != 1 || !(v[0] > 0.0)) {
-      fail(p->at, declared(*p) + " takes one positive temperature in kelvin");
+    // pbrt-v3's form [temperature scale], which assimp's pbrt exporter still writes, is read with
+    // pbrt-v3's meaning: the normalised blackbody times the scale.
+    if (v.empty() || v.size() > 2 || !(v[0] > 0.0) || (v.size() == 2 && !(v[1] >= 0.0))) {
+      fail(p->at, declared(*p) +
+                      " takes one positive temperature in kelvin (or pbrt-v3's temperature and "
+                      "scale)");
     }
-    return blackbody_rgb(v[0]);
+    const glm::vec3 rgb = blackbody_rgb(v[0]);
+    return v.size() == 2 ? rgb * static_cast<float>(v[1]) : rgb;
   }
   if (p->type == "float" && v.size() == 1) return glm::vec3(static_cast<float>(v[0]));
   if (p->type != "spectrum") fail(p->at, declared(*p) + " must be an rgb or a spectrum");

@@ -470,8 +470,27 @@ class Interpreter {
     camera_from_world_ = gs_.ctm;
     camera_at_ = d.at;
     named_spaces_["camera"] = glm::inverse(gs_.ctm);
-    if (type != "perspective") {
+    orthographic_ = type == "orthographic";
+    if (type != "perspective" && !orthographic_) {
       warn(d.at, "Camera \"" + type + "\" approximated by a perspective camera");
+    }
+    screen_half_height_.reset();
+    const PbrtParam* window = p.find("screenwindow");
+    if (window && !orthographic_) {
+      warn(window->at, "screenwindow of a perspective camera ignored (fov sets the view)");
+    } else if (window) {
+      // [x0 x1 y0 y1] in screen space (camera space for the orthographic camera): tritrace's
+      // cameras centre the image on the view axis and take their width from the film's aspect,
+      // so only the window's height is kept.
+      const auto& v = window->numbers;
+      if (v.size() != 4 || !(v[3] > v[2]) || !(v[1] > v[0])) {
+        fail(window->at,
+             "\"float screenwindow\" takes four numbers x0 x1 y0 y1 with x0 < x1, y0 < y1");
+      }
+      if (v[0] != -v[1] || v[2] != -v[3]) {
+        warn(window->at, "an off-centre screenwindow approximated by a centred one");
+      }
+      screen_half_height_ = (v[3] - v[2]) / 2.0;
     }
     fov_ = p.get_float("fov", kPbrtFov);
     if (!(fov_ > 0.0 && fov_ < 180.0))
@@ -778,7 +797,33 @@ class Interpreter {
     return add_material(m);
   }
 
+  // A shape's "float alpha": pbrt-v4 ignores a hit on it where a hash of the ray is above alpha
+  // (every hit at alpha 0), which is tritrace's blend mode with a constant alpha. An alpha
+  // texture is warned and ignored.
+  float shape_alpha(const PbrtParams& p, const PbrtToken& d) {
+    if (!p.texture_name("alpha").empty()) {
+      warn(d.at, "shape \"texture alpha\" (textured cut-outs) ignored");
+      return 1.0f;
+    }
+    const double a = p.get_float("alpha", 1.0);
+    if (!(a >= 0.0 && a <= 1.0)) fail(d.at, "\"float alpha\" must be from 0 to 1");
+    return static_cast<float>(a);
+  }
+
   uint32_t current_material() {
+    const uint32_t surface = current_surface_material();
+    if (shape_alpha_ >= 1.0f) return surface;
+    const auto key = std::make_pair(surface, shape_alpha_);
+    if (const auto it = blended_.find(key); it != blended_.end()) return it->second;
+    Material m = out_.scene.materials[surface];
+    m.alpha_mode = AlphaMode::kBlend;
+    m.alpha = shape_alpha_;
+    const uint32_t index = add_material(m);
+    blended_[key] = index;
+    return index;
+  }
+
+  uint32_t current_surface_material() {
     if (gs_.material < 0) {
       if (default_material_ < 0) {
         Material m;
@@ -1082,6 +1127,7 @@ class Interpreter {
 
   void shape(const std::string& type, const PbrtParams& p, const PbrtToken& d) {
     const std::string what = "Shape \"" + type + "\"";
+    shape_alpha_ = shape_alpha(p, d);
     if (type == "trianglemesh" || type == "bilinearmesh" || type == "loopsubdiv") {
       const auto positions = vectors<glm::vec3>(p, "P", {"point3"}, 3, d);
       auto normals = vectors<glm::vec3>(p, "N", {"normal"}, 3, d);
@@ -1176,10 +1222,11 @@ class Interpreter {
                               p.get_float("zmax", 1.0), p.get_float("phimax", 360.0));
       add_analytic(m);
     } else {
+      shape_alpha_ = 1.0f;
       warn(d.at, what + " not supported: skipped");
       return;
     }
-    if (p.find("alpha")) warn(d.at, "shape \"alpha\" (cut-outs) ignored");
+    shape_alpha_ = 1.0f;
     p.find("emissionfilename");
     warn_unused(p, what);
   }
@@ -1223,6 +1270,17 @@ class Interpreter {
     }
     // Camera::look_at's right is cross(forward, up); pbrt's is the camera's +x.
     c.mirror_x = glm::dot(glm::cross(forward, up), right) < 0.0;
+    if (orthographic_) {
+      // pbrt-v4's default screen window spans [-1, 1] on the film's shorter side; camera-space
+      // lengths become world lengths by the camera transform's scale along y.
+      const double half_height = screen_half_height_.value_or(
+          c.height <= c.width ? 1.0 : static_cast<double>(c.height) / c.width);
+      const double scale = glm::length(dvec3(world_from_camera * glm::dvec4(0, 1, 0, 0)));
+      c.ortho_half_height = static_cast<float>(half_height * scale);
+      if (!std::isfinite(*c.ortho_half_height) || !(*c.ortho_half_height > 0.0f)) {
+        fail(camera_at_, "the orthographic camera's view is beyond float range");
+      }
+    }
     // The field of view spans the shorter side; tritrace takes the vertical one.
     const double half = fov_ * std::numbers::pi / 360.0;
     c.vertical_fov_degrees =
@@ -1272,6 +1330,10 @@ class Interpreter {
   dmat4 camera_from_world_{1.0};
   PbrtLocation camera_at_;
   double fov_ = kPbrtFov;
+  float shape_alpha_ = 1.0f;                                // the current shape's "float alpha"
+  std::map<std::pair<uint32_t, float>, uint32_t> blended_;  // (material, alpha) -> its blend
+  bool orthographic_ = false;
+  std::optional<double> screen_half_height_;  // from "screenwindow"
   double lens_radius_ = 0.0;
   double focal_distance_ = kPbrtFocalDistance;
   std::map<std::string, uint32_t> named_materials_;
