@@ -117,6 +117,47 @@ TEST(Texture, WrapModes) {
   }
 }
 
+TEST(Texture, MappedTexturesAreTheAffineMapOfTheLookup) {
+  // Bilinear weights sum to 1, so mapping the texels maps every lookup: here the texels 0.2 and
+  // 0.6 blend to 0.4 halfway, and 0.5 * 0.4 + 0.1 = 0.3.
+  const Texture t(2, 1, {glm::vec3(0.2f), glm::vec3(0.6f)});
+  const Texture m = t.mapped(glm::vec3(0.5f), glm::vec3(0.1f, 0.0f, 1.0f));
+  expect_near(m.lookup({0.5f, 0.5f}, WrapMode::kClamp, WrapMode::kClamp),
+              glm::vec3(0.3f, 0.2f, 1.2f), "mapped");
+  const Texture u = small();
+  const Texture um = u.mapped(glm::vec3(2.0f, 1.0f, 0.5f), glm::vec3(0.25f));
+  for (float x : {0.1f, 0.45f, 0.8f}) {
+    const glm::vec3 v = u.lookup({x, 0.3f}, WrapMode::kRepeat, WrapMode::kRepeat);
+    expect_near(um.lookup({x, 0.3f}, WrapMode::kRepeat, WrapMode::kRepeat),
+                glm::vec3(2.0f, 1.0f, 0.5f) * v + 0.25f, "mapped small");
+  }
+}
+
+TEST(Texture, CheckerboardIsEvenWhereTheFloorsSumToAnEvenNumber) {
+  // s = 3 u - 0.25, t = 0.5 v + 2: even (tex1) where floor(s) + floor(t) is even.
+  Checkerboard board;
+  board.scale = {3.0f, 0.5f};
+  board.delta = {-0.25f, 2.0f};
+  board.even = {1.0f, 0.5f, 0.0f};
+  board.odd = {0.0f, 0.25f, 1.0f};
+  const Texture t = Texture::checkerboard(board);
+  const auto at = [&](float u, float v) {
+    return t.lookup({u, v}, WrapMode::kClamp, WrapMode::kClamp);
+  };
+  EXPECT_EQ(at(0.1f, 0.1f), board.even);   // s 0.05, t 2.05: 0 + 2 = 2
+  EXPECT_EQ(at(0.05f, 0.1f), board.odd);   // s -0.1: -1 + 2 = 1
+  EXPECT_EQ(at(0.5f, 0.1f), board.odd);    // s 1.25: 1 + 2 = 3
+  EXPECT_EQ(at(0.5f, 2.5f), board.even);   // t 3.25: 1 + 3 = 4
+  EXPECT_EQ(at(-0.5f, 0.1f), board.even);  // s -1.75: -2 + 2 = 0
+  EXPECT_EQ(t.checker()->even, board.even);
+  EXPECT_EQ(t.texel(0, 0), glm::vec3(0.5f, 0.375f, 0.5f));  // the mean of the two colours
+  const Texture m = t.mapped(glm::vec3(0.5f), glm::vec3(0.5f));
+  EXPECT_EQ(m.lookup({0.5f, 2.5f}, WrapMode::kRepeat, WrapMode::kRepeat),
+            glm::vec3(1.0f, 0.75f, 0.5f));
+  EXPECT_EQ(m.lookup({0.5f, 0.1f}, WrapMode::kRepeat, WrapMode::kRepeat),
+            glm::vec3(0.5f, 0.625f, 1.0f));
+}
+
 TEST(Texture, DecodesPnmBytesAndRejectsGarbage) {
   const std::string ppm =
       std::string("P6\n2 1\n255\n") + std::string("\x10\x20\x30\xff\x00\x80", 6);

@@ -870,5 +870,183 @@ TEST(PbrtScene, RenderAndInfoDispatchOnTheExtension) {
   EXPECT_FALSE(is_scene_file("a/b.pbrt"));
 }
 
+TEST(PbrtScene, BdptIntegratorIsTritracesBdptUnlessTheSceneHasWhatItRefuses) {
+  const LoadedScene bdpt = parse(
+      "Integrator \"bdpt\" \"integer maxdepth\" 7\nWorldBegin\n"
+      "LightSource \"point\" \"rgb I\" [1 1 1]\n");
+  EXPECT_EQ(bdpt.integrator.kind, IntegratorSpec::Kind::kBdpt);
+  EXPECT_EQ(bdpt.integrator.max_depth, 7);
+  EXPECT_TRUE(bdpt.warnings.empty()) << bdpt.warnings.front();
+  EXPECT_EQ(parse("Integrator \"path\"\n").integrator.kind, IntegratorSpec::Kind::kPath);
+  const LoadedScene sppm = parse("Integrator \"sppm\" \"integer maxdepth\" 3\n");
+  EXPECT_EQ(sppm.integrator.kind, IntegratorSpec::Kind::kPath);
+  EXPECT_EQ(sppm.integrator.max_depth, 3);
+  ASSERT_EQ(sppm.warnings.size(), 1u);
+  EXPECT_EQ(sppm.warnings[0],
+            "s.pbrt:1: warning: Integrator \"sppm\" replaced by tritrace's path tracer");
+  // bdpt refuses spot and directional lights, a lens and the orthographic camera: the path
+  // tracer renders such files, with a warning naming the Integrator line.
+  const std::pair<const char*, const char*> refused[] = {
+      {"Integrator \"bdpt\"\nWorldBegin\nLightSource \"spot\"\n", "spot and distant lights"},
+      {"Integrator \"bdpt\"\nWorldBegin\nLightSource \"distant\"\n", "spot and distant lights"},
+      {"Camera \"perspective\" \"float lensradius\" .1\nIntegrator \"bdpt\"\nWorldBegin\n",
+       "a lens (lensradius > 0)"},
+      {"Camera \"orthographic\"\nIntegrator \"bdpt\"\nWorldBegin\n", "an orthographic camera"},
+  };
+  for (const auto& [text, why] : refused) {
+    const LoadedScene loaded = parse(text);
+    EXPECT_EQ(loaded.integrator.kind, IntegratorSpec::Kind::kPath) << text;
+    ASSERT_EQ(loaded.warnings.size(), 1u) << text;
+    const std::string line = std::string(text).rfind("Camera", 0) == 0 ? "2" : "1";
+    EXPECT_EQ(loaded.warnings[0],
+              "s.pbrt:" + line +
+                  ": warning: Integrator \"bdpt\" replaced by tritrace's path tracer: "
+                  "tritrace's bdpt refuses " +
+                  why)
+        << text;
+  }
+}
+
+// The albedo a material's texture gives at uv.
+glm::vec3 albedo_at(const LoadedScene& loaded, size_t triangle, glm::vec2 uv) {
+  const Scene& s = loaded.scene;
+  const Material& m = s.materials[s.mesh.material()[triangle]];
+  return textured(s, m.albedo_texture, m.albedo, uv);
+}
+
+const char* const kQuad =
+    "Shape \"trianglemesh\" \"point3 P\" [-1 -1 0  1 -1 0  -1 1 0  1 1 0]\n"
+    "  \"integer indices\" [0 2 1  1 2 3] \"point2 uv\" [0 0  1 0  0 1  1 1]\n";
+
+TEST(PbrtScene, CheckerboardTexturesAreExactCheckerboards) {
+  // s = 4 u + 0.5, t = 2 v: tex1 (red) where floor(s) + floor(t) is even, tex2 (blue) elsewhere.
+  const LoadedScene loaded = parse(std::string("WorldBegin\n") +
+                                   "Texture \"c\" \"spectrum\" \"checkerboard\" \"float uscale\" 4 "
+                                   "\"float vscale\" 2 \"float udelta\" .5\n"
+                                   "  \"rgb tex1\" [1 0 0] \"rgb tex2\" [0 0 1]\n"
+                                   "Material \"diffuse\" \"texture reflectance\" \"c\"\n" +
+                                   kQuad +
+                                   "Texture \"d\" \"spectrum\" \"checkerboard\"\n"
+                                   "Material \"diffuse\" \"texture reflectance\" \"d\"\n" +
+                                   kQuad);
+  EXPECT_TRUE(loaded.warnings.empty()) << loaded.warnings.front();
+  const glm::vec3 red(1, 0, 0), blue(0, 0, 1);
+  const std::pair<glm::vec2, glm::vec3> cases[] = {
+      {{0.05f, 0.1f}, red},   // s 0.7, t 0.2: 0 + 0
+      {{0.2f, 0.1f}, blue},   // s 1.3: 1 + 0
+      {{0.05f, 0.6f}, blue},  // t 1.2: 0 + 1
+      {{0.2f, 0.6f}, red},    // 1 + 1
+      {{-0.3f, 0.1f}, blue},  // s -0.7: -1 + 0
+      {{1.9f, 3.3f}, red},    // s 8.1, t 6.6: 8 + 6
+  };
+  for (const auto& [uv, want] : cases) {
+    EXPECT_EQ(albedo_at(loaded, 0, uv), want) << uv.x << " " << uv.y;
+  }
+  // pbrt's defaults: tex1 1, tex2 0, unit scale.
+  EXPECT_EQ(albedo_at(loaded, 2, {0.5f, 0.5f}), glm::vec3(1.0f));
+  EXPECT_EQ(albedo_at(loaded, 2, {1.5f, 0.5f}), glm::vec3(0.0f));
+  EXPECT_EQ(albedo_at(loaded, 2, {1.5f, 1.5f}), glm::vec3(1.0f));
+}
+
+TEST(PbrtScene, RenderedCheckerboardQuadHasTheCheckersColumnMeans) {
+  // An orthographic view of the quad, x right, filling the 8 x 8 image: pixel column i holds
+  // u in [i / 8, (i + 1) / 8], s = 4 u in [i / 2, (i + 1) / 2], t = v in [0, 1); under a
+  // uniform sky of radiance 1 a diffuse plane has radiance albedo: columns 0, 1, 4, 5 tex1,
+  // columns 2, 3, 6, 7 tex2.
+  const Image image =
+      render(parse(std::string("LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"orthographic\"\n"
+                               "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                               "Sampler \"sobol\" \"integer pixelsamples\" 64\nWorldBegin\n"
+                               "LightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+                               "Texture \"c\" \"spectrum\" \"checkerboard\" \"float uscale\" 4\n"
+                               "  \"rgb tex1\" [.8 .2 .1] \"rgb tex2\" [.1 .3 .6]\n"
+                               "Material \"diffuse\" \"texture reflectance\" \"c\"\n") +
+                   kQuad));
+  const glm::vec3 tex1(.8f, .2f, .1f), tex2(.1f, .3f, .6f);
+  for (int x = 0; x < 8; ++x) {
+    glm::vec3 mean(0.0f);
+    for (int y = 0; y < 8; ++y) mean += image.at(x, y) / 8.0f;
+    const glm::vec3 want = (x / 2) % 2 == 0 ? tex1 : tex2;
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(mean[c], want[c], 0.02f * want[c] + 1e-3f) << x;
+  }
+}
+
+TEST(PbrtScene, MixTexturesBlendExactlyWhereTheyCan) {
+  const std::string dir = ::testing::TempDir() + "pbrt_mix";
+  std::filesystem::create_directories(dir);
+  Image two(2, 1);
+  two.at(0, 0) = glm::vec3(1.0f);  // 8-bit 255 and 0: sRGB-decoded 1 and 0
+  two.at(1, 0) = glm::vec3(0.0f);
+  write_image(two, dir + "/two.png");
+  const LoadedScene loaded = parse(
+      std::string("WorldBegin\n") +
+      // Constants: (1 - amount) tex1 + amount tex2, the amount a value or a constant texture.
+      "Texture \"k\" \"spectrum\" \"mix\" \"rgb tex1\" [1 0 0] \"rgb tex2\" [0 0 1] "
+      "\"float amount\" .25\n"
+      "Material \"diffuse\" \"texture reflectance\" \"k\"\n" +
+      kQuad +
+      "Texture \"a\" \"float\" \"constant\" \"float value\" .75\n"
+      "Texture \"ka\" \"spectrum\" \"mix\" \"rgb tex1\" [1 0 0] \"rgb tex2\" [0 0 1] "
+      "\"texture amount\" \"a\"\n"
+      "Material \"diffuse\" \"texture reflectance\" \"ka\"\n" +
+      kQuad +
+      // An image and a constant: baked texel by texel.
+      "Texture \"png\" \"spectrum\" \"imagemap\" \"string filename\" \"" + dir +
+      "/two.png\"\n"
+      "Texture \"im\" \"spectrum\" \"mix\" \"texture tex1\" \"png\" \"rgb tex2\" [0 .5 1] "
+      "\"float amount\" .25\n"
+      "Material \"diffuse\" \"texture reflectance\" \"im\"\n" +
+      kQuad +
+      // A constant and a checkerboard: a checkerboard of the blended colours.
+      "Texture \"c\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [1 0 0] \"rgb tex2\" [0 0 1]\n"
+      "Texture \"cm\" \"spectrum\" \"mix\" \"rgb tex1\" [1 1 1] \"texture tex2\" \"c\"\n"
+      "Material \"diffuse\" \"texture reflectance\" \"cm\"\n" +
+      kQuad +
+      // Float textures of constants feed float parameters: 0.5 0.2 + 0.5 0.6.
+      "Texture \"r\" \"float\" \"mix\" \"float tex1\" .2 \"float tex2\" .6\n"
+      "Material \"conductor\" \"texture roughness\" \"r\" \"bool remaproughness\" false\n" +
+      kQuad);
+  EXPECT_TRUE(loaded.warnings.empty()) << loaded.warnings.front();
+  const Scene& s = loaded.scene;
+  const Material& k = s.materials[s.mesh.material()[0]];
+  EXPECT_FALSE(k.albedo_texture.present());
+  EXPECT_EQ(k.albedo, glm::vec3(.75f, 0.0f, .25f));
+  EXPECT_EQ(s.materials[s.mesh.material()[2]].albedo, glm::vec3(.25f, 0.0f, .75f));
+  const Material& im = s.materials[s.mesh.material()[4]];
+  ASSERT_TRUE(im.albedo_texture.present());
+  const Texture& baked = s.textures[static_cast<size_t>(im.albedo_texture.index)];
+  ASSERT_EQ(baked.width(), 2);
+  ASSERT_EQ(baked.height(), 1);
+  // .75 (1, 1, 1) + .25 (0, .5, 1) and .75 (0, 0, 0) + .25 (0, .5, 1).
+  EXPECT_EQ(baked.texel(0, 0), glm::vec3(.75f, .875f, 1.0f));
+  EXPECT_EQ(baked.texel(1, 0), glm::vec3(0.0f, .125f, .25f));
+  EXPECT_EQ(im.albedo, glm::vec3(1.0f));
+  // Halfway between the texel centres, the blend of the two: (.375, .5, .625).
+  EXPECT_EQ(albedo_at(loaded, 4, {0.5f, 0.5f}), glm::vec3(.375f, .5f, .625f));
+  // .5 white + .5 red where the checkerboard is red, .5 white + .5 blue elsewhere.
+  EXPECT_EQ(albedo_at(loaded, 6, {0.5f, 0.5f}), glm::vec3(1.0f, .5f, .5f));
+  EXPECT_EQ(albedo_at(loaded, 6, {1.5f, 0.5f}), glm::vec3(.5f, .5f, 1.0f));
+  EXPECT_NEAR(s.materials[s.mesh.material()[8]].roughness, std::sqrt(0.4), 1e-6);
+}
+
+TEST(PbrtScene, MixTexturesTheyCannotBlendTakeTheLargerWeight) {
+  const LoadedScene loaded = parse(
+      std::string("WorldBegin\n") +
+      "Texture \"c\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [1 0 0] \"rgb tex2\" [0 0 1]\n"
+      "Texture \"d\" \"spectrum\" \"checkerboard\" \"float uscale\" 2\n"
+      "Texture \"m\" \"spectrum\" \"mix\" \"texture tex1\" \"c\" \"texture tex2\" \"d\" "
+      "\"float amount\" .7\n"
+      "Material \"diffuse\" \"texture reflectance\" \"m\"\n" +
+      kQuad + "Texture \"x\" \"spectrum\" \"directionmix\" \"rgb tex1\" [1 0 0]\n");
+  ASSERT_EQ(loaded.warnings.size(), 2u);
+  EXPECT_EQ(loaded.warnings[0],
+            "s.pbrt:4: warning: a mix of two textures approximated by the one of larger weight");
+  EXPECT_EQ(loaded.warnings[1],
+            "s.pbrt:8: warning: spectrum texture \"directionmix\" replaced by grey 0.5");
+  // d (tex2, weight .7): white at s = 2 u = 0.25, black at s = 1.25.
+  EXPECT_EQ(albedo_at(loaded, 0, {0.125f, 0.5f}), glm::vec3(1.0f));
+  EXPECT_EQ(albedo_at(loaded, 0, {0.625f, 0.5f}), glm::vec3(0.0f));
+}
+
 }  // namespace
 }  // namespace tritrace

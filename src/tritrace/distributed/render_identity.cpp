@@ -167,6 +167,13 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
     h.add_vector(t.texels());
     // Alpha channels only where present, so that other scenes' identities stay as they were.
     if (t.has_alpha()) h.add_vector(t.alpha_texels());
+    // A procedural checkerboard's definition (its one texel is only the mean of its colours).
+    if (const auto& c = t.checker()) {
+      h.add_value(c->scale);
+      h.add_value(c->delta);
+      h.add_value(c->even);
+      h.add_value(c->odd);
+    }
   }
   for (const Material& mat : scene.materials) {
     h.add_value(mat.albedo);

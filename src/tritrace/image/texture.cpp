@@ -62,6 +62,22 @@ Texture Texture::from_srgb8(const TextureImage& image) {
   return texture;
 }
 
+Texture Texture::checkerboard(const Checkerboard& board) {
+  Texture texture(1, 1, {0.5f * (board.even + board.odd)});
+  texture.checker_ = board;
+  return texture;
+}
+
+Texture Texture::mapped(glm::vec3 scale, glm::vec3 offset) const {
+  Texture out = *this;
+  for (glm::vec3& t : out.texels_) t = scale * t + offset;
+  if (out.checker_) {
+    out.checker_->even = scale * out.checker_->even + offset;
+    out.checker_->odd = scale * out.checker_->odd + offset;
+  }
+  return out;
+}
+
 Texture::Footprint Texture::footprint(glm::vec2 uv, WrapMode s, WrapMode t) const {
   const double x = texel_coordinate(uv.x, width_);
   const double y = texel_coordinate(1.0f - uv.y, height_);
@@ -76,6 +92,12 @@ Texture::Footprint Texture::footprint(glm::vec2 uv, WrapMode s, WrapMode t) cons
 }
 
 glm::vec3 Texture::lookup(glm::vec2 uv, WrapMode s, WrapMode t) const {
+  if (checker_) {
+    // In double, so that far-away coordinates still floor exactly; a non-finite one is odd.
+    const double fs = std::floor(static_cast<double>(checker_->scale.x) * uv.x + checker_->delta.x);
+    const double ft = std::floor(static_cast<double>(checker_->scale.y) * uv.y + checker_->delta.y);
+    return std::fmod(std::abs(fs + ft), 2.0) == 0.0 ? checker_->even : checker_->odd;
+  }
   const Footprint f = footprint(uv, s, t);
   const auto at = [&](size_t x, size_t y) -> const glm::vec3& {
     return texels_[y * static_cast<size_t>(width_) + x];

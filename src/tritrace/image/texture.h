@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -25,6 +26,17 @@ struct TextureImage {
   std::vector<uint8_t> alpha;
 };
 
+// pbrt-v4's two-dimensional checkerboard texture with its uv mapping: with s = scale.x u + delta.x
+// and t = scale.y v + delta.y, the colour `even` where floor(s) + floor(t) is even and `odd`
+// elsewhere (pbrt's tex1 and tex2). Evaluated at the point; pbrt filters it over the pixel's
+// footprint, which many samples per pixel average to the same.
+struct Checkerboard {
+  glm::vec2 scale{1.0f};
+  glm::vec2 delta{0.0f};
+  glm::vec3 even{1.0f};
+  glm::vec3 odd{0.0f};
+};
+
 // The IEC 61966-2-1 sRGB transfer curve, encoded [0, 1] to linear [0, 1].
 float srgb_to_linear(float encoded);
 
@@ -36,6 +48,14 @@ class Texture {
   // An 8-bit colour image: each byte b decoded as srgb_to_linear(b / 255); its alpha bytes, when
   // it has them, as b / 255 (alpha is linear).
   static Texture from_srgb8(const TextureImage& image);
+  // A procedural checkerboard, exact at every uv (no texels, no filtering; the wrap modes do not
+  // apply): one texel, the mean of its two colours, stands for it where texels are read.
+  static Texture checkerboard(const Checkerboard& board);
+  // The checkerboard this texture is, or nullopt for an image.
+  const std::optional<Checkerboard>& checker() const { return checker_; }
+  // The texture whose every texel (and checkerboard colour) is scale * c + offset, alpha kept: the
+  // lookup of the result is scale * lookup + offset exactly, as bilinear weights sum to 1.
+  Texture mapped(glm::vec3 scale, glm::vec3 offset) const;
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -44,9 +64,10 @@ class Texture {
   }
   const std::vector<glm::vec3>& texels() const { return texels_; }
 
-  // Bilinear filtering at texture coordinates uv, with OpenGL's convention (also assimp's, which
-  // flips glTF's v on import): u = 0 is the left edge, v = 0 the bottom edge, so texel (x, y) has
-  // its centre at ((x + 0.5) / width, 1 - (y + 0.5) / height). `s` wraps u, `t` wraps v.
+  // Bilinear filtering (or the checkerboard's value) at texture coordinates uv, with OpenGL's
+  // convention (also assimp's, which flips glTF's v on import): u = 0 is the left edge, v = 0 the
+  // bottom edge, so texel (x, y) has its centre at ((x + 0.5) / width, 1 - (y + 0.5) / height). `s`
+  // wraps u, `t` wraps v.
   glm::vec3 lookup(glm::vec2 uv, WrapMode s, WrapMode t) const;
 
   // Whether the texture has an alpha channel (one texel below 1).
@@ -70,6 +91,7 @@ class Texture {
   int height_ = 0;
   std::vector<glm::vec3> texels_;
   std::vector<float> alpha_;  // empty: opaque
+  std::optional<Checkerboard> checker_;
 };
 
 // Empties image.alpha when every byte of it is 255 (an opaque image needs no alpha test).

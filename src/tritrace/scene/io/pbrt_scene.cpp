@@ -550,10 +550,17 @@ class Interpreter {
   }
 
   void integrator(const std::string& type, const PbrtParams& p, const PbrtToken& d) {
-    // volpath without media renders what path renders.
-    if (type != "path" && type != "volpath") {
+    // volpath without media renders what path renders; bdpt is tritrace's bdpt unless the scene
+    // has what it refuses (finish).
+    out_.integrator.kind =
+        type == "bdpt" ? IntegratorSpec::Kind::kBdpt : IntegratorSpec::Kind::kPath;
+    integrator_at_ = d.at;
+    if (type != "path" && type != "volpath" && type != "bdpt") {
       warn(d.at, "Integrator \"" + type + "\" replaced by tritrace's path tracer");
     }
+    // bdpt's debugging images.
+    p.find("visualizestrategies");
+    p.find("visualizeweights");
     const int depth = p.get_int("maxdepth", kPbrtMaxDepth);
     if (depth < 0 || depth > kMaxMaxDepth) {
       fail(d.at, "\"integer maxdepth\" must be from 0 to " + std::to_string(kMaxMaxDepth));
@@ -572,11 +579,7 @@ class Interpreter {
       fail(d.at, "Texture type must be \"spectrum\" or \"float\", got \"" + type + "\"");
     }
     if (type == "float") {
-      if (cls == "constant") {
-        float_textures_[name] = p.get_float("value", 1.0);
-      } else {
-        warn(d.at, "float texture \"" + cls + "\" not supported (its parameter keeps its default)");
-      }
+      float_texture(name, cls, p, d);
       warn_unused(p, "Texture");
       return;
     }
@@ -586,6 +589,12 @@ class Interpreter {
       tex.factor = glm::vec3(static_cast<float>(p.get_float("scale", 1.0)));
       if (p.get_bool("invert", false)) warn(d.at, "imagemap \"invert\" ignored");
       for (const char* k : {"filter", "maxanisotropy", "wrap"}) p.find(k);
+      const std::string mapping = p.get_string("mapping", "uv");
+      if (mapping != "uv") warn(d.at, "texture mapping \"" + mapping + "\" replaced by \"uv\"");
+      for (const char* k : {"uscale", "vscale", "udelta", "vdelta"}) {
+        if (p.find(k))
+          warn(d.at, "imagemap coordinate transforms (uscale, vscale, udelta, vdelta) ignored");
+      }
     } else if (cls == "constant") {
       tex.factor = p.get_rgb("value").value_or(glm::vec3(1.0f));
     } else if (cls == "scale") {
@@ -597,20 +606,140 @@ class Interpreter {
       if (auto s = p.get_rgb("scale")) tex.factor *= *s;
       if (!p.texture_name("scale").empty())
         warn(d.at, "a \"scale\" texture's texture scale ignored");
+    } else if (cls == "checkerboard" && p.get_int("dimension", 2) == 2) {
+      tex = checkerboard(p, d);
+    } else if (cls == "mix") {
+      // pbrt-v4's MixTexture: (1 - amount) tex1 + amount tex2.
+      const SpectrumTexture a = spectrum_operand(p, "tex1", 0.0f, d);
+      const SpectrumTexture b = spectrum_operand(p, "tex2", 1.0f, d);
+      tex = blend(a, b, mix_amount(p, d), d);
     } else {
-      warn(d.at, "spectrum texture \"" + cls + "\" replaced by grey 0.5");
+      warn(d.at, "spectrum texture \"" + cls + (cls == "checkerboard" ? "\" (3-D)" : "\"") +
+                     " replaced by grey 0.5");
       tex.factor = glm::vec3(0.5f);
-      spectrum_textures_[name] = tex;
-      return;
-    }
-    const std::string mapping = p.get_string("mapping", "uv");
-    if (mapping != "uv") warn(d.at, "texture mapping \"" + mapping + "\" replaced by \"uv\"");
-    for (const char* k : {"uscale", "vscale", "udelta", "vdelta"}) {
-      if (p.find(k))
-        warn(d.at, "texture coordinate transforms (uscale, vscale, udelta, vdelta) ignored");
+      for (const PbrtParam& q : p.list) q.used = true;
     }
     warn_unused(p, "Texture");
     spectrum_textures_[name] = tex;
+  }
+
+  // A float texture of constants is its value (constant, scale, mix); others are not kept, and the
+  // parameters they feed keep their defaults with a warning (scalar).
+  void float_texture(const std::string& name, const std::string& cls, const PbrtParams& p,
+                     const PbrtToken& d) {
+    std::optional<double> v;
+    if (cls == "constant") {
+      v = p.get_float("value", 1.0);
+    } else if (cls == "scale") {
+      const auto a = float_operand(p, "tex", 1.0), b = float_operand(p, "scale", 1.0);
+      if (a && b) v = *a * *b;
+    } else if (cls == "mix") {
+      const auto a = float_operand(p, "tex1", 0.0), b = float_operand(p, "tex2", 1.0);
+      const auto w = float_operand(p, "amount", 0.5);
+      if (a && b && w) v = (1.0 - *w) * *a + *w * *b;
+    }
+    if (v) {
+      float_textures_[name] = *v;
+    } else {
+      warn(d.at, "float texture \"" + cls + "\" not supported (its parameter keeps its default)");
+      for (const PbrtParam& q : p.list) q.used = true;
+    }
+  }
+
+  // A float parameter given as a value or a constant float texture; nullopt for another texture.
+  std::optional<double> float_operand(const PbrtParams& p, std::string_view name, double fallback) {
+    std::string tex;
+    if (const std::optional<double> v = p.get_float_or_texture(name, &tex)) return v;
+    if (tex.empty()) return fallback;
+    const auto it = float_textures_.find(tex);
+    if (it == float_textures_.end()) return std::nullopt;
+    return it->second;
+  }
+
+  // A spectrum parameter of a texture: the texture it names, or its constant colour.
+  SpectrumTexture spectrum_operand(const PbrtParams& p, std::string_view name, float fallback,
+                                   const PbrtToken& d) {
+    const std::string tex = p.texture_name(name);
+    if (!tex.empty()) {
+      const auto it = spectrum_textures_.find(tex);
+      if (it == spectrum_textures_.end()) fail(d.at, "undefined spectrum texture \"" + tex + "\"");
+      return it->second;
+    }
+    SpectrumTexture c;
+    c.factor = p.get_rgb(name).value_or(glm::vec3(fallback));
+    return c;
+  }
+
+  // The mean colour of a texture (the checkerboard's two colours weigh equally).
+  glm::vec3 mean_colour(const SpectrumTexture& t) const {
+    if (t.image < 0) return t.factor;
+    const Texture& tex = out_.scene.textures[static_cast<size_t>(t.image)];
+    glm::dvec3 sum(0.0);
+    for (const glm::vec3& c : tex.texels()) sum += glm::dvec3(c);
+    return t.factor * glm::vec3(sum / static_cast<double>(tex.texels().size()));
+  }
+
+  int32_t add_texture(Texture texture) {
+    out_.scene.textures.push_back(std::move(texture));
+    return static_cast<int32_t>(out_.scene.textures.size() - 1);
+  }
+
+  // pbrt-v4's 2-D checkerboard with its uv mapping, as tritrace's procedural checkerboard texture
+  // (exact); a side that is itself a texture is replaced by its mean colour, with a warning.
+  SpectrumTexture checkerboard(const PbrtParams& p, const PbrtToken& d) {
+    const std::string mapping = p.get_string("mapping", "uv");
+    if (mapping != "uv") warn(d.at, "texture mapping \"" + mapping + "\" replaced by \"uv\"");
+    Checkerboard board;
+    board.scale = glm::vec2(static_cast<float>(p.get_float("uscale", 1.0)),
+                            static_cast<float>(p.get_float("vscale", 1.0)));
+    board.delta = glm::vec2(static_cast<float>(p.get_float("udelta", 0.0)),
+                            static_cast<float>(p.get_float("vdelta", 0.0)));
+    const SpectrumTexture a = spectrum_operand(p, "tex1", 1.0f, d);
+    const SpectrumTexture b = spectrum_operand(p, "tex2", 0.0f, d);
+    if (a.image >= 0 || b.image >= 0) {
+      warn(d.at, "a checkerboard of textures: each textured square replaced by its mean colour");
+    }
+    board.even = mean_colour(a);
+    board.odd = mean_colour(b);
+    p.find("dimension");
+    SpectrumTexture t;
+    t.image = add_texture(Texture::checkerboard(board));
+    return t;
+  }
+
+  // A mix's "amount": a value or a constant float texture; another texture is taken as 0.5.
+  float mix_amount(const PbrtParams& p, const PbrtToken& d) {
+    const std::optional<double> w = float_operand(p, "amount", 0.5);
+    if (w) return static_cast<float>(*w);
+    warn(d.at, "a mix's non-constant \"amount\" texture approximated by 0.5");
+    return 0.5f;
+  }
+
+  // (1 - w) a + w b: exact for two constants, two factors of one texture, or a texture (image or
+  // checkerboard) and a constant, which is baked texel by texel (exact under bilinear filtering,
+  // whose weights sum to 1); two different textures are approximated by the one of larger weight.
+  SpectrumTexture blend(const SpectrumTexture& a, const SpectrumTexture& b, float w,
+                        const PbrtToken& d) {
+    if (w == 0.0f) return a;
+    if (w == 1.0f) return b;
+    if (a.image == b.image) {
+      SpectrumTexture t = a;
+      t.factor = (1.0f - w) * a.factor + w * b.factor;
+      return t;
+    }
+    if (a.image >= 0 && b.image >= 0) {
+      warn(d.at, "a mix of two textures approximated by the one of larger weight");
+      return w > 0.5f ? b : a;
+    }
+    const bool a_textured = a.image >= 0;
+    const SpectrumTexture& textured = a_textured ? a : b;
+    const glm::vec3 constant = a_textured ? w * b.factor : (1.0f - w) * a.factor;
+    const float weight = a_textured ? 1.0f - w : w;
+    Texture baked = out_.scene.textures[static_cast<size_t>(textured.image)].mapped(
+        weight * textured.factor, constant);
+    SpectrumTexture t;
+    t.image = add_texture(std::move(baked));
+    return t;
   }
 
   int32_t image_texture(const std::string& name, const std::string& encoding, const PbrtToken& d) {
@@ -1301,10 +1430,30 @@ class Interpreter {
         fail(p.at, "ObjectInstance: " + e.reason());
       }
     }
+    bdpt_or_path();
     for (const Warning& w : warnings_) {
       out_.warnings.push_back(w.where + ": warning: " + w.what +
                               (w.count > 1 ? " (" + std::to_string(w.count) + " times)" : ""));
     }
+  }
+
+  // What tritrace's bdpt refuses to render (render/bdpt_integrator.cpp's bdpt_unsupported and the
+  // render job's light-tracing checks; README's --integrator row): such a file asking for bdpt
+  // gets the path tracer and a warning instead of a usage error.
+  void bdpt_or_path() {
+    if (out_.integrator.kind != IntegratorSpec::Kind::kBdpt) return;
+    std::string why;
+    if (!out_.scene.spot_lights.empty() || !out_.scene.directional_lights.empty()) {
+      why = "spot and distant lights";
+    } else if (lens_radius_ > 0.0) {
+      why = "a lens (lensradius > 0)";
+    } else if (orthographic_) {
+      why = "an orthographic camera";
+    }
+    if (why.empty()) return;
+    warn(integrator_at_,
+         "Integrator \"bdpt\" replaced by tritrace's path tracer: tritrace's bdpt refuses " + why);
+    out_.integrator.kind = IntegratorSpec::Kind::kPath;
   }
 
   struct Placed {
@@ -1329,6 +1478,7 @@ class Interpreter {
   bool in_world_ = false;
   dmat4 camera_from_world_{1.0};
   PbrtLocation camera_at_;
+  PbrtLocation integrator_at_;
   double fov_ = kPbrtFov;
   float shape_alpha_ = 1.0f;                                // the current shape's "float alpha"
   std::map<std::pair<uint32_t, float>, uint32_t> blended_;  // (material, alpha) -> its blend
