@@ -5,6 +5,7 @@
 #include <array>
 #include <functional>
 #include <memory>
+#include <utility>
 
 #include "tritrace/build_info.h"
 #include "tritrace/distributed/merge_plan.h"
@@ -65,6 +66,24 @@ TEST(RenderIdentity, AlphaModesAndTextureAlphaChangeIt) {
   Scene cut = opaque;
   cut.textures[0].set_alpha({0.0f});
   EXPECT_NE(identity_of(opaque), identity_of(cut));
+}
+
+TEST(RenderIdentity, CheckerboardTexturesChangeIt) {
+  // Two checkerboards of the same colours (so the same one texel, their mean) that differ only in
+  // their scale, or only in which colour is even.
+  Checkerboard board;
+  board.even = glm::vec3(0.2f);
+  board.odd = glm::vec3(0.8f);
+  Scene a = make_cornell_area();
+  a.textures.push_back(Texture::checkerboard(board));
+  Scene b = make_cornell_area(), c = b;
+  board.scale = {2.0f, 1.0f};
+  b.textures.push_back(Texture::checkerboard(board));
+  std::swap(board.even, board.odd);
+  board.scale = glm::vec2(1.0f);
+  c.textures.push_back(Texture::checkerboard(board));
+  EXPECT_NE(identity_of(a), identity_of(b));
+  EXPECT_NE(identity_of(a), identity_of(c));
 }
 
 TEST(RenderIdentity, SpotAndDirectionalLightsChangeIt) {

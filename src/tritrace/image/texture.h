@@ -1,6 +1,6 @@
 // Textures: images looked up by texture coordinates (linear RGB texels, bilinear filtering, the
-// repeat / clamp / mirror wrap modes of OpenGL and glTF samplers), and the sRGB decoding of the
-// 8-bit images that colour textures are stored as.
+// repeat / clamp / mirror wrap modes of OpenGL and glTF samplers) or pbrt-v4's procedural
+// checkerboard, and the sRGB decoding of the 8-bit images that colour textures are stored as.
 #pragma once
 
 #include <cstdint>
