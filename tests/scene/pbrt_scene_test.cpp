@@ -1002,6 +1002,11 @@ TEST(PbrtScene, MixTexturesBlendExactlyWhereTheyCan) {
       "Texture \"cm\" \"spectrum\" \"mix\" \"rgb tex1\" [1 1 1] \"texture tex2\" \"c\"\n"
       "Material \"diffuse\" \"texture reflectance\" \"cm\"\n" +
       kQuad +
+      // A scale by a constant float texture: the checkerboard's colours times 0.5.
+      "Texture \"h\" \"float\" \"constant\" \"float value\" .5\n"
+      "Texture \"cs\" \"spectrum\" \"scale\" \"texture tex\" \"c\" \"texture scale\" \"h\"\n"
+      "Material \"diffuse\" \"texture reflectance\" \"cs\"\n" +
+      kQuad +
       // Float textures of constants feed float parameters: 0.5 0.2 + 0.5 0.6.
       "Texture \"r\" \"float\" \"mix\" \"float tex1\" .2 \"float tex2\" .6\n"
       "Material \"conductor\" \"texture roughness\" \"r\" \"bool remaproughness\" false\n" +
@@ -1026,7 +1031,9 @@ TEST(PbrtScene, MixTexturesBlendExactlyWhereTheyCan) {
   // .5 white + .5 red where the checkerboard is red, .5 white + .5 blue elsewhere.
   EXPECT_EQ(albedo_at(loaded, 6, {0.5f, 0.5f}), glm::vec3(1.0f, .5f, .5f));
   EXPECT_EQ(albedo_at(loaded, 6, {1.5f, 0.5f}), glm::vec3(.5f, .5f, 1.0f));
-  EXPECT_NEAR(s.materials[s.mesh.material()[8]].roughness, std::sqrt(0.4), 1e-6);
+  EXPECT_EQ(albedo_at(loaded, 8, {0.5f, 0.5f}), glm::vec3(.5f, 0.0f, 0.0f));
+  EXPECT_EQ(albedo_at(loaded, 8, {1.5f, 0.5f}), glm::vec3(0.0f, 0.0f, .5f));
+  EXPECT_NEAR(s.materials[s.mesh.material()[10]].roughness, std::sqrt(0.4), 1e-6);
 }
 
 TEST(PbrtScene, MixTexturesTheyCannotBlendTakeTheLargerWeight) {

@@ -598,14 +598,15 @@ class Interpreter {
     } else if (cls == "constant") {
       tex.factor = p.get_rgb("value").value_or(glm::vec3(1.0f));
     } else if (cls == "scale") {
-      // tex * scale, where one is an image and the other a constant.
-      const std::string inner = p.texture_name("tex");
-      const auto it = inner.empty() ? spectrum_textures_.end() : spectrum_textures_.find(inner);
-      if (it != spectrum_textures_.end()) tex = it->second;
-      if (auto c = p.get_rgb("tex")) tex.factor = *c;
-      if (auto s = p.get_rgb("scale")) tex.factor *= *s;
-      if (!p.texture_name("scale").empty())
-        warn(d.at, "a \"scale\" texture's texture scale ignored");
+      // tex * scale: a texture or colour times a value or a constant float texture.
+      tex = spectrum_operand(p, "tex", 1.0f, d);
+      if (const auto c = p.get_rgb("scale")) {
+        tex.factor *= *c;
+      } else if (const auto f = float_operand(p, "scale", 1.0)) {
+        tex.factor *= static_cast<float>(*f);
+      } else {
+        warn(d.at, "a \"scale\" texture's non-constant texture scale ignored");
+      }
     } else if (cls == "checkerboard" && p.get_int("dimension", 2) == 2) {
       tex = checkerboard(p, d);
     } else if (cls == "mix") {
