@@ -50,6 +50,9 @@ constexpr double kPbrtFov = 90.0;
 constexpr double kPbrtFocalDistance = 1e6;
 constexpr float kMaxIndex = 10.0f;  // the scene file's range for ior and eta
 constexpr int kMaxIncludeDepth = 32;
+// The texels that mix textures may bake in all (each bake copies an image): a file chaining mixes
+// of a large image cannot exhaust memory; beyond it a mix takes the side of larger weight.
+constexpr size_t kMaxBakedTexels = size_t{1} << 26;
 
 using dmat4 = glm::dmat4;
 using dvec3 = glm::dvec3;
@@ -736,8 +739,14 @@ class Interpreter {
     const SpectrumTexture& textured = a_textured ? a : b;
     const glm::vec3 constant = a_textured ? w * b.factor : (1.0f - w) * a.factor;
     const float weight = a_textured ? 1.0f - w : w;
-    Texture baked = out_.scene.textures[static_cast<size_t>(textured.image)].mapped(
-        weight * textured.factor, constant);
+    const Texture& source = out_.scene.textures[static_cast<size_t>(textured.image)];
+    if (baked_texels_ + source.texels().size() > kMaxBakedTexels) {
+      warn(d.at, "a mix approximated by the side of larger weight (mixes would bake more than " +
+                     std::to_string(kMaxBakedTexels) + " texels)");
+      return w > 0.5f ? b : a;
+    }
+    baked_texels_ += source.texels().size();
+    Texture baked = source.mapped(weight * textured.factor, constant);
     SpectrumTexture t;
     t.image = add_texture(std::move(baked));
     return t;
@@ -1491,6 +1500,7 @@ class Interpreter {
   std::map<std::string, SpectrumTexture> spectrum_textures_;
   std::map<std::string, double> float_textures_;
   std::map<std::string, int32_t> texture_files_;
+  size_t baked_texels_ = 0;  // by mix textures, at most kMaxBakedTexels
   std::map<std::tuple<int, float, float, float, bool>, uint32_t> emissive_;
   int default_material_ = -1;
   Soup world_;
