@@ -56,6 +56,14 @@ Texture Texture::from_srgb8(const TextureImage& image) {
   return Texture(image.width, image.height, std::move(texels));
 }
 
+Texture Texture::from_linear8(const TextureImage& image) {
+  std::vector<glm::vec3> texels(static_cast<size_t>(image.width) * image.height);
+  for (size_t i = 0; i < texels.size(); ++i) {
+    texels[i] = glm::vec3(image.rgb[3 * i], image.rgb[3 * i + 1], image.rgb[3 * i + 2]) / 255.0f;
+  }
+  return Texture(image.width, image.height, std::move(texels));
+}
+
 glm::vec3 Texture::lookup(glm::vec2 uv, WrapMode s, WrapMode t) const {
   const double x = texel_coordinate(uv.x, width_);
   const double y = texel_coordinate(1.0f - uv.y, height_);
@@ -89,7 +97,7 @@ TextureImage decode_texture_image(std::span<const uint8_t> bytes, const std::str
   uint8_t* data =
       stbi_load_from_memory(bytes.data(), static_cast<int>(bytes.size()), &w, &h, &channels, 3);
   if (!data) throw Error(subject, std::string("cannot read texture: ") + stbi_failure_reason());
-  TextureImage image{w, h, std::vector<uint8_t>(data, data + static_cast<size_t>(w) * h * 3)};
+  TextureImage image{w, h, std::vector<uint8_t>(data, data + static_cast<size_t>(w) * h * 3), true};
   stbi_image_free(data);
   return image;
 }

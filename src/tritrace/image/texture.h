@@ -20,6 +20,9 @@ struct TextureImage {
   int width = 0;
   int height = 0;
   std::vector<uint8_t> rgb;  // width * height * 3 bytes
+  // Colour (sRGB-encoded, decoded to linear when loaded) or data stored as it is (glTF's
+  // metallic-roughness, normal and transmission textures).
+  bool srgb = true;
 };
 
 // The IEC 61966-2-1 sRGB transfer curve, encoded [0, 1] to linear [0, 1].
@@ -32,6 +35,12 @@ class Texture {
   Texture(int width, int height, std::vector<glm::vec3> texels);
   // An 8-bit colour image: each byte b decoded as srgb_to_linear(b / 255).
   static Texture from_srgb8(const TextureImage& image);
+  // An 8-bit data image: each byte b read as b / 255.
+  static Texture from_linear8(const TextureImage& image);
+  // from_srgb8 or from_linear8, as image.srgb says.
+  static Texture from_image(const TextureImage& image) {
+    return image.srgb ? from_srgb8(image) : from_linear8(image);
+  }
 
   int width() const { return width_; }
   int height() const { return height_; }

@@ -1,0 +1,238 @@
+// Reading glTF materials from JSON (glTF 2.0 specification, sections 3.8 "Textures" and 3.9
+// "Materials", and the KHR_texture_transform, KHR_materials_emissive_strength, KHR_materials_ior
+// and KHR_materials_transmission extension specifications).
+#include "tritrace/scene/io/gltf_materials.h"
+
+#include <array>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "tritrace/error.h"
+
+namespace tritrace {
+namespace {
+
+using Json = nlohmann::json;
+
+class Reader {
+ public:
+  explicit Reader(const std::string& subject) : subject_(subject) {}
+
+  GltfMaterialTable run(const Json& doc) {
+    if (!doc.is_object()) fail("", "a glTF document must be a JSON object");
+    doc_ = &doc;
+    GltfMaterialTable out;
+    read_images(doc, out);
+    const Json& materials = member_array(doc, "materials", "");
+    for (size_t i = 0; i < materials.size(); ++i) {
+      out.materials.push_back(read_material(materials[i], "/materials/" + std::to_string(i)));
+    }
+    return out;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& where, const std::string& reason) const {
+    throw Error(subject_, where.empty() ? reason : where + ": " + reason);
+  }
+
+  // j[key] when present (an array), else an empty array.
+  const Json& member_array(const Json& j, const char* key, const std::string& where) const {
+    static const Json kEmpty = Json::array();
+    if (!j.contains(key)) return kEmpty;
+    if (!j[key].is_array()) fail(where + "/" + key, "must be an array");
+    return j[key];
+  }
+
+  const Json* member_object(const Json& j, const char* key, const std::string& where) const {
+    if (!j.contains(key)) return nullptr;
+    if (!j[key].is_object()) fail(where + "/" + key, "must be an object");
+    return &j[key];
+  }
+
+  double number(const Json& j, const char* key, double fallback, const std::string& where) const {
+    if (!j.contains(key)) return fallback;
+    const Json& v = j[key];
+    if (!v.is_number() || !std::isfinite(v.get<double>())) {
+      fail(where + "/" + key, "must be a finite number");
+    }
+    return v.get<double>();
+  }
+
+  size_t index(const Json& j, const char* key, size_t count, const std::string& where) const {
+    const Json& v = j[key];
+    if (!v.is_number_unsigned() || v.get<uint64_t>() >= count) {
+      fail(where + "/" + key, "must be an index below " + std::to_string(count));
+    }
+    return static_cast<size_t>(v.get<uint64_t>());
+  }
+
+  template <size_t N>
+  std::array<double, N> numbers(const Json& j, const char* key, std::array<double, N> fallback,
+                                const std::string& where) const {
+    if (!j.contains(key)) return fallback;
+    const Json& a = j[key];
+    if (!a.is_array() || a.size() != N) {
+      fail(where + "/" + key, "must be an array of " + std::to_string(N) + " numbers");
+    }
+    std::array<double, N> v;
+    for (size_t i = 0; i < N; ++i) {
+      if (!a[i].is_number() || !std::isfinite(a[i].get<double>())) {
+        fail(where + "/" + key + "/" + std::to_string(i), "must be a finite number");
+      }
+      v[i] = a[i].get<double>();
+    }
+    return v;
+  }
+
+  // assimp numbers the images it decodes (bufferView or data: URI) in order, from 0.
+  void read_images(const Json& doc, GltfMaterialTable& out) const {
+    const Json& images = member_array(doc, "images", "");
+    int32_t embedded = 0;
+    for (size_t i = 0; i < images.size(); ++i) {
+      const std::string where = "/images/" + std::to_string(i);
+      const Json& image = images[i];
+      if (!image.is_object()) fail(where, "must be an object");
+      GltfImage g;
+      if (image.contains("uri")) {
+        if (!image["uri"].is_string()) fail(where + "/uri", "must be a string");
+        g.uri = image["uri"].get<std::string>();
+        if (g.uri.rfind("data:", 0) == 0) g.uri.clear();
+      }
+      if (g.uri.empty()) {
+        if (!image.contains("uri") && !image.contains("bufferView")) {
+          fail(where, "has neither a \"uri\" nor a \"bufferView\"");
+        }
+        g.embedded = embedded++;
+      }
+      out.images.push_back(std::move(g));
+    }
+  }
+
+  static WrapMode wrap(int64_t code) {
+    switch (code) {
+      case 33071:
+        return WrapMode::kClamp;  // CLAMP_TO_EDGE
+      case 33648:
+        return WrapMode::kMirror;  // MIRRORED_REPEAT
+      default:
+        return WrapMode::kRepeat;  // REPEAT (10497), the default
+    }
+  }
+
+  // A textureInfo (or normalTextureInfo) at `where`.
+  GltfTextureRef read_texture(const Json& info, const std::string& where) const {
+    if (!info.is_object()) fail(where, "must be an object");
+    GltfTextureRef ref;
+    const Json& textures = member_array(*doc_, "textures", "");
+    const size_t t = index(info, "index", textures.size(), where);
+    const std::string tw = "/textures/" + std::to_string(t);
+    const Json& texture = textures[t];
+    if (!texture.is_object()) fail(tw, "must be an object");
+    if (!texture.contains("source")) return ref;  // only an extension's image (KTX2, WebP): none
+    const size_t images = member_array(*doc_, "images", "").size();
+    ref.image = static_cast<int32_t>(index(texture, "source", images, tw));
+    if (texture.contains("sampler")) {
+      const Json& samplers = member_array(*doc_, "samplers", "");
+      const size_t s = index(texture, "sampler", samplers.size(), tw);
+      const std::string sw = "/samplers/" + std::to_string(s);
+      if (!samplers[s].is_object()) fail(sw, "must be an object");
+      ref.wrap_s = wrap(static_cast<int64_t>(number(samplers[s], "wrapS", 10497, sw)));
+      ref.wrap_t = wrap(static_cast<int64_t>(number(samplers[s], "wrapT", 10497, sw)));
+    }
+    double texcoord = number(info, "texCoord", 0, where);
+    if (const Json* ext = member_object(info, "extensions", where)) {
+      const std::string ew = where + "/extensions";
+      if (const Json* tt = member_object(*ext, "KHR_texture_transform", ew)) {
+        const std::string xw = ew + "/KHR_texture_transform";
+        const auto offset = numbers<2>(*tt, "offset", {0.0, 0.0}, xw);
+        const double rotation = number(*tt, "rotation", 0.0, xw);
+        const auto scale = numbers<2>(*tt, "scale", {1.0, 1.0}, xw);
+        texcoord = number(*tt, "texCoord", texcoord, xw);
+        set_transform(offset, rotation, scale, ref);
+      }
+    }
+    if (!(texcoord >= 0.0) || texcoord != std::floor(texcoord)) {
+      fail(where + "/texCoord", "must be a whole number at least 0");
+    }
+    ref.texcoord = texcoord == 1.0 ? 1 : 0;
+    return ref;
+  }
+
+  // KHR_texture_transform: glTF coordinates g become M g with M = T(offset) R(rotation) S(scale),
+  // R = [[cos r, sin r], [-sin r, cos r]] (the extension's matrices). tritrace's coordinates are
+  // (u, 1 - g.v), so its matrix is F M F with F(u, v) = (u, 1 - v):
+  //   u' = A00 u - A01 v + (A01 + offset.x),  v' = -A10 u + A11 v + (1 - A11 - offset.y)
+  // with A = R S.
+  static void set_transform(const std::array<double, 2>& offset, double rotation,
+                            const std::array<double, 2>& scale, GltfTextureRef& ref) {
+    const double c = std::cos(rotation), s = std::sin(rotation);
+    const double a00 = c * scale[0], a01 = s * scale[1];
+    const double a10 = -s * scale[0], a11 = c * scale[1];
+    const double m[6] = {a00, -a10, -a01, a11, a01 + offset[0], 1.0 - a11 - offset[1]};
+    for (int i = 0; i < 6; ++i) ref.transform[i] = static_cast<float>(m[i]);
+  }
+
+  const Json* extension(const Json& material, const char* name, const std::string& where) const {
+    const Json* ext = member_object(material, "extensions", where);
+    return ext == nullptr ? nullptr : member_object(*ext, name, where + "/extensions");
+  }
+
+  GltfMaterial read_material(const Json& m, const std::string& where) const {
+    if (!m.is_object()) fail(where, "must be an object");
+    GltfMaterial out;
+    if (const Json* pbr = member_object(m, "pbrMetallicRoughness", where)) {
+      const std::string pw = where + "/pbrMetallicRoughness";
+      if (pbr->contains("baseColorTexture")) {
+        out.base_colour = read_texture((*pbr)["baseColorTexture"], pw + "/baseColorTexture");
+      }
+      if (pbr->contains("metallicRoughnessTexture")) {
+        out.metallic_roughness =
+            read_texture((*pbr)["metallicRoughnessTexture"], pw + "/metallicRoughnessTexture");
+      }
+    }
+    if (m.contains("normalTexture")) {
+      out.normal = read_texture(m["normalTexture"], where + "/normalTexture");
+      out.normal_scale =
+          static_cast<float>(number(m["normalTexture"], "scale", 1.0, where + "/normalTexture"));
+    }
+    if (m.contains("emissiveTexture")) {
+      out.emissive = read_texture(m["emissiveTexture"], where + "/emissiveTexture");
+    }
+    const auto e = numbers<3>(m, "emissiveFactor", {0.0, 0.0, 0.0}, where);
+    out.emissive_factor = glm::vec3(e[0], e[1], e[2]);
+    const std::string ew = where + "/extensions";
+    if (const Json* x = extension(m, "KHR_materials_emissive_strength", where)) {
+      out.emissive_strength = static_cast<float>(
+          number(*x, "emissiveStrength", 1.0, ew + "/KHR_materials_emissive_strength"));
+    }
+    if (const Json* x = extension(m, "KHR_materials_ior", where)) {
+      out.ior = static_cast<float>(number(*x, "ior", 1.5, ew + "/KHR_materials_ior"));
+    }
+    if (const Json* x = extension(m, "KHR_materials_transmission", where)) {
+      const std::string xw = ew + "/KHR_materials_transmission";
+      out.transmission = static_cast<float>(number(*x, "transmissionFactor", 0.0, xw));
+      if (x->contains("transmissionTexture")) {
+        out.transmission_texture =
+            read_texture((*x)["transmissionTexture"], xw + "/transmissionTexture");
+      }
+    }
+    return out;
+  }
+
+  std::string subject_;
+  const Json* doc_ = nullptr;
+};
+
+}  // namespace
+
+GltfMaterialTable parse_gltf_materials(std::string_view json, const std::string& subject) {
+  Json doc;
+  try {
+    doc = Json::parse(json);
+  } catch (const Json::exception&) {
+    throw Error(subject, "invalid glTF JSON (reading its materials)");
+  }
+  return Reader(subject).run(doc);
+}
+
+}  // namespace tritrace
