@@ -150,8 +150,9 @@ def normal_mapped(name, texel, towards, tangents=None):
         [png(1, 1, [texel])], extra_nodes=[sun(B, towards)], extensions=LIGHTS))
 
 
-# A normal map tilting the normal by 30 degrees towards +u (red), and one towards image up (green,
-# glTF's +y: decreasing glTF v, here -z); the sun 40 degrees from +y on the side of the tilt.
+# A normal map tilting the normal by 30 degrees towards +u (red), and one towards image down (green
+# below 128: glTF's +y is the image's up, decreasing glTF v, here -z, so the tilt is towards +z,
+# the side the default camera looks from); the sun 40 degrees from +y on the side of the tilt.
 # Bytes round(255 (m + 1) / 2) of the tilted normal m.
 def byte(x):
     return round(255 * (x + 1) / 2)
@@ -160,8 +161,8 @@ def byte(x):
 A = math.radians(30.0)
 normal_mapped("normal_map_u.gltf", (byte(math.sin(A)), 128, byte(math.cos(A))),
               (math.sin(B), math.cos(B), 0.0))
-normal_mapped("normal_map_v.gltf", (128, byte(math.sin(A)), byte(math.cos(A))),
-              (0.0, math.cos(B), -math.sin(B)))
+normal_mapped("normal_map_v.gltf", (128, byte(-math.sin(A)), byte(math.cos(A))),
+              (0.0, math.cos(B), math.sin(B)))
 # The file's own tangents (+z, w = -1: the bitangent -(y x z) = -x): red tilts towards +z.
 normal_mapped("normal_map_tangents.gltf", (byte(math.sin(A)), 128, byte(math.cos(A))),
               (0.0, math.cos(B), math.sin(B)), tangents=(0.0, 0.0, 1.0, -1.0))

@@ -96,7 +96,11 @@ class Reader {
       if (image.contains("uri")) {
         if (!image["uri"].is_string()) fail(where + "/uri", "must be a string");
         g.uri = image["uri"].get<std::string>();
-        if (g.uri.rfind("data:", 0) == 0) g.uri.clear();
+        if (g.uri.rfind("data:", 0) == 0) {
+          g.uri.clear();
+        } else {
+          g.uri = percent_decoded(g.uri);
+        }
       }
       if (g.uri.empty()) {
         if (!image.contains("uri") && !image.contains("bufferView")) {
@@ -106,6 +110,26 @@ class Reader {
       }
       out.images.push_back(std::move(g));
     }
+  }
+
+  // A relative URI's %XX escapes decoded (RFC 3986, section 2.1): the file name they stand for.
+  static std::string percent_decoded(const std::string& uri) {
+    const auto hex = [](char c) {
+      return c >= '0' && c <= '9'   ? c - '0'
+             : c >= 'a' && c <= 'f' ? c - 'a' + 10
+             : c >= 'A' && c <= 'F' ? c - 'A' + 10
+                                    : -1;
+    };
+    std::string out;
+    for (size_t i = 0; i < uri.size(); ++i) {
+      if (uri[i] == '%' && i + 2 < uri.size() && hex(uri[i + 1]) >= 0 && hex(uri[i + 2]) >= 0) {
+        out += static_cast<char>(16 * hex(uri[i + 1]) + hex(uri[i + 2]));
+        i += 2;
+      } else {
+        out += uri[i];
+      }
+    }
+    return out;
   }
 
   static WrapMode wrap(int64_t code) {
