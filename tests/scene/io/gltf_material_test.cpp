@@ -7,17 +7,20 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <glm/geometric.hpp>
 #include <numbers>
 #include <string>
 #include <vector>
 
+#include "stb_image.h"
 #include "tritrace/accel/brute_force.h"
 #include "tritrace/error.h"
 #include "tritrace/image/image.h"
 #include "tritrace/job/render_job.h"
 #include "tritrace/render/shading_normal.h"
 #include "tritrace/scene/io/gltf_materials.h"
+#include "tritrace/scene/io/mesh_import.h"
 #include "tritrace/scene/io/scene_loader.h"
 #include "tritrace/scene/io/tangents.h"
 
@@ -188,16 +191,71 @@ TEST(GltfMaterials, TextureTransformSecondCoordinateSetAndVertexColours) {
   }
 }
 
+// assimp numbers a glTF file's materials and images in the order its lazy loader meets them, not
+// the file's: in Khronos' TextureTransformTest (in assimp-testmodels; CC0) the marker materials
+// (Correct, NotSupported, Error) are met, as children of the "Rotation" node, before the arrows'
+// materials. Each material must get its own texture and transform: its image's bytes are the PNG
+// the JSON names (decoded here by stb_image), and an offset (ox, oy) alone is, with tritrace's v =
+// 1 - glTF's, the translation (ox, -oy).
+TEST(GltfMaterials, KhronosTextureTransformTestMaterialsKeepTheirOwnTexturesAndTransforms) {
+  const std::string dir = "/usr/share/assimp/models/glTF2/textureTransform/";
+  if (!std::filesystem::exists(dir + "TextureTransformTest.gltf")) {
+    GTEST_SKIP() << "assimp-testmodels not installed";
+  }
+  const ImportedMesh mesh = import_mesh_file(dir + "TextureTransformTest.gltf");
+  const auto image_of = [&](const std::string& png) {
+    int w = 0, h = 0, n = 0;
+    uint8_t* data = stbi_load((dir + png).c_str(), &w, &h, &n, 3);
+    EXPECT_NE(data, nullptr) << png;
+    std::vector<uint8_t> bytes(data, data + static_cast<size_t>(w) * h * 3);
+    stbi_image_free(data);
+    return bytes;
+  };
+  struct Want {
+    std::string material, png;
+    float ox, oy;  // expected translation for offset-only materials
+    bool moves;
+  };
+  const std::vector<Want> wants = {
+      {"Offset U", "UV.png", 0.5f, 0.0f, true},   {"Offset V", "UV.png", 0.0f, -0.5f, true},
+      {"Offset UV", "UV.png", 0.5f, -0.5f, true}, {"Rotation", "Arrow.png", 0, 0, true},
+      {"Scale", "Arrow.png", 0, 0, true},         {"All", "Arrow.png", 0, 0, true},
+      {"Correct", "Correct.png", 0, 0, false},    {"Error", "Error.png", 0, 0, false}};
+  for (const Want& want : wants) {
+    size_t k = 0;
+    while (k < mesh.material_names.size() && mesh.material_names[k] != want.material) ++k;
+    ASSERT_LT(k, mesh.materials.size()) << want.material;
+    const TextureRef& ref = mesh.materials[k].albedo_texture;
+    ASSERT_TRUE(ref.present()) << want.material;
+    EXPECT_EQ(mesh.textures.at(static_cast<size_t>(ref.index)).rgb, image_of(want.png))
+        << want.material;
+    EXPECT_EQ(ref.moves(), want.moves) << want.material;
+    if (want.material.rfind("Offset", 0) == 0) {
+      EXPECT_FLOAT_EQ(ref.transform[0], 1.0f);
+      EXPECT_FLOAT_EQ(ref.transform[3], 1.0f);
+      EXPECT_NEAR(ref.transform[4], want.ox, 1e-6) << want.material;
+      EXPECT_NEAR(ref.transform[5], want.oy, 1e-6) << want.material;
+    }
+  }
+}
+
+// A document whose one node draws material 0 (assimp reads only the materials drawn).
+std::string drawing(const std::string& material) {
+  return R"({"scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+             "meshes": [{"primitives": [{"attributes": {}, "material": 0}]}],
+             "materials": [)" +
+         material + "]}";
+}
+
 TEST(GltfMaterials, BadTextureReferencesAreOneLineErrorsNamingTheField) {
   try {
-    parse_gltf_materials(R"({"materials": [{"normalTexture": {"index": 7}}]})", "m.gltf");
+    parse_gltf_materials(drawing(R"({"normalTexture": {"index": 7}})"), "m.gltf");
     FAIL() << "no error";
   } catch (const Error& e) {
     EXPECT_EQ(e.subject(), "m.gltf");
     EXPECT_EQ(e.reason(), "/materials/0/normalTexture/index: must be an index below 0");
   }
-  EXPECT_THROW(parse_gltf_materials(R"({"materials": [{"emissiveFactor": [1, 2]}]})", "m.gltf"),
-               Error);
+  EXPECT_THROW(parse_gltf_materials(drawing(R"({"emissiveFactor": [1, 2]})"), "m.gltf"), Error);
   EXPECT_THROW(parse_gltf_materials("{", "m.gltf"), Error);
 }
 

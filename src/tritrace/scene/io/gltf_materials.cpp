@@ -6,6 +6,8 @@
 #include <array>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <vector>
 
 #include "tritrace/error.h"
 
@@ -22,10 +24,12 @@ class Reader {
     if (!doc.is_object()) fail("", "a glTF document must be a JSON object");
     doc_ = &doc;
     GltfMaterialTable out;
-    read_images(doc, out);
+    const LoadOrder order = assimp_load_order(doc);
+    read_images(doc, order, out);
     const Json& materials = member_array(doc, "materials", "");
-    for (size_t i = 0; i < materials.size(); ++i) {
+    for (const size_t i : order.materials) {
       out.materials.push_back(read_material(materials[i], "/materials/" + std::to_string(i)));
+      out.file_index.push_back(i);
     }
     return out;
   }
@@ -84,10 +88,153 @@ class Reader {
     return v;
   }
 
-  // assimp numbers the images it decodes (bufferView or data: URI) in order, from 0.
-  void read_images(const Json& doc, GltfMaterialTable& out) const {
+  // The materials and images in the order assimp 5.2's glTF importer numbers them. It loads the
+  // document's objects lazily, each when first referred to, and numbers them in that order
+  // (glTF2Asset.inl, LazyDict::Retrieve): from the default scene's nodes, depth first, a node's
+  // children before its own mesh, a mesh's primitives in order, a material's textures in the
+  // order Material::Read reads them; then the nodes of skins and animations. Objects it never
+  // meets (a material no drawn primitive uses) it does not import.
+  struct LoadOrder {
+    std::vector<size_t> materials, images;
+  };
+
+  LoadOrder assimp_load_order(const Json& doc) const {
+    LoadOrder order;
+    const Json& nodes = member_array(doc, "nodes", "");
+    const Json& meshes = member_array(doc, "meshes", "");
+    const Json& materials = member_array(doc, "materials", "");
+    const Json& textures = member_array(doc, "textures", "");
     const Json& images = member_array(doc, "images", "");
-    int32_t embedded = 0;
+    std::vector<bool> node_seen(nodes.size()), mesh_seen(meshes.size()),
+        material_seen(materials.size()), image_seen(images.size());
+    const auto index_in = [](const Json& j, const char* key,
+                             size_t count) -> std::optional<size_t> {
+      if (!j.is_object() || !j.contains(key) || !j[key].is_number_unsigned()) return std::nullopt;
+      const uint64_t i = j[key].get<uint64_t>();
+      return i < count ? std::optional<size_t>(i) : std::nullopt;
+    };
+    const auto used = [&](const char* extension) {
+      if (!doc.contains("extensionsUsed") || !doc["extensionsUsed"].is_array()) return false;
+      for (const Json& e : doc["extensionsUsed"]) {
+        if (e.is_string() && e.get<std::string>() == extension) return true;
+      }
+      return false;
+    };
+    const auto visit_texture = [&](const Json* parent, const char* key) {
+      if (parent == nullptr || !parent->is_object() || !parent->contains(key)) return;
+      const auto t = index_in((*parent)[key], "index", textures.size());
+      if (!t) return;
+      const auto image = index_in(textures[*t], "source", images.size());
+      if (image && !image_seen[*image]) {
+        image_seen[*image] = true;
+        order.images.push_back(*image);
+      }
+    };
+    const auto visit_material = [&](size_t m) {
+      if (material_seen[m]) return;
+      material_seen[m] = true;
+      order.materials.push_back(m);
+      const Json& mat = materials[m];
+      if (!mat.is_object()) return;
+      const Json* pbr =
+          mat.contains("pbrMetallicRoughness") ? &mat["pbrMetallicRoughness"] : nullptr;
+      visit_texture(pbr, "baseColorTexture");
+      visit_texture(pbr, "metallicRoughnessTexture");
+      visit_texture(&mat, "normalTexture");
+      visit_texture(&mat, "occlusionTexture");
+      visit_texture(&mat, "emissiveTexture");
+      if (!mat.contains("extensions") || !mat["extensions"].is_object()) return;
+      const Json& ext = mat["extensions"];
+      const auto in = [&](const char* name) {
+        return used(name) && ext.contains(name) ? &ext[name] : nullptr;
+      };
+      const Json* sg = in("KHR_materials_pbrSpecularGlossiness");
+      visit_texture(sg, "diffuseTexture");
+      visit_texture(sg, "specularGlossinessTexture");
+      const Json* sheen = in("KHR_materials_sheen");
+      visit_texture(sheen, "sheenColorTexture");
+      visit_texture(sheen, "sheenRoughnessTexture");
+      const Json* coat = in("KHR_materials_clearcoat");
+      visit_texture(coat, "clearcoatTexture");
+      visit_texture(coat, "clearcoatRoughnessTexture");
+      visit_texture(coat, "clearcoatNormalTexture");
+      visit_texture(in("KHR_materials_transmission"), "transmissionTexture");
+      visit_texture(in("KHR_materials_volume"), "thicknessTexture");
+    };
+    // Depth first with an explicit stack (a hostile file may nest deeply): a node's children are
+    // all visited before its mesh.
+    const auto visit_node = [&](size_t root) {
+      struct Step {
+        size_t node;
+        bool children_done;
+      };
+      std::vector<Step> stack = {{root, false}};
+      while (!stack.empty()) {
+        const Step step = stack.back();
+        stack.pop_back();
+        const Json& node = nodes[step.node];
+        if (!step.children_done) {
+          if (node_seen[step.node]) continue;
+          node_seen[step.node] = true;
+          stack.push_back({step.node, true});
+          if (node.is_object() && node.contains("children") && node["children"].is_array()) {
+            const Json& children = node["children"];
+            for (size_t c = children.size(); c-- > 0;) {
+              const Json& child = children[c];
+              if (child.is_number_unsigned() && child.get<uint64_t>() < nodes.size()) {
+                stack.push_back({static_cast<size_t>(child.get<uint64_t>()), false});
+              }
+            }
+          }
+          continue;
+        }
+        const auto mesh = index_in(node, "mesh", meshes.size());
+        if (!mesh || mesh_seen[*mesh]) continue;
+        mesh_seen[*mesh] = true;
+        const Json& m = meshes[*mesh];
+        if (!m.is_object() || !m.contains("primitives") || !m["primitives"].is_array()) continue;
+        for (const Json& p : m["primitives"]) {
+          if (const auto mat = index_in(p, "material", materials.size())) visit_material(*mat);
+        }
+      }
+    };
+    const auto visit_nodes = [&](const Json& list) {
+      if (!list.is_array()) return;
+      for (const Json& n : list) {
+        if (n.is_number_unsigned() && n.get<uint64_t>() < nodes.size()) {
+          visit_node(static_cast<size_t>(n.get<uint64_t>()));
+        }
+      }
+    };
+    const Json& scenes = member_array(doc, "scenes", "");
+    size_t scene = 0;
+    if (doc.contains("scene") && doc["scene"].is_number_unsigned()) {
+      scene = static_cast<size_t>(doc["scene"].get<uint64_t>());
+    }
+    if (scene < scenes.size() && scenes[scene].is_object() && scenes[scene].contains("nodes")) {
+      visit_nodes(scenes[scene]["nodes"]);
+    }
+    for (const Json& skin : member_array(doc, "skins", "")) {
+      if (!skin.is_object()) continue;
+      if (skin.contains("joints")) visit_nodes(skin["joints"]);
+      if (skin.contains("skeleton")) visit_nodes(Json::array({skin["skeleton"]}));
+    }
+    for (const Json& animation : member_array(doc, "animations", "")) {
+      if (!animation.is_object() || !animation.contains("channels")) continue;
+      for (const Json& channel : animation["channels"]) {
+        if (channel.is_object() && channel.contains("target") && channel["target"].is_object() &&
+            channel["target"].contains("node")) {
+          visit_nodes(Json::array({channel["target"]["node"]}));
+        }
+      }
+    }
+    return order;
+  }
+
+  // Every image, in the file's order; assimp numbers those it decodes itself (bufferView or data:
+  // URI) in its load order, from 0.
+  void read_images(const Json& doc, const LoadOrder& order, GltfMaterialTable& out) const {
+    const Json& images = member_array(doc, "images", "");
     for (size_t i = 0; i < images.size(); ++i) {
       const std::string where = "/images/" + std::to_string(i);
       const Json& image = images[i];
@@ -106,9 +253,12 @@ class Reader {
         if (!image.contains("uri") && !image.contains("bufferView")) {
           fail(where, "has neither a \"uri\" nor a \"bufferView\"");
         }
-        g.embedded = embedded++;
       }
       out.images.push_back(std::move(g));
+    }
+    int32_t embedded = 0;
+    for (const size_t i : order.images) {
+      if (out.images[i].uri.empty()) out.images[i].embedded = embedded++;
     }
   }
 
@@ -204,6 +354,7 @@ class Reader {
   GltfMaterial read_material(const Json& m, const std::string& where) const {
     if (!m.is_object()) fail(where, "must be an object");
     GltfMaterial out;
+    if (m.contains("name") && m["name"].is_string()) out.name = m["name"].get<std::string>();
     if (const Json* pbr = member_object(m, "pbrMetallicRoughness", where)) {
       const std::string pw = where + "/pbrMetallicRoughness";
       if (pbr->contains("baseColorTexture")) {

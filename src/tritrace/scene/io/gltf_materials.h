@@ -37,6 +37,7 @@ struct GltfTextureRef {
 };
 
 struct GltfMaterial {
+  std::string name;  // the file's, or empty
   GltfTextureRef base_colour, metallic_roughness, normal, emissive, transmission_texture;
   float normal_scale = 1.0f;
   glm::vec3 emissive_factor{0.0f};
@@ -46,8 +47,11 @@ struct GltfMaterial {
 };
 
 struct GltfMaterialTable {
-  std::vector<GltfMaterial> materials;  // in the file's order (assimp's material numbering)
-  std::vector<GltfImage> images;
+  // The materials assimp imports, in its numbering (aiScene::mMaterials): the order in which its
+  // lazy loader first meets them (gltf_materials.cpp, assimp_load_order), not the file's.
+  std::vector<GltfMaterial> materials;
+  std::vector<size_t> file_index;  // each one's index in the file's "materials"
+  std::vector<GltfImage> images;   // in the file's order
 };
 
 // The materials of a glTF document's JSON text. Throws Error(subject, "<JSON pointer>: <reason>")

@@ -364,12 +364,16 @@ ImportedMesh convert_scene(const aiScene& scene, const std::string& subject,
   TextureTable textures(scene, subject, directory, out);
   for (unsigned i = 0; i < scene.mNumMaterials; ++i) {
     out.materials.push_back(convert_material(*scene.mMaterials[i], textures));
-    if (const GltfMaterial* g = gltf_material(gltf, i)) {
+    // A guard on the numbering (GltfMaterialTable::materials): a named material must be the one
+    // assimp named so, else assimp's reading of it stands.
+    const GltfMaterial* g = gltf_material(gltf, i);
+    if (g != nullptr && (g->name.empty() || g->name == scene.mMaterials[i]->GetName().C_Str())) {
       try {
         apply_gltf_material(*g, *gltf, textures, out.materials.back());
       } catch (const Error& e) {
         if (!e.subject().empty()) throw;
-        throw Error(subject, "/materials/" + std::to_string(i) + ": " + e.reason());
+        throw Error(subject,
+                    "/materials/" + std::to_string(gltf->file_index[i]) + ": " + e.reason());
       }
     }
     out.material_names.emplace_back(scene.mMaterials[i]->GetName().C_Str());
