@@ -298,7 +298,9 @@ bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
   }
   x.frame = Frame::from_normal(x.ns);
   const glm::vec3 albedo = surface_albedo(scene_, *x.material, hit.prim, hit.u, hit.v);
-  x.bsdf = Bsdf(material_at(scene_, *x.material, hit.prim, hit.u, hit.v), albedo);
+  x.bsdf = x.material->has_parameter_textures()
+               ? Bsdf(material_at(scene_, *x.material, hit.prim, hit.u, hit.v), albedo)
+               : Bsdf(*x.material, albedo);
   x.albedo = albedo;
   x.connectible = !x.bsdf.all_delta();
   x.specular = !x.material->is_diffuse() && !x.connectible;

@@ -307,7 +307,9 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
         // choice number: light sampling adds its term and the bounce continues the path, so the
         // estimate's expectation is the sum of two expectations, each over a uniform number, and
         // stays unbiased (unlike the roulette's coin, which multiplies the same path's weight).
-        const Bsdf bsdf(material_at(scene, material, prim, hit.u, hit.v), albedo);
+        const Bsdf bsdf = material.has_parameter_textures()
+                              ? Bsdf(material_at(scene, material, prim, hit.u, hit.v), albedo)
+                              : Bsdf(material, albedo);
         // The shading frame, unless wo lies on different sides of the shading and geometric
         // surfaces (then the lobes, which decide inside and outside by wo, would be told wrong).
         glm::vec3 n_shade = n_lab;
