@@ -218,7 +218,9 @@ Material convert_material(const aiMaterial& m, TextureTable& textures) {
 // from the normal map's coordinate set (tangents.h). Empty otherwise.
 std::vector<glm::vec4> corner_tangents(const aiMesh& mesh, const GltfMaterial* gltf) {
   std::vector<glm::vec4> out;
+  // Only a normal map reads tangents: other meshes store none (16 bytes a corner).
   const bool normal_map = gltf != nullptr && gltf->normal.present();
+  if (!normal_map) return out;
   if (mesh.HasTangentsAndBitangents() && mesh.HasNormals()) {
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
       const aiFace& face = mesh.mFaces[f];
@@ -233,8 +235,8 @@ std::vector<glm::vec4> corner_tangents(const aiMesh& mesh, const GltfMaterial* g
     }
     return out;
   }
-  const unsigned set = normal_map ? gltf->normal.texcoord : 0;
-  if (!normal_map || !mesh.HasTextureCoords(set)) return out;
+  const unsigned set = gltf->normal.texcoord;
+  if (!mesh.HasTextureCoords(set)) return out;
   std::vector<glm::vec3> positions(mesh.mNumVertices), normals;
   std::vector<glm::vec2> uvs(mesh.mNumVertices);
   for (unsigned i = 0; i < mesh.mNumVertices; ++i) {
@@ -282,8 +284,11 @@ const GltfMaterial* gltf_material(const GltfMaterialTable* table, size_t index) 
   return table != nullptr && index < table->materials.size() ? &table->materials[index] : nullptr;
 }
 
+// `gltf_file`: the file is glTF, whose vertex colours and second coordinate set are read (other
+// formats' are not: their materials do not say to multiply the colours in); `gltf` its material.
 void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t material,
-                 const GltfMaterial* gltf, const std::string& subject, ImportedMesh& out) {
+                 bool gltf_file, const GltfMaterial* gltf, const std::string& subject,
+                 ImportedMesh& out) {
   const bool has_uvs = mesh.HasTextureCoords(0);
   const bool uvs = has_uvs || !out.uvs.empty();
   if (uvs) out.uvs.resize(out.corners.size(), glm::vec2(0.0f));
@@ -296,7 +301,8 @@ void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t mate
   if (normals) out.normals.resize(out.corners.size(), glm::vec3(0.0f));
   // glTF's further attributes (ImportedMesh), earlier meshes without them given the defaults.
   const std::vector<glm::vec4> tangent = corner_tangents(mesh, gltf);
-  const bool has_colours = mesh.HasVertexColors(0), has_uvs1 = mesh.HasTextureCoords(1);
+  const bool has_colours = gltf_file && mesh.HasVertexColors(0);
+  const bool has_uvs1 = gltf_file && mesh.HasTextureCoords(1);
   const bool tangents = !tangent.empty() || !out.tangents.empty();
   const bool colours = has_colours || !out.colours.empty();
   const bool uvs1 = has_uvs1 || !out.uvs1.empty();
@@ -399,8 +405,8 @@ ImportedMesh convert_scene(const aiScene& scene, const std::string& subject,
       const uint32_t material =
           mesh.mMaterialIndex < out.materials.size() ? mesh.mMaterialIndex : 0;
       const size_t before = out.triangles();
-      append_mesh(mesh, transform, material, gltf_material(gltf, mesh.mMaterialIndex), subject,
-                  out);
+      append_mesh(mesh, transform, material, gltf != nullptr,
+                  gltf_material(gltf, mesh.mMaterialIndex), subject, out);
       if (out.triangles() > before) ++out.meshes;
     }
     for (unsigned i = 0; i < node->mNumChildren; ++i) {

@@ -41,9 +41,10 @@ struct ImportedMesh {
   // Texture coordinates (u, v) of the first set at the corners, or empty when no mesh has any.
   HugePageVector<glm::vec2> uvs;
   // glTF's further corner attributes, each three per triangle or empty when no mesh has any
-  // (TriangleMesh::set_extras has the defaults a mesh without them gets): tangents (TANGENT, node
-  // transforms applied, else computed for normal-mapped materials: tangents.h), vertex colours
-  // (COLOR_0, RGBA) and the second texture coordinates (TEXCOORD_1).
+  // (TriangleMesh::set_extras has the defaults a mesh without them gets): tangents of
+  // normal-mapped materials' primitives (TANGENT with node transforms applied, else computed:
+  // tangents.h), vertex colours (COLOR_0, RGBA) and the second texture coordinates (TEXCOORD_1).
+  // Read from glTF files only.
   HugePageVector<glm::vec4> tangents;
   HugePageVector<glm::vec4> colours;
   HugePageVector<glm::vec2> uvs1;
