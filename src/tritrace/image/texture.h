@@ -23,6 +23,9 @@ struct TextureImage {
   // width * height bytes of coverage (0 transparent, 255 opaque), or empty where the image has
   // no alpha channel or every texel is opaque.
   std::vector<uint8_t> alpha;
+  // Colour (sRGB-encoded, decoded to linear when loaded) or data stored as it is (glTF's
+  // metallic-roughness, normal and transmission textures).
+  bool srgb = true;
 };
 
 // The IEC 61966-2-1 sRGB transfer curve, encoded [0, 1] to linear [0, 1].
@@ -36,6 +39,12 @@ class Texture {
   // An 8-bit colour image: each byte b decoded as srgb_to_linear(b / 255); its alpha bytes, when
   // it has them, as b / 255 (alpha is linear).
   static Texture from_srgb8(const TextureImage& image);
+  // An 8-bit data image: each byte b read as b / 255.
+  static Texture from_linear8(const TextureImage& image);
+  // from_srgb8 or from_linear8, as image.srgb says.
+  static Texture from_image(const TextureImage& image) {
+    return image.srgb ? from_srgb8(image) : from_linear8(image);
+  }
 
   int width() const { return width_; }
   int height() const { return height_; }
