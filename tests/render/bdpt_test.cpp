@@ -490,7 +490,7 @@ TEST(Bdpt, AgreesWithThePathTracerWithNormalMapsAndVertexColours) {
     out.set_extras(i, nullptr, colours, nullptr);
   }
   scene.mesh = out;
-  TextureImage normals{.width = 2, .height = 2, .rgb = {}, .srgb = false};
+  TextureImage normals{.width = 2, .height = 2, .rgb = {}, .alpha = {}, .srgb = false};
   normals.rgb = {158, 128, 250, 128, 100, 250, 110, 150, 250, 140, 118, 252};
   scene.textures = {Texture::from_image(normals)};
   for (Material& m : scene.materials) {

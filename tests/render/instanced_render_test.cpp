@@ -168,7 +168,7 @@ TEST(InstancedRender, NormalMappedColouredInstancesRenderAsTheFlattenedScene) {
       p.set_extras(i, tangents, colours, nullptr);
     }
   }
-  TextureImage normals{.width = 2, .height = 2, .rgb = {}, .srgb = false};
+  TextureImage normals{.width = 2, .height = 2, .rgb = {}, .alpha = {}, .srgb = false};
   normals.rgb = {170, 128, 240, 100, 150, 245, 128, 90, 240, 150, 160, 240};
   s.textures.push_back(Texture::from_image(normals));
   for (const TriangleMesh& p : s.prototypes) {
