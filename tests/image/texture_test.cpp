@@ -18,7 +18,7 @@ double srgb_closed_form(double c) {
 }
 
 TEST(Texture, SrgbBytesDecodeByTheIecCurve) {
-  TextureImage image{256, 1, {}, {}};
+  TextureImage image{256, 1, {}, {}, true};
   for (int b = 0; b < 256; ++b) image.rgb.insert(image.rgb.end(), 3, static_cast<uint8_t>(b));
   const Texture t = Texture::from_srgb8(image);
   for (int b = 0; b < 256; ++b) {

@@ -49,7 +49,7 @@ bool AlphaTestedAccel::transparent(const Ray& ray, const Hit& hit) const {
   const uint32_t id = scene_.material_of(hit.prim);
   if (id >= tested_.size() || !tested_[id]) return false;
   const Material& m = scene_.materials[id];
-  const float alpha = material_alpha(scene_, m, scene_.uv(hit.prim, hit.u, hit.v));
+  const float alpha = material_alpha(scene_, m, hit.prim, hit.u, hit.v);
   if (m.alpha_mode == AlphaMode::kMask) return alpha < m.alpha_cutoff;
   return alpha <= blend_threshold(ray, hit.prim);
 }

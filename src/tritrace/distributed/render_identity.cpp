@@ -59,6 +59,23 @@ void add_mesh(Hasher& h, const TriangleMesh& m) {
   h.add_vector(m.material());
   h.add_vector(m.corner_normals());
   h.add_vector(m.corner_uvs());
+  // glTF's extra corner attributes only where present, so that other meshes' identities stay.
+  if (m.has_tangents() || m.has_colours() || !m.corner_uvs1().empty()) {
+    h.add_vector(m.corner_tangents());
+    h.add_vector(m.corner_colours());
+    h.add_vector(m.corner_uvs1());
+  }
+}
+
+// A texture reference's coordinate set and transform, only where they are not the defaults.
+void add_texture_ref(Hasher& h, const TextureRef& r) {
+  h.add_value(r.index);
+  h.add_value(static_cast<uint8_t>(r.wrap_s));
+  h.add_value(static_cast<uint8_t>(r.wrap_t));
+  if (r.texcoord != 0 || r.moves()) {
+    h.add_value(r.texcoord);
+    for (float f : r.transform) h.add_value(f);
+  }
 }
 
 void add_affine(Hasher& h, const Affine& a) {
@@ -186,16 +203,19 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
     h.add_value(mat.transmission);
     h.add_value(mat.conductor_eta);
     h.add_value(mat.conductor_k);
-    for (const TextureRef& r : {mat.albedo_texture, mat.emission_texture}) {
-      h.add_value(r.index);
-      h.add_value(static_cast<uint8_t>(r.wrap_s));
-      h.add_value(static_cast<uint8_t>(r.wrap_t));
+    add_texture_ref(h, mat.albedo_texture);
+    add_texture_ref(h, mat.emission_texture);
+    // glTF's data textures only where present.
+    for (const TextureRef* r :
+         {&mat.metallic_roughness_texture, &mat.transmission_texture, &mat.normal_texture}) {
+      if (r->present()) add_texture_ref(h, *r);
     }
     if (mat.alpha_mode != AlphaMode::kOpaque) {  // likewise only where a material has one
       h.add_value(static_cast<uint8_t>(mat.alpha_mode));
       h.add_value(mat.alpha);
       h.add_value(mat.alpha_cutoff);
     }
+    if (mat.normal_texture.present()) h.add_value(mat.normal_scale);
   }
   for (const PointLight& l : scene.lights) {
     h.add_value(l.position);

@@ -29,6 +29,66 @@ void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& 
   material_.push_back(material);
   if (!corner_normals_.empty()) corner_normals_.insert(corner_normals_.end(), 3, normal_.back());
   if (!corner_uvs_.empty()) corner_uvs_.insert(corner_uvs_.end(), 3, glm::vec2(0.0f));
+  fit_extras();
+}
+
+namespace {
+constexpr glm::vec4 kNoTangent{0.0f};
+constexpr glm::vec4 kWhite{1.0f};
+constexpr glm::vec2 kNoUv{0.0f};
+
+template <typename T>
+void fit(HugePageVector<T>& v, size_t n, const T& fill) {
+  if (v.empty() || v.size() == n) return;
+  const size_t held = v.size();
+  v.resize(n);  // new elements uninitialised (huge_page_allocator.h)
+  for (size_t k = held; k < n; ++k) v[k] = fill;
+}
+
+template <typename T>
+T interpolate(const HugePageVector<T>& v, size_t tri, float u, float v_, const T& none) {
+  if (v.empty()) return none;
+  const T* c = &v[3 * tri];
+  return (1.0f - u - v_) * c[0] + u * c[1] + v_ * c[2];
+}
+}  // namespace
+
+void TriangleMesh::fit_extras() {
+  fit(corner_tangents_, 3 * size(), kNoTangent);
+  fit(corner_colours_, 3 * size(), kWhite);
+  fit(corner_uvs1_, 3 * size(), kNoUv);
+}
+
+glm::vec4 TriangleMesh::tangent(size_t tri, float u, float v) const {
+  if (corner_tangents_.empty()) return kNoTangent;
+  glm::vec4 t = interpolate(corner_tangents_, tri, u, v, kNoTangent);
+  t.w = corner_tangents_[3 * tri].w;
+  return t;
+}
+
+glm::vec4 TriangleMesh::colour(size_t tri, float u, float v) const {
+  return interpolate(corner_colours_, tri, u, v, kWhite);
+}
+
+glm::vec2 TriangleMesh::uv1(size_t tri, float u, float v) const {
+  return interpolate(corner_uvs1_, tri, u, v, kNoUv);
+}
+
+void TriangleMesh::make_extras(bool tangents, bool colours, bool uvs1) {
+  const size_t n = 3 * size();
+  if (tangents && corner_tangents_.empty()) corner_tangents_.assign(n, kNoTangent);
+  if (colours && corner_colours_.empty()) corner_colours_.assign(n, kWhite);
+  if (uvs1 && corner_uvs1_.empty()) corner_uvs1_.assign(n, kNoUv);
+}
+
+void TriangleMesh::set_extras(size_t i, const glm::vec4* tangents, const glm::vec4* colours,
+                              const glm::vec2* uvs1) {
+  make_extras(tangents != nullptr, colours != nullptr, uvs1 != nullptr);
+  for (size_t k = 0; k < 3; ++k) {
+    if (tangents != nullptr) corner_tangents_[3 * i + k] = tangents[k];
+    if (colours != nullptr) corner_colours_[3 * i + k] = colours[k];
+    if (uvs1 != nullptr) corner_uvs1_[3 * i + k] = uvs1[k];
+  }
 }
 
 void TriangleMesh::add(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,
@@ -93,6 +153,7 @@ void TriangleMesh::grow(size_t more, bool corner_normals, bool corner_uvs) {
   material_.resize(held + more);
   if (normals) corner_normals_.resize(3 * (held + more));
   if (uvs) corner_uvs_.resize(3 * (held + more));
+  fit_extras();
 }
 
 void TriangleMesh::set(size_t i, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,
@@ -130,6 +191,20 @@ void TriangleMesh::append(const TriangleMesh& other, uint32_t material_offset) {
       corner_uvs_.insert(corner_uvs_.end(), other.corner_uvs_.begin(), other.corner_uvs_.end());
     }
   }
+  // The extras: `other`'s where it has them, defaults for the other side's triangles.
+  const size_t my_corners = 3 * (size() - other.size());
+  const auto join = [&](auto& dst, const auto& src, const auto& fill) {
+    if (src.empty() && dst.empty()) return;
+    if (dst.empty()) dst.assign(my_corners, fill);
+    if (src.empty()) {
+      dst.insert(dst.end(), 3 * other.size(), fill);
+    } else {
+      dst.insert(dst.end(), src.begin(), src.end());
+    }
+  };
+  join(corner_tangents_, other.corner_tangents_, kNoTangent);
+  join(corner_colours_, other.corner_colours_, kWhite);
+  join(corner_uvs1_, other.corner_uvs1_, kNoUv);
   if (other.corner_normals_.empty() && corner_normals_.empty()) return;
   // One of the two has shading normals: the other's triangles get their geometric normals.
   const size_t mine = normal_.size() - other.normal_.size();

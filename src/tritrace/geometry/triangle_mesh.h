@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 #include <vector>
 
 #include "tritrace/geometry/intersect.h"
@@ -73,6 +74,28 @@ class TriangleMesh {
   // The corner texture coordinates interpolated at barycentrics (u, v); (0, 0) without any.
   glm::vec2 uv(size_t tri, float u, float v) const;
 
+  // glTF's further corner attributes, each three per triangle or empty when no triangle has any;
+  // triangles added without them get the defaults: tangent (0, 0, 0, 0) (none: shading computes
+  // one), colour (1, 1, 1, 1), second texture coordinates (0, 0).
+  // Tangents: xyz the direction of increasing u, w = +1 or -1 the sign that makes the bitangent
+  // w cross(normal, tangent) point along increasing v (glTF's TANGENT).
+  const HugePageVector<glm::vec4>& corner_tangents() const { return corner_tangents_; }
+  const HugePageVector<glm::vec4>& corner_colours() const { return corner_colours_; }
+  const HugePageVector<glm::vec2>& corner_uvs1() const { return corner_uvs1_; }
+  bool has_tangents() const { return !corner_tangents_.empty(); }
+  bool has_colours() const { return !corner_colours_.empty(); }
+  // Interpolated at barycentrics (u, v), the defaults without any. The tangent's xyz is not
+  // normalised; its w is corner 0's.
+  glm::vec4 tangent(size_t tri, float u, float v) const;
+  glm::vec4 colour(size_t tri, float u, float v) const;
+  glm::vec2 uv1(size_t tri, float u, float v) const;
+  // Makes room for the attributes asked for (defaults for every triangle held), so that set_extras
+  // may then be called from several threads.
+  void make_extras(bool tangents, bool colours, bool uvs1);
+  // Stores triangle i's attributes (each null: keep what it has), making an array on first use.
+  void set_extras(size_t i, const glm::vec4* tangents, const glm::vec4* colours,
+                  const glm::vec2* uvs1);
+
   // Corner 0, 1 or 2, exactly as added (inline: the BVH builds read every vertex through it).
   glm::vec3 vertex(size_t tri, int corner) const {
     return corner == 1 ? v1_[tri] : corner == 2 ? v2_[tri] : v0_[tri];
@@ -90,6 +113,11 @@ class TriangleMesh {
   HugePageVector<uint32_t> material_;
   HugePageVector<glm::vec3> corner_normals_;
   HugePageVector<glm::vec2> corner_uvs_;
+  HugePageVector<glm::vec4> corner_tangents_;
+  HugePageVector<glm::vec4> corner_colours_;
+  HugePageVector<glm::vec2> corner_uvs1_;
+  // Every extra attribute array at the length the triangles held need, new entries defaulted.
+  void fit_extras();
 };
 
 }  // namespace tritrace

@@ -78,6 +78,14 @@ Texture Texture::mapped(glm::vec3 scale, glm::vec3 offset) const {
   return out;
 }
 
+Texture Texture::from_linear8(const TextureImage& image) {
+  std::vector<glm::vec3> texels(static_cast<size_t>(image.width) * image.height);
+  for (size_t i = 0; i < texels.size(); ++i) {
+    texels[i] = glm::vec3(image.rgb[3 * i], image.rgb[3 * i + 1], image.rgb[3 * i + 2]) / 255.0f;
+  }
+  return Texture(image.width, image.height, std::move(texels));
+}
+
 Texture::Footprint Texture::footprint(glm::vec2 uv, WrapMode s, WrapMode t) const {
   const double x = texel_coordinate(uv.x, width_);
   const double y = texel_coordinate(1.0f - uv.y, height_);

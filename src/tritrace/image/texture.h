@@ -24,6 +24,9 @@ struct TextureImage {
   // width * height bytes of coverage (0 transparent, 255 opaque), or empty where the image has
   // no alpha channel or every texel is opaque.
   std::vector<uint8_t> alpha;
+  // Colour (sRGB-encoded, decoded to linear when loaded) or data stored as it is (glTF's
+  // metallic-roughness, normal and transmission textures).
+  bool srgb = true;
 };
 
 // pbrt-v4's two-dimensional checkerboard texture with its uv mapping: with s = scale.x u + delta.x
@@ -56,6 +59,12 @@ class Texture {
   // The texture whose every texel (and checkerboard colour) is scale * c + offset, alpha kept: the
   // lookup of the result is scale * lookup + offset exactly, as bilinear weights sum to 1.
   Texture mapped(glm::vec3 scale, glm::vec3 offset) const;
+  // An 8-bit data image: each byte b read as b / 255.
+  static Texture from_linear8(const TextureImage& image);
+  // from_srgb8 or from_linear8, as image.srgb says.
+  static Texture from_image(const TextureImage& image) {
+    return image.srgb ? from_srgb8(image) : from_linear8(image);
+  }
 
   int width() const { return width_; }
   int height() const { return height_; }

@@ -117,7 +117,7 @@ glm::vec3 emission(const Scene& scene, const Vertex& x, glm::vec3 w) {
   if (x.point_light || infinite(x)) return x.le;
   glm::vec3 le = emitted_radiance(*x.material, x.ng, w);
   if (x.material->emission_texture.present() && max_component(le) > 0.0f) {
-    le = textured(scene, x.material->emission_texture, le, scene.uv(x.prim, x.u, x.v));
+    le = textured(scene, x.material->emission_texture, le, x.prim, x.u, x.v);
   }
   return le;
 }
@@ -341,19 +341,17 @@ bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
   x.material = &scene_.materials[x.tri.material];
   x.p = x.tri.v0 + hit.u * x.tri.e1 + hit.v * x.tri.e2;
   x.ng = x.tri.normal;
-  x.smooth = scene_.smooth(hit.prim);
+  x.smooth = shades_smooth(scene_, *x.material, hit.prim);
   x.ns = x.ng;
   if (x.smooth) {
-    x.corners = scene_.corners(hit.prim);
-    x.ns = oriented_shading_normal(x.corners, hit.u, hit.v, x.ng);
+    x.corners = scene_.any_corners(hit.prim);
+    x.ns = surface_normal(scene_, *x.material, hit.prim, x.corners, hit.u, hit.v, x.ng);
   }
   x.frame = Frame::from_normal(x.ns);
-  glm::vec3 albedo = x.material->albedo;
-  if (x.material->albedo_texture.present()) {
-    albedo =
-        textured(scene_, x.material->albedo_texture, albedo, scene_.uv(hit.prim, hit.u, hit.v));
-  }
-  x.bsdf = Bsdf(*x.material, albedo);
+  const glm::vec3 albedo = surface_albedo(scene_, *x.material, hit.prim, hit.u, hit.v);
+  x.bsdf = x.material->has_parameter_textures()
+               ? Bsdf(material_at(scene_, *x.material, hit.prim, hit.u, hit.v), albedo)
+               : Bsdf(*x.material, albedo);
   x.albedo = albedo;
   x.connectible = !x.bsdf.all_delta();
   x.specular = !x.material->is_diffuse() && !x.connectible;

@@ -14,11 +14,8 @@ void write_first_hit_aovs(const Scene& scene, std::span<const Ray> rays, std::sp
       glm::vec3 albedo(0.0f);
       if (h.found()) {
         const Material& m = scene.materials[scene.material_of(h.prim)];
-        albedo = m.albedo;
         // Textured as the path tracer shades it.
-        if (m.albedo_texture.present()) {
-          albedo = textured(scene, m.albedo_texture, albedo, scene.uv(h.prim, h.u, h.v));
-        }
+        albedo = surface_albedo(scene, m, h.prim, h.u, h.v);
       }
       out.albedo[i] = albedo;
     }

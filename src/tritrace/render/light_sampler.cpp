@@ -199,8 +199,7 @@ LightSample LightSampler::sample(const Scene& scene, glm::vec3 x, float u_select
   out.radiance = light.radiance;
   if (light.textured) {
     const Material& m = scene.materials[scene.material_of(light.index)];
-    out.radiance =
-        textured(scene, m.emission_texture, light.radiance, scene.uv(light.index, b.y, b.z));
+    out.radiance = textured(scene, m.emission_texture, light.radiance, light.index, b.y, b.z);
   }
   out.pdf = light.pmf_over_area * dist2 / cos_light;
   return out;

@@ -121,9 +121,10 @@ PathIntegrator::PathIntegrator(const Scene& scene, const PathSettings& settings,
                                const RayOffsetParams& offset)
     : settings_(settings), offset_(offset), lights_(scene) {
   plain_diffuse_ =
-      !scene.mesh.has_shading_normals() && scene.instances.empty() &&
+      !scene.mesh.has_shading_normals() && !scene.mesh.has_colours() && scene.instances.empty() &&
       std::all_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) {
-        return m.is_diffuse() && !m.albedo_texture.present() && !m.emission_texture.present();
+        return m.is_diffuse() && !m.albedo_texture.present() && !m.emission_texture.present() &&
+               !m.normal_texture.present();
       });
   uniform_environment_ = !scene.environment_map && max_component(scene.environment) > 0.0f;
   specular_.reserve(scene.materials.size());
@@ -259,24 +260,22 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       const glm::vec3 n_lab = tri.normal;
       // An instance's triangles shade smooth where its prototype has vertex normals, with the
       // corners moved to world space (Scene::corners).
-      const bool smooth = !kPlainDiffuse && scene.smooth(prim);
+      const bool smooth = !kPlainDiffuse && shades_smooth(scene, material, prim);
       SmoothCorners corners;
-      if (smooth) corners = scene.corners(prim);
-      // Texture coordinates only for a textured material.
-      const auto uv = [&] { return scene.uv(prim, hit.u, hit.v); };
-
+      if (smooth) corners = scene.any_corners(prim);
       // Texture lookups only where a material has a texture: untextured scenes run as before.
-      glm::vec3 albedo = material.albedo;
-      if (!kPlainDiffuse && material.albedo_texture.present()) {
-        albedo = textured(scene, material.albedo_texture, albedo, uv());
-      }
+      const glm::vec3 albedo =
+          kPlainDiffuse ? material.albedo : surface_albedo(scene, material, prim, hit.u, hit.v);
+      const auto shading_normal = [&] {
+        return surface_normal(scene, material, prim, corners, hit.u, hit.v, n_lab);
+      };
       if (surface_aovs && aov_open[i]) {
         // The normal the diffuse branch below shades with: the shading normal on the side the
         // path arrived from, unless the two normals disagree about wo.
         const glm::vec3 n_face = glm::dot(n_lab, wo) >= 0.0f ? n_lab : -n_lab;
         glm::vec3 n_aov = n_face;
         if (smooth) {
-          glm::vec3 ns = oriented_shading_normal(corners, hit.u, hit.v, n_lab);
+          glm::vec3 ns = shading_normal();
           if (!(n_face == n_lab)) ns = -ns;
           if (shading_agrees(wo, ns, n_face)) n_aov = ns;
         }
@@ -287,7 +286,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       if (material.emits()) {
         glm::vec3 le = emitted_radiance(material, n_lab, wo);
         if (!kPlainDiffuse && material.emission_texture.present()) {
-          le = textured(scene, material.emission_texture, le, uv());
+          le = textured(scene, material.emission_texture, le, prim, hit.u, hit.v);
         }
         // Emission reached by the camera or through a delta lobe is found by no other strategy:
         // weight 1 under every strategy (light sampling alone included).
@@ -308,12 +307,14 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
         // choice number: light sampling adds its term and the bounce continues the path, so the
         // estimate's expectation is the sum of two expectations, each over a uniform number, and
         // stays unbiased (unlike the roulette's coin, which multiplies the same path's weight).
-        const Bsdf bsdf(material, albedo);
+        const Bsdf bsdf = material.has_parameter_textures()
+                              ? Bsdf(material_at(scene, material, prim, hit.u, hit.v), albedo)
+                              : Bsdf(material, albedo);
         // The shading frame, unless wo lies on different sides of the shading and geometric
         // surfaces (then the lobes, which decide inside and outside by wo, would be told wrong).
         glm::vec3 n_shade = n_lab;
         if (smooth) {
-          const glm::vec3 ns = oriented_shading_normal(corners, hit.u, hit.v, n_lab);
+          const glm::vec3 ns = shading_normal();
           if (shading_agrees(wo, ns, n_lab)) n_shade = ns;
         }
         const Frame frame = Frame::from_normal(n_shade);
@@ -389,7 +390,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       // describe, above the facets.
       glm::vec3 ns = n;
       if (smooth) {
-        ns = oriented_shading_normal(corners, hit.u, hit.v, n_lab);
+        ns = shading_normal();
         if (!(n == n_lab)) ns = -ns;
         if (!shading_agrees(wo, ns, n)) ns = n;
       }

@@ -1,10 +1,12 @@
-// Instances: their triangle numbering, their world-space triangles and boxes, and flattening.
+// Instances: their triangle numbering, their world-space triangles and boxes, and flattening;
+// per-hit surface attributes (tangents, textured material parameters).
 #include "tritrace/scene/scene.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 #include <string>
 
 #include "tritrace/error.h"
@@ -99,6 +101,43 @@ glm::vec2 Scene::instanced_uv(uint32_t prim, float u, float v) const {
   return prototypes[inst.prototype].uv(prim - inst.first_prim, u, v);
 }
 
+glm::vec4 Scene::tangent(uint32_t prim, float u, float v) const {
+  if (prim < mesh.size()) return mesh.tangent(prim, u, v);
+  const Instance& inst = instance_of(prim);
+  const glm::vec4 t = prototypes[inst.prototype].tangent(prim - inst.first_prim, u, v);
+  // A tangent is a direction along the surface: it moves with the linear part itself. A mirroring
+  // transform turns cross(normal, tangent) around, so the bitangent's sign turns with it.
+  const float det = glm::determinant(inst.to_world.linear);
+  return {inst.to_world.apply_vector(glm::vec3(t)), det < 0.0f ? -t.w : t.w};
+}
+
+SmoothCorners Scene::any_corners(uint32_t prim) const {
+  if (smooth(prim)) return corners(prim);
+  const SurfaceTriangle t = triangle(prim);
+  SmoothCorners c;
+  c.vertex[0] = t.v0;
+  c.vertex[1] = t.v0 + t.e1;
+  c.vertex[2] = t.v0 + t.e2;
+  for (glm::vec3& n : c.normal) n = t.normal;
+  return c;
+}
+
+Material material_at(const Scene& scene, const Material& m, uint32_t prim, float u, float v) {
+  if (!m.has_parameter_textures()) return m;
+  Material out = m;
+  if (m.metallic_roughness_texture.present()) {
+    // glTF 2.0, section 3.9.2: roughness in the green channel, metalness in the blue.
+    const glm::vec3 t = textured(scene, m.metallic_roughness_texture, glm::vec3(1.0f), prim, u, v);
+    out.roughness = std::clamp(m.roughness * t.y, 0.0f, 1.0f);
+    out.metallic = std::clamp(m.metallic * t.z, 0.0f, 1.0f);
+  }
+  if (m.transmission_texture.present()) {
+    const glm::vec3 t = textured(scene, m.transmission_texture, glm::vec3(1.0f), prim, u, v);
+    out.transmission = std::clamp(m.transmission * t.x, 0.0f, 1.0f);
+  }
+  return out;
+}
+
 void add_instance(Scene& scene, uint32_t prototype, const Affine& to_world) {
   const uint64_t drawn = scene.drawn_triangles();
   const uint64_t added = scene.prototypes.at(prototype).size();
@@ -150,6 +189,7 @@ Scene flattened(const Scene& scene) {
   out.mesh.reserve(scene.drawn_triangles());
   for (const Instance& inst : scene.instances) {
     const TriangleMesh& proto = scene.prototypes[inst.prototype];
+    const bool mirrors = glm::determinant(inst.to_world.linear) < 0.0f;
     for (uint32_t k = 0; k < proto.size(); ++k) {
       // Vertex normals as Scene::corners gives them, texture coordinates as they are.
       std::array<glm::vec3, 3> normals;
@@ -163,6 +203,23 @@ Scene flattened(const Scene& scene) {
                    inst.to_world.apply(proto.v2()[k]), proto.material()[k],
                    proto.has_shading_normals() ? &normals : nullptr,
                    proto.has_uvs() ? &uvs : nullptr);
+      // glTF's corner attributes as Scene::tangent and Scene::vertex_colour give them.
+      glm::vec4 tangents[3], colours[3];
+      glm::vec2 uvs1[3];
+      for (size_t j = 0; j < 3; ++j) {
+        const size_t c = 3 * size_t{k} + j;
+        if (proto.has_tangents()) {
+          const glm::vec4 t = proto.corner_tangents()[c];
+          tangents[j] = {inst.to_world.apply_vector(glm::vec3(t)), mirrors ? -t.w : t.w};
+        }
+        if (proto.has_colours()) colours[j] = proto.corner_colours()[c];
+        if (!proto.corner_uvs1().empty()) uvs1[j] = proto.corner_uvs1()[c];
+      }
+      if (proto.has_tangents() || proto.has_colours() || !proto.corner_uvs1().empty()) {
+        out.mesh.set_extras(out.mesh.size() - 1, proto.has_tangents() ? tangents : nullptr,
+                            proto.has_colours() ? colours : nullptr,
+                            proto.corner_uvs1().empty() ? nullptr : uvs1);
+      }
     }
   }
   return out;
@@ -192,9 +249,12 @@ bool has_alpha_tested_materials(const Scene& scene) {
   return false;
 }
 
-float material_alpha(const Scene& scene, const Material& material, glm::vec2 uv) {
+float material_alpha(const Scene& scene, const Material& material, uint32_t prim, float u,
+                     float v) {
   const TextureRef& t = material.albedo_texture;
   if (!t.present()) return material.alpha;
+  glm::vec2 uv = scene.uv(prim, u, v, t.texcoord);
+  if (t.moves()) uv = t.apply(uv);
   return material.alpha *
          scene.textures[static_cast<size_t>(t.index)].alpha(uv, t.wrap_s, t.wrap_t);
 }

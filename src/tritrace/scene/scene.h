@@ -3,10 +3,13 @@
 // the camera, plus instanced meshes.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <glm/mat3x3.hpp>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -29,12 +32,25 @@ enum class MaterialType : uint8_t {
 };
 
 // One of Scene::textures, looked up through the mesh's texture coordinates with these wrap modes
-// (a glTF sampler's; repeat by default).
+// (a glTF sampler's; repeat by default). `texcoord` picks the coordinate set (glTF's TEXCOORD_0 or
+// TEXCOORD_1), and `transform` moves the coordinates before the lookup: uv' = (m[0] u + m[2] v +
+// m[4], m[1] u + m[3] v + m[5]) in tritrace's (OpenGL's, v up) convention, KHR_texture_transform's
+// matrix carried over from glTF's (v down) convention by the importer; the identity by default.
 struct TextureRef {
   int32_t index = -1;  // none
   WrapMode wrap_s = WrapMode::kRepeat;
   WrapMode wrap_t = WrapMode::kRepeat;
+  uint8_t texcoord = 0;
+  float transform[6] = {1.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f};
   bool present() const { return index >= 0; }
+  bool moves() const {
+    return transform[0] != 1.0f || transform[1] != 0.0f || transform[2] != 0.0f ||
+           transform[3] != 1.0f || transform[4] != 0.0f || transform[5] != 0.0f;
+  }
+  glm::vec2 apply(glm::vec2 uv) const {
+    return {transform[0] * uv.x + transform[2] * uv.y + transform[4],
+            transform[1] * uv.x + transform[3] * uv.y + transform[5]};
+  }
 };
 
 // How a material's alpha (Material::alpha times its base colour texture's alpha) hides parts of its
@@ -71,6 +87,30 @@ struct Material {
   AlphaMode alpha_mode = AlphaMode::kOpaque;
   float alpha = 1.0f;         // glTF's base colour factor's alpha, in [0, 1]
   float alpha_cutoff = 0.5f;  // kMask only
+  // glTF's data textures (linear, not sRGB), each scaling a parameter where present (principled
+  // only): metallic times the texture's blue channel and roughness times its green
+  // (metallicRoughnessTexture), transmission times its red (KHR_materials_transmission).
+  TextureRef metallic_roughness_texture{};
+  TextureRef transmission_texture{};
+  // A tangent-space normal map (glTF's normalTexture, +y up in the image as OpenGL's): texel t
+  // gives the normal (2 t - 1) with x and y times `normal_scale`, in the frame of the mesh's
+  // tangent, bitangent and shading normal (shading_normal.h).
+  TextureRef normal_texture{};
+  float normal_scale = 1.0f;
+
+  // Every texture reference, for code that renumbers or checks them all.
+  std::array<TextureRef*, 5> texture_refs() {
+    return {&albedo_texture, &emission_texture, &metallic_roughness_texture, &transmission_texture,
+            &normal_texture};
+  }
+  std::array<const TextureRef*, 5> texture_refs() const {
+    return {&albedo_texture, &emission_texture, &metallic_roughness_texture, &transmission_texture,
+            &normal_texture};
+  }
+  // Whether a texture changes the BSDF's parameters (not only its albedo).
+  bool has_parameter_textures() const {
+    return metallic_roughness_texture.present() || transmission_texture.present();
+  }
 
   bool emits() const { return emission.x > 0.0f || emission.y > 0.0f || emission.z > 0.0f; }
   bool is_diffuse() const { return type == MaterialType::kDiffuse; }
@@ -293,6 +333,23 @@ struct Scene {
   glm::vec2 uv(uint32_t prim, float u, float v) const {
     return prim < mesh.size() ? mesh.uv(prim, u, v) : instanced_uv(prim, u, v);
   }
+  // Coordinates of set `set` (0 or 1, glTF's TEXCOORD_n).
+  glm::vec2 uv(uint32_t prim, float u, float v, int set) const {
+    if (set == 0) return uv(prim, u, v);
+    const TriangleMesh& m = prim < mesh.size() ? mesh : prototypes[instance_of(prim).prototype];
+    return m.uv1(prim < mesh.size() ? prim : prim - instance_of(prim).first_prim, u, v);
+  }
+  // The vertex colour (glTF's COLOR_0, RGBA) at barycentrics (u, v); white without any.
+  glm::vec4 vertex_colour(uint32_t prim, float u, float v) const {
+    if (prim < mesh.size()) return mesh.colour(prim, u, v);
+    const Instance& inst = instance_of(prim);
+    return prototypes[inst.prototype].colour(prim - inst.first_prim, u, v);
+  }
+  // The tangent at barycentrics (u, v) in world space, unnormalised, with the bitangent's sign in
+  // w (TriangleMesh::tangent); zero where the mesh has none.
+  glm::vec4 tangent(uint32_t prim, float u, float v) const;
+  // corners(prim) for any triangle: a flat one gets its geometric normal at each corner.
+  SmoothCorners any_corners(uint32_t prim) const;
 
  private:
   SurfaceTriangle instanced_triangle(uint32_t prim) const;
@@ -324,15 +381,41 @@ Scene flattened(const Scene& scene);
 bool alpha_tested(const Scene& scene, const Material& material);
 // Whether any material of `scene` is alpha_tested.
 bool has_alpha_tested_materials(const Scene& scene);
-// The alpha of `material` at texture coordinates uv: Material::alpha times the base colour
-// texture's alpha there (1 for a texture without an alpha channel).
-float material_alpha(const Scene& scene, const Material& material, glm::vec2 uv);
+// The alpha of `material` at barycentrics (u, v) of triangle `prim`: Material::alpha times the
+// base colour texture's alpha there, in that texture's coordinate set and transform, as the colour
+// is looked up (1 for a texture without an alpha channel).
+float material_alpha(const Scene& scene, const Material& material, uint32_t prim, float u, float v);
 
 // `factor` times the texture `ref` at texture coordinates uv, or `factor` alone without a texture.
+// `uv` is of the reference's coordinate set and not yet moved by its transform.
 inline glm::vec3 textured(const Scene& scene, const TextureRef& ref, glm::vec3 factor,
                           glm::vec2 uv) {
   if (!ref.present()) return factor;
+  if (ref.moves()) uv = ref.apply(uv);
   return factor * scene.textures[static_cast<size_t>(ref.index)].lookup(uv, ref.wrap_s, ref.wrap_t);
 }
+
+// The same at barycentrics (u, v) of triangle `prim`, in the reference's coordinate set.
+inline glm::vec3 textured(const Scene& scene, const TextureRef& ref, glm::vec3 factor,
+                          uint32_t prim, float u, float v) {
+  if (!ref.present()) return factor;
+  return textured(scene, ref, factor, scene.uv(prim, u, v, ref.texcoord));
+}
+
+// The reflectance a surface shades with at barycentrics (u, v) of `prim`: the material's albedo
+// times its base colour texture times the vertex colour (glTF: baseColorFactor *
+// baseColorTexture * COLOR_0).
+inline glm::vec3 surface_albedo(const Scene& scene, const Material& m, uint32_t prim, float u,
+                                float v) {
+  glm::vec3 albedo = textured(scene, m.albedo_texture, m.albedo, prim, u, v);
+  if (prim >= scene.mesh.size() || scene.mesh.has_colours()) {
+    albedo *= glm::vec3(scene.vertex_colour(prim, u, v));
+  }
+  return albedo;
+}
+
+// The material at barycentrics (u, v) of `prim` with its parameter textures applied (metallic,
+// roughness, transmission); `m` itself for a material without them.
+Material material_at(const Scene& scene, const Material& m, uint32_t prim, float u, float v);
 
 }  // namespace tritrace

@@ -17,6 +17,13 @@ Scene transformed(const Scene& scene, const Similarity& xf) {
     if (m.has_uvs()) std::copy_n(&m.corner_uvs()[3 * i], 3, uvs.begin());
     out.mesh.add(xf.apply(m.v0()[i]), xf.apply(m.v1()[i]), xf.apply(m.v2()[i]), m.material()[i],
                  m.has_shading_normals() ? &normals : nullptr, m.has_uvs() ? &uvs : nullptr);
+    // glTF's corner attributes stay too (a positive uniform scale keeps tangent directions).
+    const bool uvs1 = !m.corner_uvs1().empty();
+    if (m.has_tangents() || m.has_colours() || uvs1) {
+      out.mesh.set_extras(i, m.has_tangents() ? &m.corner_tangents()[3 * i] : nullptr,
+                          m.has_colours() ? &m.corner_colours()[3 * i] : nullptr,
+                          uvs1 ? &m.corner_uvs1()[3 * i] : nullptr);
+    }
   }
   // Instances keep their prototypes; the similarity is composed into each placement.
   out.prototypes = scene.prototypes;

@@ -6,8 +6,6 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
-#include <filesystem>
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
@@ -16,40 +14,12 @@
 #include <sstream>
 
 #include "tritrace/error.h"
-#include "tritrace/scene/io/input_file.h"
+#include "tritrace/scene/io/gltf_json.h"
 
 namespace tritrace {
 namespace {
 
 using Json = nlohmann::json;
-
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
-  return ext;
-}
-
-uint32_t read_u32(const std::string& bytes, size_t at) {
-  uint32_t v = 0;
-  std::memcpy(&v, bytes.data() + at, 4);  // glTF's binary container is little-endian, as x86
-  return v;
-}
-
-// The JSON text of a .gltf, or of a .glb's first chunk (glTF 2.0, section 4.4 "Binary glTF").
-std::string json_text(const std::string& path, const std::string& bytes) {
-  if (lower_extension(path) != ".glb") return bytes;
-  constexpr uint32_t kMagic = 0x46546C67;      // "glTF"
-  constexpr uint32_t kJsonChunk = 0x4E4F534A;  // "JSON"
-  if (bytes.size() < 20 || read_u32(bytes, 0) != kMagic) {
-    throw Error(path, "not a binary glTF file (no glTF header)");
-  }
-  const uint32_t length = read_u32(bytes, 12);
-  if (read_u32(bytes, 16) != kJsonChunk || length > bytes.size() - 20) {
-    throw Error(path, "binary glTF without a JSON chunk");
-  }
-  return bytes.substr(20, length);
-}
 
 double number(const Json& j, const char* key, const std::string& where, const std::string& path) {
   if (!j.contains(key) || !j[key].is_number()) {
@@ -143,7 +113,7 @@ GltfCamera parse_camera(const Json& cameras, size_t index, const std::string& pa
 std::vector<GltfCamera> read_gltf_cameras(const std::string& path) {
   Json j;
   try {
-    j = Json::parse(json_text(path, read_input_file(path)));
+    j = Json::parse(read_gltf_json_text(path));
   } catch (const Json::exception& e) {
     throw Error(path, std::string("glTF JSON: ") + e.what());
   }

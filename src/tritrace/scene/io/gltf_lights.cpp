@@ -6,9 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/mat4x4.hpp>
@@ -17,7 +15,7 @@
 #include <utility>
 
 #include "tritrace/error.h"
-#include "tritrace/scene/io/input_file.h"
+#include "tritrace/scene/io/gltf_json.h"
 
 namespace tritrace {
 namespace {
@@ -267,11 +265,6 @@ class Reader {
   std::vector<LightDef> defs_;
 };
 
-uint32_t read_u32_le(const char* p) {
-  const auto* b = reinterpret_cast<const unsigned char*>(p);
-  return uint32_t{b[0]} | uint32_t{b[1]} << 8 | uint32_t{b[2]} << 16 | uint32_t{b[3]} << 24;
-}
-
 }  // namespace
 
 bool is_gltf_file(const std::string& path) {
@@ -295,22 +288,7 @@ PunctualLights parse_gltf_lights(std::string_view json, const std::string& subje
 }
 
 PunctualLights read_gltf_lights(const std::string& path) {
-  const size_t size = check_input_file(path);
-  std::ifstream in(path, std::ios::binary);
-  char header[20];
-  // A .glb starts with "glTF", version, length, then the JSON chunk's length and type "JSON"
-  // (glTF 2.0 specification, section 4.4); anything else is read as a .gltf's text.
-  if (size >= sizeof header && in.read(header, sizeof header) &&
-      std::memcmp(header, "glTF", 4) == 0) {
-    const uint32_t chunk = read_u32_le(header + 12);
-    if (std::memcmp(header + 16, "JSON", 4) != 0 || chunk > size - sizeof header) {
-      throw Error(path, "a .glb whose first chunk is not its JSON");
-    }
-    std::string json(chunk, '\0');
-    if (!in.read(json.data(), chunk)) throw Error(path, "could not read the .glb's JSON chunk");
-    return parse_gltf_lights(json, path);
-  }
-  return parse_gltf_lights(read_input_file(path), path);
+  return parse_gltf_lights(read_gltf_json_text(path), path);
 }
 
 }  // namespace tritrace

@@ -32,12 +32,16 @@
 #include "tritrace/error.h"
 #include "tritrace/image/image_limits.h"
 #include "tritrace/parallel.h"
+#include "tritrace/scene/io/gltf_json.h"
+#include "tritrace/scene/io/gltf_lights.h"  // is_gltf_file
+#include "tritrace/scene/io/gltf_materials.h"
 #include "tritrace/scene/io/input_file.h"
 #include "tritrace/scene/io/isolated_call.h"
 #include "tritrace/scene/io/load_progress.h"
 #include "tritrace/scene/io/material_mapping.h"
 #include "tritrace/scene/io/obj_reader.h"
 #include "tritrace/scene/io/ply_reader.h"
+#include "tritrace/scene/io/tangents.h"
 #include "tritrace/scene/io/triangle_filter.h"
 
 namespace tritrace {
@@ -105,7 +109,7 @@ class TextureTable {
         continue;
       }
       TextureRef ref;
-      ref.index = index_of(path.C_Str());
+      ref.index = index_of(path.C_Str(), true);
       ref.wrap_s = wrap_mode(modes[0]);
       ref.wrap_t = wrap_mode(modes[1]);
       return ref;
@@ -113,7 +117,44 @@ class TextureTable {
     return {};
   }
 
+  // A glTF material's texture (gltf_materials.h) with its sampler, coordinate set and transform,
+  // its image decoded as colour (`srgb`) or as data.
+  TextureRef find_gltf(const GltfTextureRef& g, const GltfMaterialTable& table, bool srgb) {
+    if (!g.present()) return {};
+    const GltfImage& image = table.images[static_cast<size_t>(g.image)];
+    TextureRef ref;
+    // assimp names an embedded image "*N" (aiScene::GetEmbeddedTexture).
+    std::string path = image.uri;
+    if (image.embedded >= 0) path = std::string(1, '*').append(std::to_string(image.embedded));
+    ref.index = index_of(path, srgb);
+    ref.wrap_s = g.wrap_s;
+    ref.wrap_t = g.wrap_t;
+    ref.texcoord = g.texcoord;
+    std::copy(std::begin(g.transform), std::end(g.transform), std::begin(ref.transform));
+    return ref;
+  }
+
  private:
+  // The image at `path`, decoded as colour or as data: the first use decides how an image is
+  // read, and one used both ways is held twice.
+  int32_t index_of(const std::string& path, bool srgb) {
+    const int32_t i = index_of(path);
+    const auto [it, first] = decoding_.emplace(i, srgb);
+    if (first) {
+      out_.textures[static_cast<size_t>(i)].srgb = srgb;
+      return i;
+    }
+    if (it->second == srgb) return i;
+    const auto [copy, added] = other_way_.emplace(i, -1);
+    if (added) {
+      TextureImage image = out_.textures[static_cast<size_t>(i)];
+      image.srgb = srgb;
+      out_.textures.push_back(std::move(image));
+      copy->second = static_cast<int32_t>(out_.textures.size() - 1);
+    }
+    return copy->second;
+  }
+
   int32_t index_of(const std::string& path) {
     const aiTexture* embedded = scene_.GetEmbeddedTexture(path.c_str());
     if (embedded == nullptr) return external_.index_of(path);
@@ -136,7 +177,7 @@ class TextureTable {
     } catch (const Error& e) {
       throw Error(what, "cannot read texture: " + e.reason());
     }
-    TextureImage image{static_cast<int>(t.mWidth), static_cast<int>(t.mHeight), {}, {}};
+    TextureImage image{static_cast<int>(t.mWidth), static_cast<int>(t.mHeight), {}, {}, true};
     image.rgb.reserve(static_cast<size_t>(t.mWidth) * t.mHeight * 3);
     image.alpha.reserve(static_cast<size_t>(t.mWidth) * t.mHeight);
     for (size_t i = 0; i < static_cast<size_t>(t.mWidth) * t.mHeight; ++i) {
@@ -152,6 +193,8 @@ class TextureTable {
   ExternalTextures external_;  // files beside the model
   ImportedMesh& out_;
   std::map<std::string, int32_t> embedded_;
+  std::map<int32_t, bool> decoding_;      // image index -> read as colour
+  std::map<int32_t, int32_t> other_way_;  // image index -> its copy read the other way
 };
 
 // glTF's alphaMode, alphaCutoff and the base colour factor's alpha (assimp keeps all three; its
@@ -199,8 +242,83 @@ Material convert_material(const aiMaterial& m, TextureTable& textures) {
   return out;
 }
 
+// The tangents at the corners of `mesh`'s triangle faces (three per triangle face, in face order,
+// in the mesh's own space): the file's TANGENT attribute, which assimp gives as tangents and
+// bitangents cross(n, t) w, or for a normal-mapped glTF material without it, tangents computed
+// from the normal map's coordinate set (tangents.h). Empty otherwise.
+std::vector<glm::vec4> corner_tangents(const aiMesh& mesh, const GltfMaterial* gltf) {
+  std::vector<glm::vec4> out;
+  // Only a normal map reads tangents: other meshes store none (16 bytes a corner).
+  const bool normal_map = gltf != nullptr && gltf->normal.present();
+  if (!normal_map) return out;
+  if (mesh.HasTangentsAndBitangents() && mesh.HasNormals()) {
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      for (int k = 0; k < 3; ++k) {
+        const unsigned i = face.mIndices[k];
+        if (i >= mesh.mNumVertices) return {};  // append_mesh reports the bad index
+        const aiVector3D t = mesh.mTangents[i], b = mesh.mBitangents[i], n = mesh.mNormals[i];
+        const float w = ((n ^ t) * b) < 0.0f ? -1.0f : 1.0f;  // b = w (n x t)
+        out.emplace_back(t.x, t.y, t.z, w);
+      }
+    }
+    return out;
+  }
+  const unsigned set = gltf->normal.texcoord;
+  if (!mesh.HasTextureCoords(set)) return out;
+  std::vector<glm::vec3> positions(mesh.mNumVertices), normals;
+  std::vector<glm::vec2> uvs(mesh.mNumVertices);
+  for (unsigned i = 0; i < mesh.mNumVertices; ++i) {
+    positions[i] = glm::vec3(mesh.mVertices[i].x, mesh.mVertices[i].y, mesh.mVertices[i].z);
+    uvs[i] = glm::vec2(mesh.mTextureCoords[set][i].x, mesh.mTextureCoords[set][i].y);
+    if (mesh.HasNormals()) {
+      normals.emplace_back(mesh.mNormals[i].x, mesh.mNormals[i].y, mesh.mNormals[i].z);
+    }
+  }
+  std::vector<uint32_t> indices;
+  for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+    const aiFace& face = mesh.mFaces[f];
+    if (face.mNumIndices == 3) indices.insert(indices.end(), face.mIndices, face.mIndices + 3);
+  }
+  return mikktspace_tangents(positions, normals, uvs, indices);
+}
+
+// What the glTF JSON says (gltf_materials.h) laid over `out`, the material assimp's keys gave:
+// every texture again with its coordinate set and transform, the data textures, emission as
+// emissiveFactor times KHR_materials_emissive_strength, KHR_materials_ior and
+// KHR_materials_transmission.
+void apply_gltf_material(const GltfMaterial& g, const GltfMaterialTable& table,
+                         TextureTable& textures, Material& out) {
+  out.albedo_texture = textures.find_gltf(g.base_colour, table, true);
+  out.emission_texture = textures.find_gltf(g.emissive, table, true);
+  out.metallic_roughness_texture = textures.find_gltf(g.metallic_roughness, table, false);
+  out.normal_texture = textures.find_gltf(g.normal, table, false);
+  out.transmission_texture = textures.find_gltf(g.transmission_texture, table, false);
+  out.normal_scale = g.normal_scale;
+  const auto channel = [](float x) { return x > 0.0f ? x : 0.0f; };  // NaN to 0 too
+  out.emission = glm::vec3(channel(g.emissive_factor.x), channel(g.emissive_factor.y),
+                           channel(g.emissive_factor.z)) *
+                 channel(g.emissive_strength);
+  if (!std::isfinite(out.emission.x + out.emission.y + out.emission.z)) {
+    throw Error("", "an emissive strength beyond float range");
+  }
+  // Indices the BSDFs handle (Material::ior): from 1 (an invisible interface) to 4.
+  if (g.ior && *g.ior >= 1.0f && *g.ior <= 4.0f && ior_supported(*g.ior)) out.ior = *g.ior;
+  out.transmission = std::clamp(g.transmission, 0.0f, 1.0f);
+}
+
+// The glTF material of assimp's material `index`, or null (assimp appends a default material,
+// and files other than glTF have none).
+const GltfMaterial* gltf_material(const GltfMaterialTable* table, size_t index) {
+  return table != nullptr && index < table->materials.size() ? &table->materials[index] : nullptr;
+}
+
+// `gltf_file`: the file is glTF, whose vertex colours and second coordinate set are read (other
+// formats' are not: their materials do not say to multiply the colours in); `gltf` its material.
 void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t material,
-                 const std::string& subject, ImportedMesh& out) {
+                 bool gltf_file, const GltfMaterial* gltf, const std::string& subject,
+                 ImportedMesh& out) {
   const bool has_uvs = mesh.HasTextureCoords(0);
   const bool uvs = has_uvs || !out.uvs.empty();
   if (uvs) out.uvs.resize(out.corners.size(), glm::vec2(0.0f));
@@ -211,11 +329,28 @@ void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t mate
   // Earlier meshes without normals get zero vectors (add_checked makes them geometric normals).
   const bool normals = mesh.HasNormals() || !out.normals.empty();
   if (normals) out.normals.resize(out.corners.size(), glm::vec3(0.0f));
+  // glTF's further attributes (ImportedMesh), earlier meshes without them given the defaults.
+  const std::vector<glm::vec4> tangent = corner_tangents(mesh, gltf);
+  const bool has_colours = gltf_file && mesh.HasVertexColors(0);
+  const bool has_uvs1 = gltf_file && mesh.HasTextureCoords(1);
+  const bool tangents = !tangent.empty() || !out.tangents.empty();
+  const bool colours = has_colours || !out.colours.empty();
+  const bool uvs1 = has_uvs1 || !out.uvs1.empty();
+  if (tangents) out.tangents.resize(out.corners.size(), glm::vec4(0.0f));
+  if (colours) out.colours.resize(out.corners.size(), glm::vec4(1.0f));
+  if (uvs1) out.uvs1.resize(out.corners.size(), glm::vec2(0.0f));
+  // Tangents move with the transform's linear part; a mirroring transform turns the bitangent
+  // w cross(n, t) around, so w turns with it.
+  const aiMatrix3x3 linear(transform);
+  const float handedness = linear.Determinant() < 0.0f ? -1.0f : 1.0f;
+  size_t triangle = 0;  // this mesh's triangle faces so far (the index into `tangent`)
   for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
     const aiFace& face = mesh.mFaces[f];
     if (face.mNumIndices != 3) continue;  // points and lines carry no surface
     glm::vec3 corner[3], normal[3] = {};
-    glm::vec2 uv[3] = {};
+    glm::vec2 uv[3] = {}, uv1[3] = {};
+    glm::vec4 colour[3] = {glm::vec4(1.0f), glm::vec4(1.0f), glm::vec4(1.0f)};
+    glm::vec4 tan[3] = {};
     for (int k = 0; k < 3; ++k) {
       const unsigned index = face.mIndices[k];
       if (index >= mesh.mNumVertices) {
@@ -230,7 +365,19 @@ void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t mate
       }
       if (has_uvs)
         uv[k] = glm::vec2(mesh.mTextureCoords[0][index].x, mesh.mTextureCoords[0][index].y);
+      if (has_uvs1)
+        uv1[k] = glm::vec2(mesh.mTextureCoords[1][index].x, mesh.mTextureCoords[1][index].y);
+      if (has_colours) {
+        const aiColor4D& c = mesh.mColors[0][index];
+        colour[k] = glm::vec4(c.r, c.g, c.b, c.a);
+      }
+      if (!tangent.empty()) {
+        const glm::vec4 t = tangent[3 * triangle + static_cast<size_t>(k)];
+        const aiVector3D moved = linear * aiVector3D(t.x, t.y, t.z);
+        tan[k] = glm::vec4(moved.x, moved.y, moved.z, t.w * handedness);
+      }
     }
+    ++triangle;
     if (out.triangles() >= kMaxSceneTriangles) {
       throw Error(subject, "has more than " + std::to_string(kMaxSceneTriangles) + " triangles");
     }
@@ -239,16 +386,32 @@ void append_mesh(const aiMesh& mesh, const aiMatrix4x4& transform, uint32_t mate
     out.corners.insert(out.corners.end(), {corner[0], corner[2], corner[1]});
     if (normals) out.normals.insert(out.normals.end(), {normal[0], normal[2], normal[1]});
     if (uvs) out.uvs.insert(out.uvs.end(), {uv[0], uv[2], uv[1]});
+    if (tangents) out.tangents.insert(out.tangents.end(), {tan[0], tan[2], tan[1]});
+    if (colours) out.colours.insert(out.colours.end(), {colour[0], colour[2], colour[1]});
+    if (uvs1) out.uvs1.insert(out.uvs1.end(), {uv1[0], uv1[2], uv1[1]});
     out.material.push_back(material);
   }
 }
 
+// `gltf`: the file's glTF materials (null for other formats).
 ImportedMesh convert_scene(const aiScene& scene, const std::string& subject,
-                           const std::string& directory) {
+                           const std::string& directory, const GltfMaterialTable* gltf) {
   ImportedMesh out;
   TextureTable textures(scene, subject, directory, out);
   for (unsigned i = 0; i < scene.mNumMaterials; ++i) {
     out.materials.push_back(convert_material(*scene.mMaterials[i], textures));
+    // A guard on the numbering (GltfMaterialTable::materials): a named material must be the one
+    // assimp named so, else assimp's reading of it stands.
+    const GltfMaterial* g = gltf_material(gltf, i);
+    if (g != nullptr && (g->name.empty() || g->name == scene.mMaterials[i]->GetName().C_Str())) {
+      try {
+        apply_gltf_material(*g, *gltf, textures, out.materials.back());
+      } catch (const Error& e) {
+        if (!e.subject().empty()) throw;
+        throw Error(subject,
+                    "/materials/" + std::to_string(gltf->file_index[i]) + ": " + e.reason());
+      }
+    }
     out.material_names.emplace_back(scene.mMaterials[i]->GetName().C_Str());
   }
   if (out.materials.empty()) {
@@ -272,7 +435,8 @@ ImportedMesh convert_scene(const aiScene& scene, const std::string& subject,
       const uint32_t material =
           mesh.mMaterialIndex < out.materials.size() ? mesh.mMaterialIndex : 0;
       const size_t before = out.triangles();
-      append_mesh(mesh, transform, material, subject, out);
+      append_mesh(mesh, transform, material, gltf != nullptr,
+                  gltf_material(gltf, mesh.mMaterialIndex), subject, out);
       if (out.triangles() > before) ++out.meshes;
     }
     for (unsigned i = 0; i < node->mNumChildren; ++i) {
@@ -314,8 +478,11 @@ class ImportProgress final : public Assimp::ProgressHandler {
   LoadProgress& progress_;
 };
 
+// `gltf_json` reads a glTF file's JSON text for its materials (gltf_materials.h); null for other
+// formats.
 template <typename ReadFn>
-ImportedMesh import_with(const std::string& subject, const std::string& directory, ReadFn&& read) {
+ImportedMesh import_with(const std::string& subject, const std::string& directory,
+                         const std::function<std::string()>& gltf_json, ReadFn&& read) {
   try {
     Assimp::Importer importer;
     if (LoadProgress* progress = load_progress()) {
@@ -341,7 +508,11 @@ ImportedMesh import_with(const std::string& subject, const std::string& director
     if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) {
       throw Error(subject, "cannot import: the file is incomplete");
     }
-    return convert_scene(*scene, subject, directory);
+    if (gltf_json) {
+      const GltfMaterialTable table = parse_gltf_materials(gltf_json(), subject);
+      return convert_scene(*scene, subject, directory, &table);
+    }
+    return convert_scene(*scene, subject, directory, nullptr);
   } catch (const Error&) {
     throw;
   } catch (const std::bad_alloc&) {
@@ -460,10 +631,14 @@ void put_mesh(const ImportedMesh& mesh, Bytes& b) {
   b.put<uint64_t>(mesh.meshes);
   b.put_array(mesh.normals);
   b.put_array(mesh.uvs);
+  b.put_array(mesh.tangents);
+  b.put_array(mesh.colours);
+  b.put_array(mesh.uvs1);
   b.put<uint64_t>(mesh.textures.size());
   for (const TextureImage& t : mesh.textures) {
     b.put<int32_t>(t.width);
     b.put<int32_t>(t.height);
+    b.put<uint8_t>(t.srgb ? 1 : 0);
     b.put_array(t.rgb);
     b.put_array(t.alpha);
   }
@@ -487,14 +662,19 @@ ImportedMesh from_bytes(std::span<const uint8_t> bytes, const std::string& subje
       throw std::runtime_error("normals");
     }
     in.get_array(mesh.uvs);
-    if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.corners.size()) {
-      throw std::runtime_error("uvs");
+    in.get_array(mesh.tangents);
+    in.get_array(mesh.colours);
+    in.get_array(mesh.uvs1);
+    for (const size_t n :
+         {mesh.uvs.size(), mesh.tangents.size(), mesh.colours.size(), mesh.uvs1.size()}) {
+      if (n != 0 && n != mesh.corners.size()) throw std::runtime_error("corner attributes");
     }
     const uint64_t textures = in.get<uint64_t>();
     for (uint64_t i = 0; i < textures; ++i) {
       TextureImage t;
       t.width = in.get<int32_t>();
       t.height = in.get<int32_t>();
+      t.srgb = in.get<uint8_t>() != 0;
       t.rgb = in.get_array<uint8_t>();
       t.alpha = in.get_array<uint8_t>();
       const size_t texels = static_cast<size_t>(t.width) * static_cast<size_t>(t.height);
@@ -505,8 +685,8 @@ ImportedMesh from_bytes(std::span<const uint8_t> bytes, const std::string& subje
       mesh.textures.push_back(std::move(t));
     }
     for (const Material& m : mesh.materials) {
-      for (const TextureRef& r : {m.albedo_texture, m.emission_texture}) {
-        if (r.present() && static_cast<uint64_t>(r.index) >= textures) {
+      for (const TextureRef* r : m.texture_refs()) {
+        if (r->present() && static_cast<uint64_t>(r->index) >= textures) {
           throw std::runtime_error("texture index");
         }
       }
@@ -571,7 +751,9 @@ ImportedMesh import_mesh_file(const std::string& path) {
 ImportedMesh import_mesh_file_with_assimp(const std::string& path) {
   check_input_file(path);
   return import_isolated(path, [&] {
-    return import_with(path, model_folder(path), [&](Assimp::Importer& importer) {
+    std::function<std::string()> json;
+    if (is_gltf_file(path)) json = [&] { return read_gltf_json_text(path); };
+    return import_with(path, model_folder(path), json, [&](Assimp::Importer& importer) {
       return importer.ReadFile(path, kImportFlags);
     });
   });
@@ -596,7 +778,11 @@ ImportedMesh import_mesh_memory_in_process(std::span<const uint8_t> bytes,
   if (std::optional<ImportedMesh> mesh = read_natively(chars, "." + format_hint, subject, "")) {
     return std::move(*mesh);
   }
-  return import_with(subject, "", [&](Assimp::Importer& importer) {
+  std::function<std::string()> json;
+  if (is_gltf_file("model." + format_hint)) {
+    json = [&] { return std::string(gltf_json_text(bytes, subject)); };
+  }
+  return import_with(subject, "", json, [&](Assimp::Importer& importer) {
     return importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags,
                                        format_hint.c_str());
   });

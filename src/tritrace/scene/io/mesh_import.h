@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 #include <span>
 #include <string>
 #include <vector>
@@ -39,6 +40,14 @@ struct ImportedMesh {
   HugePageVector<glm::vec3> normals;
   // Texture coordinates (u, v) of the first set at the corners, or empty when no mesh has any.
   HugePageVector<glm::vec2> uvs;
+  // glTF's further corner attributes, each three per triangle or empty when no mesh has any
+  // (TriangleMesh::set_extras has the defaults a mesh without them gets): tangents of
+  // normal-mapped materials' primitives (TANGENT with node transforms applied, else computed:
+  // tangents.h), vertex colours (COLOR_0, RGBA) and the second texture coordinates (TEXCOORD_1).
+  // Read from glTF files only.
+  HugePageVector<glm::vec4> tangents;
+  HugePageVector<glm::vec4> colours;
+  HugePageVector<glm::vec2> uvs1;
   // The textures the materials refer to (TextureRef::index into this list), each file or embedded
   // image once however many materials use it.
   std::vector<TextureImage> textures;

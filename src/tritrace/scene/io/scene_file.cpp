@@ -768,10 +768,10 @@ class Parser {
     if (!material) {
       const auto texture_offset = static_cast<int32_t>(out_.scene.textures.size());
       for (const TextureImage& t : imported.textures) {
-        out_.scene.textures.push_back(Texture::from_srgb8(t));
+        out_.scene.textures.push_back(Texture::from_image(t));
       }
       for (Material m : imported.materials) {
-        for (TextureRef* r : {&m.albedo_texture, &m.emission_texture}) {
+        for (TextureRef* r : m.texture_refs()) {
           if (r->present()) r->index += texture_offset;
         }
         add_material(m);
@@ -784,6 +784,9 @@ class Parser {
     options.materials = imported.materials.size();
     options.stored = stored_triangles_;
     options.max_triangles = kMaxSceneTriangles;
+    options.tangents = imported.tangents;
+    options.colours = imported.colours;
+    options.uvs1 = imported.uvs1;
     TriangleMesh& mesh = target();
     const size_t before = mesh.size();
     switch (add_all_checked(mesh, imported.corner_view(), imported.material, imported.normals,

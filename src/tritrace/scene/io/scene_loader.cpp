@@ -2,6 +2,7 @@
 #include "tritrace/scene/io/scene_loader.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <filesystem>
 #include <glm/geometric.hpp>
@@ -129,9 +130,14 @@ LoadedScene scene_from_mesh(const ImportedMesh& mesh, const SceneOverrides& over
   LoadedScene loaded;
   Scene& scene = loaded.scene;
   scene.materials = mesh.materials;
-  for (const TextureImage& t : mesh.textures) scene.textures.push_back(Texture::from_srgb8(t));
-  add_all_checked(scene.mesh, mesh.corner_view(), mesh.material, mesh.normals, mesh.uvs,
-                  loaded.stats);
+  for (const TextureImage& t : mesh.textures) scene.textures.push_back(Texture::from_image(t));
+  AddOptions options;
+  options.tangents = mesh.tangents;
+  options.colours = mesh.colours;
+  options.uvs1 = mesh.uvs1;
+  [[maybe_unused]] const AddResult added = add_all_checked(
+      scene.mesh, mesh.corner_view(), mesh.material, mesh.normals, mesh.uvs, options, loaded.stats);
+  assert(added == AddResult::kOk);
   loaded.stats.meshes = mesh.meshes;
   if (scene.mesh.empty()) {
     throw Error("", "no geometry: every triangle was degenerate or non-finite (" +

@@ -85,6 +85,41 @@ bool add_checked(TriangleMesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, uint
   return true;
 }
 
+namespace {
+
+bool finite(glm::vec4 v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
+}
+
+// Triangle k's extra corner attributes from `options`, checked and moved, into place `place`.
+void set_checked_extras(TriangleMesh& mesh, size_t place, size_t k, const AddOptions& options,
+                        const Transform* transform, float handedness) {
+  glm::vec4 tangents[3], colours[3];
+  glm::vec2 uvs1[3];
+  for (size_t i = 0; i < 3; ++i) {
+    if (!options.tangents.empty()) {
+      glm::vec4 t = options.tangents[3 * k + i];
+      if (transform != nullptr) {
+        t = glm::vec4(transform->rotate * (transform->scale * glm::vec3(t)), t.w * handedness);
+      }
+      tangents[i] = finite(t) ? t : glm::vec4(0.0f);
+    }
+    if (!options.colours.empty()) {
+      const glm::vec4 c = options.colours[3 * k + i];
+      colours[i] = finite(c) ? c : glm::vec4(1.0f);
+    }
+    if (!options.uvs1.empty()) {
+      const glm::vec2 t = options.uvs1[3 * k + i];
+      uvs1[i] = std::isfinite(t.x) && std::isfinite(t.y) ? t : glm::vec2(0.0f);
+    }
+  }
+  mesh.set_extras(place, options.tangents.empty() ? nullptr : tangents,
+                  options.colours.empty() ? nullptr : colours,
+                  options.uvs1.empty() ? nullptr : uvs1);
+}
+
+}  // namespace
+
 AddResult add_all_checked(TriangleMesh& mesh, CornerView corners,
                           std::span<const uint32_t> material, std::span<const glm::vec3> normals,
                           std::span<const glm::vec2> uvs, const AddOptions& options,
@@ -172,6 +207,15 @@ AddResult add_all_checked(TriangleMesh& mesh, CornerView corners,
   }
   const size_t held = mesh.size();
   mesh.grow(kept, !normals.empty() && kept > 0, !uvs.empty() && kept > 0);
+  mesh.make_extras(!options.tangents.empty() && kept > 0, !options.colours.empty() && kept > 0,
+                   !options.uvs1.empty() && kept > 0);
+  const bool extras =
+      !options.tangents.empty() || !options.colours.empty() || !options.uvs1.empty();
+  // A mirroring transform (negative scale product) turns the bitangent cross(n, t) around.
+  const float handedness =
+      transform != nullptr && transform->scale.x * transform->scale.y * transform->scale.z < 0.0f
+          ? -1.0f
+          : 1.0f;
   // Second pass: each chunk fills its places, exactly as add_checked would have in order.
   parallel::for_range(all_chunks, [&](const tbb::blocked_range<size_t>& r) {
     for (size_t c = r.begin(); c != r.end(); ++c) {
@@ -194,6 +238,7 @@ AddResult add_all_checked(TriangleMesh& mesh, CornerView corners,
         if (!uvs.empty()) t = checked_uvs(&uvs[3 * k]);
         const uint32_t id =
             options.material ? *options.material : options.material_offset + material[k];
+        if (extras) set_checked_extras(mesh, place, k, options, transform, handedness);
         mesh.set(place++, v[0], v[1], v[2], id, normals.empty() ? nullptr : &unit,
                  uvs.empty() ? nullptr : &t);
       }

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 #include <limits>
 #include <optional>
 #include <span>
@@ -51,6 +52,12 @@ struct AddOptions {
   // triangle (kept or dropped) met when the scene is full is an error.
   size_t stored = 0;
   size_t max_triangles = std::numeric_limits<size_t>::max();
+  // glTF's further corner attributes (TriangleMesh::set_extras), each three per triangle or empty.
+  // Tangents move with the transform's linear part (their sign turns where it mirrors); a
+  // non-finite value becomes the attribute's default.
+  std::span<const glm::vec4> tangents;
+  std::span<const glm::vec4> colours;
+  std::span<const glm::vec2> uvs1;
 };
 
 // The first error adding the triangles one by one would meet: the material id is checked before
