@@ -1055,5 +1055,30 @@ TEST(PbrtScene, MixTexturesTheyCannotBlendTakeTheLargerWeight) {
   EXPECT_EQ(albedo_at(loaded, 0, {0.625f, 0.5f}), glm::vec3(0.0f));
 }
 
+TEST(PbrtScene, ImagemapUvMappingMovesTheLookup) {
+  const std::string dir = ::testing::TempDir() + "pbrt_uvmap";
+  std::filesystem::create_directories(dir);
+  Image two(2, 1);
+  two.at(0, 0) = glm::vec3(1.0f);  // 8-bit 255 and 0: sRGB-decoded 1 and 0
+  two.at(1, 0) = glm::vec3(0.0f);
+  write_image(two, dir + "/two.png");
+  const LoadedScene loaded =
+      parse(std::string("WorldBegin\n") +
+            "Texture \"png\" \"spectrum\" \"imagemap\" \"string filename\" \"" + dir +
+            "/two.png\"\n"
+            "  \"float uscale\" 2 \"float vscale\" 3 \"float udelta\" .25 "
+            "\"float vdelta\" .5\n"
+            "Material \"diffuse\" \"texture reflectance\" \"png\"\n" +
+            kQuad);
+  EXPECT_TRUE(loaded.warnings.empty()) << loaded.warnings.front();
+  const TextureRef& ref = loaded.scene.materials[loaded.scene.mesh.material()[0]].albedo_texture;
+  const float want[6] = {2.0f, 0.0f, 0.0f, 3.0f, 0.25f, 0.5f};
+  for (int k = 0; k < 6; ++k) EXPECT_EQ(ref.transform[k], want[k]) << k;
+  // u = 0.1: s = 0.45, texel coordinate 2 s - 0.5 = 0.4 between texel 0 (1) and texel 1 (0): 0.6.
+  // u = 0.3: s = 0.85, texel coordinate 1.2 between texel 1 (0) and texel 0 wrapped (1): 0.2.
+  EXPECT_NEAR(albedo_at(loaded, 0, {0.1f, 0.7f}).x, 0.6f, 1e-5f);
+  EXPECT_NEAR(albedo_at(loaded, 0, {0.3f, 0.2f}).x, 0.2f, 1e-5f);
+}
+
 }  // namespace
 }  // namespace tritrace

@@ -123,6 +123,13 @@ struct GraphicsState {
 struct SpectrumTexture {
   int32_t image = -1;  // into scene.textures
   glm::vec3 factor{1.0f};
+  // An imagemap's uv mapping, (u, v) -> (uscale u + udelta, vscale v + vdelta), applied before the
+  // lookup (TextureRef::transform).
+  glm::vec2 scale{1.0f};
+  glm::vec2 delta{0.0f};
+  bool same_lookup(const SpectrumTexture& o) const {
+    return image == o.image && scale == o.scale && delta == o.delta;
+  }
 };
 
 struct Warning {
@@ -594,10 +601,12 @@ class Interpreter {
       for (const char* k : {"filter", "maxanisotropy", "wrap"}) p.find(k);
       const std::string mapping = p.get_string("mapping", "uv");
       if (mapping != "uv") warn(d.at, "texture mapping \"" + mapping + "\" replaced by \"uv\"");
-      for (const char* k : {"uscale", "vscale", "udelta", "vdelta"}) {
-        if (p.find(k))
-          warn(d.at, "imagemap coordinate transforms (uscale, vscale, udelta, vdelta) ignored");
-      }
+      // pbrt-v4's UVMapping: st = (uscale u + udelta, vscale v + vdelta); its image lookup puts
+      // t = 0 at the bottom of the image, as tritrace's textures do.
+      tex.scale = glm::vec2(static_cast<float>(p.get_float("uscale", 1.0)),
+                            static_cast<float>(p.get_float("vscale", 1.0)));
+      tex.delta = glm::vec2(static_cast<float>(p.get_float("udelta", 0.0)),
+                            static_cast<float>(p.get_float("vdelta", 0.0)));
     } else if (cls == "constant") {
       tex.factor = p.get_rgb("value").value_or(glm::vec3(1.0f));
     } else if (cls == "scale") {
@@ -726,7 +735,7 @@ class Interpreter {
                         const PbrtToken& d) {
     if (w == 0.0f) return a;
     if (w == 1.0f) return b;
-    if (a.image == b.image) {
+    if (a.same_lookup(b)) {
       SpectrumTexture t = a;
       t.factor = (1.0f - w) * a.factor + w * b.factor;
       return t;
@@ -747,8 +756,9 @@ class Interpreter {
     }
     baked_texels_ += source.texels().size();
     Texture baked = source.mapped(weight * textured.factor, constant);
-    SpectrumTexture t;
+    SpectrumTexture t = textured;  // its uv mapping
     t.image = add_texture(std::move(baked));
+    t.factor = glm::vec3(1.0f);
     return t;
   }
 
@@ -791,6 +801,9 @@ class Interpreter {
       if (it->second.image >= 0) {
         if (texture) {
           texture->index = it->second.image;
+          const SpectrumTexture& t = it->second;
+          const float m[6] = {t.scale.x, 0.0f, 0.0f, t.scale.y, t.delta.x, t.delta.y};
+          std::copy(m, m + 6, texture->transform);
         } else {
           warn(d.at, "an image texture on \"" + std::string(name) + "\" replaced by white");
         }
