@@ -108,14 +108,9 @@ std::shared_ptr<SceneData> builtin(const py::object& name_object) {
 std::shared_ptr<SceneData> from_arrays(const py::object& vertices_object,
                                        const py::object& triangles_object,
                                        const py::object& materials_object) {
-  const py::array_t<float> vertices = float32_array("vertices", vertices_object);
-  if (vertices.ndim() != 2 || vertices.shape(1) != 3) {
-    throw py::value_error("vertices: must have shape (N, 3), got " + shape_text(vertices));
-  }
-  const py::array_t<int64_t> triangles = int64_array("triangles", triangles_object);
-  if (triangles.ndim() != 2 || triangles.shape(1) != 3) {
-    throw py::value_error("triangles: must have shape (M, 3), got " + shape_text(triangles));
-  }
+  const MeshInput mesh = mesh_input(vertices_object, triangles_object);
+  const py::array_t<float>& vertices = mesh.vertices;
+  const py::array_t<int64_t>& triangles = mesh.triangles;
   py::array_t<float> albedo(0);  // empty: no materials given
   if (!materials_object.is_none()) {
     albedo = float32_array("materials", materials_object);

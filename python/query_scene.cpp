@@ -24,14 +24,9 @@ constexpr size_t kResultChunk = size_t{1} << 14;
 
 uint32_t add_geometry(QueryScene& self, const py::object& vertices_object,
                       const py::object& triangles_object) {
-  const py::array_t<float> vertices = float32_array("vertices", vertices_object);
-  if (vertices.ndim() != 2 || vertices.shape(1) != 3) {
-    throw py::value_error("vertices: must have shape (N, 3), got " + shape_text(vertices));
-  }
-  const py::array_t<int64_t> triangles = int64_array("triangles", triangles_object);
-  if (triangles.ndim() != 2 || triangles.shape(1) != 3) {
-    throw py::value_error("triangles: must have shape (M, 3), got " + shape_text(triangles));
-  }
+  const MeshInput mesh = mesh_input(vertices_object, triangles_object);
+  const py::array_t<float>& vertices = mesh.vertices;
+  const py::array_t<int64_t>& triangles = mesh.triangles;
   const auto vertex_count = static_cast<int64_t>(vertices.shape(0));
   const auto triangle_count = static_cast<size_t>(triangles.shape(0));
   const int64_t* index = triangles.data();

@@ -8,6 +8,19 @@
 
 namespace tritrace::python {
 
+MeshInput mesh_input(const py::object& vertices_object, const py::object& triangles_object) {
+  MeshInput in;
+  in.vertices = float32_array("vertices", vertices_object);
+  if (in.vertices.ndim() != 2 || in.vertices.shape(1) != 3) {
+    throw py::value_error("vertices: must have shape (N, 3), got " + shape_text(in.vertices));
+  }
+  in.triangles = int64_array("triangles", triangles_object);
+  if (in.triangles.ndim() != 2 || in.triangles.shape(1) != 3) {
+    throw py::value_error("triangles: must have shape (M, 3), got " + shape_text(in.triangles));
+  }
+  return in;
+}
+
 std::string shape_text(const py::array& a) {
   std::string s = "(";
   for (py::ssize_t i = 0; i < a.ndim(); ++i) {

@@ -7,6 +7,7 @@
 #include <pybind11/pybind11.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <string>
@@ -47,6 +48,17 @@ struct RayInput {
     return a;
   }
 };
+
+// The checked arguments of a triangle mesh (Scene.from_arrays, QueryScene.add_geometry):
+// vertices as float32 (N, 3), triangles as int64 (M, 3) vertex indices, kept alive while in use.
+struct MeshInput {
+  py::array_t<float> vertices;
+  py::array_t<int64_t> triangles;
+};
+
+// ValueError or TypeError naming the argument for a bad shape or dtype; the indices and values are
+// checked by the caller.
+MeshInput mesh_input(const py::object& vertices, const py::object& triangles);
 
 // ValueError or TypeError naming the argument for a bad shape, dtype, tmin or tmax; the values of
 // per-ray arrays are checked by the ray loop (ray_queries.h).

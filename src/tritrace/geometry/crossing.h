@@ -51,13 +51,7 @@ inline bool crossing_on_edge(const WatertightRay& ray, const Sheared& a, const S
   const int sw = perturbed_sign(wd, b, a);
   if (su == 0 || su != sv || su != sw) return false;
   const float u = static_cast<float>(ud), v = static_cast<float>(vd), w = static_cast<float>(wd);
-  const float det = u + v + w;
-  if (!(det != 0.0f)) return false;
-  const float inv_det = 1.0f / det;
-  const float t = (u * a.z + v * b.z + w * c.z) * (ray.sz * inv_det);
-  if (!(t >= ray.tmin && t <= ray.tmax)) return false;
-  out = {t, v * inv_det, w * inv_det};
-  return true;
+  return watertight_hit(ray, a, b, c, u, v, w, out);
 }
 
 template <int Kz>
@@ -76,13 +70,7 @@ inline bool crossing_watertight_axis(const WatertightRay& ray, const glm::vec3& 
   const bool all_pos = u > 0.0f && v > 0.0f && w > 0.0f;
   const bool all_neg = u < 0.0f && v < 0.0f && w < 0.0f;
   if (!(all_pos || all_neg)) return false;
-  const float det = u + v + w;
-  if (!(det != 0.0f)) return false;
-  const float inv_det = 1.0f / det;
-  const float t = (u * a.z + v * b.z + w * c.z) * (ray.sz * inv_det);
-  if (!(t >= ray.tmin && t <= ray.tmax)) return false;
-  out = {t, v * inv_det, w * inv_det};
-  return true;
+  return watertight_hit(ray, a, b, c, u, v, w, out);
 }
 
 }  // namespace detail

@@ -172,6 +172,22 @@ inline double edge_exact(const Sheared& a, const Sheared& b) {
          static_cast<double>(a.y) * static_cast<double>(b.x);
 }
 
+// The kernel's last step, once the edge functions U, V, W have passed the inside test: the
+// determinant, t = sz * (U az + V bz + W cz) / det (the distance along the sheared z axis,
+// rescaled) within [tmin, tmax], and the barycentrics. Shared with the crossing test
+// (crossing.h) so that both give the same t, u, v bit for bit.
+[[gnu::always_inline]] inline bool watertight_hit(const WatertightRay& ray, const Sheared& a,
+                                                  const Sheared& b, const Sheared& c, float u,
+                                                  float v, float w, TriangleHit& out) {
+  const float det = u + v + w;
+  if (!(det != 0.0f)) return false;  // the ray lies in the triangle's plane, or it is degenerate
+  const float inv_det = 1.0f / det;
+  const float t = (u * a.z + v * b.z + w * c.z) * (ray.sz * inv_det);
+  if (!(t >= ray.tmin && t <= ray.tmax)) return false;
+  out = {t, v * inv_det, w * inv_det};
+  return true;
+}
+
 template <int Kz>
 inline bool intersect_watertight_axis(const WatertightRay& ray, const glm::vec3& v0,
                                       const glm::vec3& v1, const glm::vec3& v2, TriangleHit& out) {
@@ -205,14 +221,7 @@ inline bool intersect_watertight_axis(const WatertightRay& ray, const glm::vec3&
   const bool all_nonneg = u >= 0.0f && v >= 0.0f && w >= 0.0f;
   const bool all_nonpos = u <= 0.0f && v <= 0.0f && w <= 0.0f;
   if (!(all_nonneg || all_nonpos)) return false;
-  const float det = u + v + w;
-  if (!(det != 0.0f)) return false;  // the ray lies in the triangle's plane, or it is degenerate
-  // t = sz * (U az + V bz + W cz) / det: the distance along the sheared z axis, rescaled.
-  const float inv_det = 1.0f / det;
-  const float t = (u * a.z + v * b.z + w * c.z) * (ray.sz * inv_det);
-  if (!(t >= ray.tmin && t <= ray.tmax)) return false;
-  out = {t, v * inv_det, w * inv_det};
-  return true;
+  return watertight_hit(ray, a, b, c, u, v, w, out);
 }
 }  // namespace detail
 

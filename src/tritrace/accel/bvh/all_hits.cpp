@@ -8,6 +8,7 @@
 #include <bit>
 #include <cassert>
 
+#include "tritrace/accel/bvh/block_kernels.h"
 #include "tritrace/accel/bvh/ray_box.h"
 #include "tritrace/geometry/crossing.h"
 
@@ -25,24 +26,10 @@ template <int Kz, bool kList, typename Emit>
                                                        const WatertightRay& r, Emit&& emit) {
   uint32_t found = 0;
 #if defined(__AVX2__)
-  constexpr int kKx = (Kz + 1) % 3, kKy = (Kz + 2) % 3;
-  const __m256 ox = _mm256_set1_ps(r.ox), oy = _mm256_set1_ps(r.oy), oz = _mm256_set1_ps(r.oz);
-  const __m256 sx = _mm256_set1_ps(r.sx), sy = _mm256_set1_ps(r.sy);
-  __m256 x[3], y[3], z[3];
-  for (int c = 0; c < 3; ++c) {
-    const __m256 qx = _mm256_sub_ps(_mm256_load_ps(b.vertex[c][kKx]), ox);
-    const __m256 qy = _mm256_sub_ps(_mm256_load_ps(b.vertex[c][kKy]), oy);
-    z[c] = _mm256_sub_ps(_mm256_load_ps(b.vertex[c][Kz]), oz);
-    x[c] = _mm256_sub_ps(qx, _mm256_mul_ps(sx, z[c]));
-    y[c] = _mm256_sub_ps(qy, _mm256_mul_ps(sy, z[c]));
-  }
-  const __m256 u = _mm256_sub_ps(_mm256_mul_ps(x[2], y[1]), _mm256_mul_ps(y[2], x[1]));
-  const __m256 v = _mm256_sub_ps(_mm256_mul_ps(x[0], y[2]), _mm256_mul_ps(y[0], x[2]));
-  const __m256 w = _mm256_sub_ps(_mm256_mul_ps(x[1], y[0]), _mm256_mul_ps(y[1], x[0]));
+  const BlockEdges e = block_edge_functions<Kz>(b, r);
+  const __m256 u = e.u, v = e.v, w = e.w, on_edge = e.on_edge;
+  const __m256* z = e.z;
   const __m256 zero = _mm256_setzero_ps();
-  const __m256 on_edge = _mm256_or_ps(
-      _mm256_or_ps(_mm256_cmp_ps(u, zero, _CMP_EQ_OQ), _mm256_cmp_ps(v, zero, _CMP_EQ_OQ)),
-      _mm256_cmp_ps(w, zero, _CMP_EQ_OQ));
   // Away from edges no function is 0, so "all > 0 or all < 0" is the kernel's "all >= 0 or all
   // <= 0"; padding lanes (NaN) fail both.
   const __m256 pos = _mm256_and_ps(

@@ -84,6 +84,42 @@ inline bool block_moller_trumbore(const TriangleBlock& b, const Ray& ray, Hit* b
   return true;
 }
 
+// The first half of the watertight kernel on a block, for a ray whose dominant axis is Kz: the
+// sheared, translated corners' z, the edge functions U = edge(c, b), V = edge(a, c),
+// W = edge(b, a) with edge(p, q) = p.x q.y - p.y q.x, and the lanes where one of them is exactly 0
+// (the ray through an edge or a vertex). Shared by block_watertight_axis (closest hit) and the
+// all-crossings traversal (all_hits.cpp); operation for operation the scalar kernel's.
+struct BlockEdges {
+  __m256 z[3];
+  __m256 u, v, w;
+  __m256 on_edge;
+};
+
+template <int Kz>
+[[gnu::always_inline]] inline BlockEdges block_edge_functions(const TriangleBlock& b,
+                                                              const WatertightRay& r) {
+  constexpr int kKx = (Kz + 1) % 3, kKy = (Kz + 2) % 3;
+  const __m256 ox = _mm256_set1_ps(r.ox), oy = _mm256_set1_ps(r.oy), oz = _mm256_set1_ps(r.oz);
+  const __m256 sx = _mm256_set1_ps(r.sx), sy = _mm256_set1_ps(r.sy);
+  BlockEdges e;
+  __m256 x[3], y[3];
+  for (int c = 0; c < 3; ++c) {
+    const __m256 qx = _mm256_sub_ps(_mm256_load_ps(b.vertex[c][kKx]), ox);
+    const __m256 qy = _mm256_sub_ps(_mm256_load_ps(b.vertex[c][kKy]), oy);
+    e.z[c] = _mm256_sub_ps(_mm256_load_ps(b.vertex[c][Kz]), oz);
+    x[c] = _mm256_sub_ps(qx, _mm256_mul_ps(sx, e.z[c]));
+    y[c] = _mm256_sub_ps(qy, _mm256_mul_ps(sy, e.z[c]));
+  }
+  e.u = _mm256_sub_ps(_mm256_mul_ps(x[2], y[1]), _mm256_mul_ps(y[2], x[1]));
+  e.v = _mm256_sub_ps(_mm256_mul_ps(x[0], y[2]), _mm256_mul_ps(y[0], x[2]));
+  e.w = _mm256_sub_ps(_mm256_mul_ps(x[1], y[0]), _mm256_mul_ps(y[1], x[0]));
+  const __m256 zero = _mm256_setzero_ps();
+  e.on_edge = _mm256_or_ps(
+      _mm256_or_ps(_mm256_cmp_ps(e.u, zero, _CMP_EQ_OQ), _mm256_cmp_ps(e.v, zero, _CMP_EQ_OQ)),
+      _mm256_cmp_ps(e.w, zero, _CMP_EQ_OQ));
+  return e;
+}
+
 // The watertight kernel (intersect_watertight in geometry/intersect.h) on eight triangles at once,
 // for one ray whose dominant axis is Kz: the same shear, edge functions, determinant and distance,
 // operation for operation, so every lane's (t, u, v) is the scalar kernel's bit for bit. A lane
@@ -92,25 +128,10 @@ inline bool block_moller_trumbore(const TriangleBlock& b, const Ray& ray, Hit* b
 // by construction. Padding lanes (NaN vertices) fail every comparison.
 template <int Kz>
 inline bool block_watertight_axis(const TriangleBlock& b, const WatertightRay& r, Hit* best) {
-  constexpr int kKx = (Kz + 1) % 3, kKy = (Kz + 2) % 3;
-  const __m256 ox = _mm256_set1_ps(r.ox), oy = _mm256_set1_ps(r.oy), oz = _mm256_set1_ps(r.oz);
-  const __m256 sx = _mm256_set1_ps(r.sx), sy = _mm256_set1_ps(r.sy);
-  __m256 x[3], y[3], z[3];
-  for (int c = 0; c < 3; ++c) {
-    const __m256 qx = _mm256_sub_ps(_mm256_load_ps(b.vertex[c][kKx]), ox);
-    const __m256 qy = _mm256_sub_ps(_mm256_load_ps(b.vertex[c][kKy]), oy);
-    z[c] = _mm256_sub_ps(_mm256_load_ps(b.vertex[c][Kz]), oz);
-    x[c] = _mm256_sub_ps(qx, _mm256_mul_ps(sx, z[c]));
-    y[c] = _mm256_sub_ps(qy, _mm256_mul_ps(sy, z[c]));
-  }
-  // U = edge(c, b), V = edge(a, c), W = edge(b, a), edge(p, q) = p.x q.y - p.y q.x.
-  const __m256 u = _mm256_sub_ps(_mm256_mul_ps(x[2], y[1]), _mm256_mul_ps(y[2], x[1]));
-  const __m256 v = _mm256_sub_ps(_mm256_mul_ps(x[0], y[2]), _mm256_mul_ps(y[0], x[2]));
-  const __m256 w = _mm256_sub_ps(_mm256_mul_ps(x[1], y[0]), _mm256_mul_ps(y[1], x[0]));
+  const BlockEdges e = block_edge_functions<Kz>(b, r);
+  const __m256 u = e.u, v = e.v, w = e.w, on_edge = e.on_edge;
+  const __m256* z = e.z;
   const __m256 zero = _mm256_setzero_ps();
-  const __m256 on_edge = _mm256_or_ps(
-      _mm256_or_ps(_mm256_cmp_ps(u, zero, _CMP_EQ_OQ), _mm256_cmp_ps(v, zero, _CMP_EQ_OQ)),
-      _mm256_cmp_ps(w, zero, _CMP_EQ_OQ));
   const __m256 nonneg = _mm256_and_ps(
       _mm256_and_ps(_mm256_cmp_ps(u, zero, _CMP_GE_OQ), _mm256_cmp_ps(v, zero, _CMP_GE_OQ)),
       _mm256_cmp_ps(w, zero, _CMP_GE_OQ));

@@ -6,6 +6,7 @@
 #include "tritrace/accel/bvh/block_kernels.h"
 #include "tritrace/accel/bvh/packet_traversal.h"
 #include "tritrace/accel/bvh/ray_box.h"
+#include "tritrace/accel/bvh/traversal_stack.h"
 
 #include <algorithm>
 #include <bit>
@@ -23,7 +24,9 @@ namespace {
 using bvh::box_setup;
 using bvh::intersect_boxes;
 using bvh::prefetch;
+using bvh::push_nearest_last;
 using bvh::RayBoxSetup;
+using bvh::StackEntry;
 using bvh::traceable;
 
 using bvh::kLeafBit;
@@ -77,11 +80,6 @@ template <Kernel K, int Kz = -1>
   return block_scalar<K>(b, tris, prepared, best);
 }
 
-struct StackEntry {
-  uint32_t ref;
-  float t;
-};
-
 template <Kernel K, int Kz>
 Hit closest_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
                      const PreparedRay<K>& prepared) {
@@ -107,15 +105,7 @@ Hit closest_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray&
         // straight into the stack's top, so nothing is copied.
         assert(sp + std::popcount(mask) <= kStackSize);  // the builder bounds the depth
         StackEntry* top = stack + sp;
-        int n = 0;
-        while (mask) {
-          const int i = std::countr_zero(mask);
-          mask &= mask - 1;
-          const StackEntry e{node.child[i], tnear[i]};
-          int j = n++;
-          for (; j > 0 && top[j - 1].t < e.t; --j) top[j] = top[j - 1];
-          top[j] = e;
-        }
+        const int n = push_nearest_last(node, mask, tnear, top);
         // The stacked children are fetched from memory while the nearest is traversed: on a
         // big scene most node and leaf visits wait on memory.
         for (int i = 0; i < n - 1; ++i) prefetch(tree, top[i].ref);
@@ -128,7 +118,7 @@ Hit closest_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray&
     do {
       if (sp == 0) return best;
       --sp;
-    } while (stack[sp].t > best.t);
+    } while (stack[sp].key > best.t);
     ref = stack[sp].ref;
   }
 }
@@ -239,15 +229,7 @@ template <int Kz>
       }
       assert(s.sp + std::popcount(mask) <= kStackSize);
       StackEntry* top = s.stack + s.sp;
-      int n = 0;
-      while (mask) {
-        const int i = std::countr_zero(mask);
-        mask &= mask - 1;
-        const StackEntry e{node.child[i], tnear[i]};
-        int j = n++;
-        for (; j > 0 && top[j - 1].t < e.t; --j) top[j] = top[j - 1];
-        top[j] = e;
-      }
+      const int n = push_nearest_last(node, mask, tnear, top);
       for (int i = 0; i < n; ++i) prefetch(tree, top[i].ref);
       s.sp += n - 1;
       s.ref = top[n - 1].ref;
@@ -257,7 +239,7 @@ template <int Kz>
   do {
     if (s.sp == 0) return false;
     --s.sp;
-  } while (s.stack[s.sp].t > s.best.t);
+  } while (s.stack[s.sp].key > s.best.t);
   s.ref = s.stack[s.sp].ref;
   return true;
 }

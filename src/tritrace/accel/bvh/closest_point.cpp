@@ -13,6 +13,7 @@
 #include <immintrin.h>
 #endif
 
+#include "tritrace/accel/bvh/traversal_stack.h"
 #include "tritrace/geometry/point_triangle_distance.h"
 #include "tritrace/parallel.h"
 
@@ -143,11 +144,6 @@ inline void prefetch(const WideBvh& tree, uint32_t ref) {
   for (size_t line = 0; line < bytes; line += 64) __builtin_prefetch(p + line);
 }
 
-struct StackEntry {
-  uint32_t ref;
-  float d2;
-};
-
 ClosestPoint result(const Best& best) {
   ClosestPoint out;
   if (best.prim == kNoHit) return out;
@@ -188,15 +184,7 @@ ClosestPoint closest_point(const WideBvh& tree, const TriangleMesh& mesh, const 
         // Nearest child next, the others on the stack with the farthest deepest.
         assert(sp + std::popcount(mask) <= kStackSize);
         StackEntry* top = stack + sp;
-        int n = 0;
-        while (mask) {
-          const int i = std::countr_zero(mask);
-          mask &= mask - 1;
-          const StackEntry e{node.child[i], d2[i]};
-          int j = n++;
-          for (; j > 0 && top[j - 1].d2 < e.d2; --j) top[j] = top[j - 1];
-          top[j] = e;
-        }
+        const int n = push_nearest_last(node, mask, d2, top);
         // The stacked children are fetched while the nearest is searched (as in the ray
         // traversal): on a big mesh most visits wait on memory.
         for (int i = 0; i < n - 1; ++i) prefetch(tree, top[i].ref);
@@ -208,7 +196,7 @@ ClosestPoint closest_point(const WideBvh& tree, const TriangleMesh& mesh, const 
     do {
       if (sp == 0) return result(best);
       --sp;
-    } while (stack[sp].d2 > best.bound);
+    } while (stack[sp].key > best.bound);
     ref = stack[sp].ref;
   }
 }
