@@ -884,14 +884,21 @@ TEST(PbrtScene, BdptIntegratorIsTritracesBdptUnlessTheSceneHasWhatItRefuses) {
   ASSERT_EQ(sppm.warnings.size(), 1u);
   EXPECT_EQ(sppm.warnings[0],
             "s.pbrt:1: warning: Integrator \"sppm\" replaced by tritrace's path tracer");
-  // bdpt refuses spot and directional lights, a lens and the orthographic camera: the path
-  // tracer renders such files, with a warning naming the Integrator line.
+  // bdpt takes spot and distant lights, a lens and the orthographic camera ...
+  for (const char* text :
+       {"Integrator \"bdpt\"\nWorldBegin\nLightSource \"spot\"\n",
+        "Integrator \"bdpt\"\nWorldBegin\nLightSource \"distant\"\n",
+        "Camera \"perspective\" \"float lensradius\" .1\nIntegrator \"bdpt\"\nWorldBegin\n",
+        "Camera \"orthographic\"\nIntegrator \"bdpt\"\nWorldBegin\n"}) {
+    const LoadedScene loaded = parse(text);
+    EXPECT_EQ(loaded.integrator.kind, IntegratorSpec::Kind::kBdpt) << text;
+    EXPECT_TRUE(loaded.warnings.empty()) << text;
+  }
+  // ... but not an orthographic camera with a lens: the path tracer renders such files, with a
+  // warning naming the Integrator line.
   const std::pair<const char*, const char*> refused[] = {
-      {"Integrator \"bdpt\"\nWorldBegin\nLightSource \"spot\"\n", "spot and distant lights"},
-      {"Integrator \"bdpt\"\nWorldBegin\nLightSource \"distant\"\n", "spot and distant lights"},
-      {"Camera \"perspective\" \"float lensradius\" .1\nIntegrator \"bdpt\"\nWorldBegin\n",
-       "a lens (lensradius > 0)"},
-      {"Camera \"orthographic\"\nIntegrator \"bdpt\"\nWorldBegin\n", "an orthographic camera"},
+      {"Camera \"orthographic\" \"float lensradius\" .1\nIntegrator \"bdpt\"\nWorldBegin\n",
+       "an orthographic camera with a lens"},
   };
   for (const auto& [text, why] : refused) {
     const LoadedScene loaded = parse(text);

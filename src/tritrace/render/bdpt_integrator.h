@@ -51,6 +51,11 @@ struct BdptSettings {
 // Why bdpt cannot render `scene` correctly yet (empty when it can): the caller refuses it.
 std::string bdpt_unsupported(const Scene& scene);
 
+// Whether light tracing (t = 1) can reach `camera`: a pinhole or a thin lens can; an orthographic
+// camera cannot (its direction is a delta, so those strategies do not exist: BdptIntegrator turns
+// light tracing off for it). Throws Error for an orthographic camera with a lens, not done yet.
+bool camera_light_tracing(const Camera& camera);
+
 class BdptIntegrator final : public Integrator {
  public:
   // Keeps the scene's emitters (built here): the scene must outlive it. Throws Error when
@@ -65,13 +70,18 @@ class BdptIntegrator final : public Integrator {
 
   const BdptSettings& settings() const { return settings_; }
 
-  // An emitter for light subpaths: a point light, an emissive triangle or the environment.
+  // An emitter for light subpaths: a point, spot or directional light, an emissive triangle or the
+  // environment.
   struct Emitter {
     bool point = false;
+    bool spot = false;
+    bool directional = false;
     bool environment = false;
-    uint32_t prim = 0;          // the triangle (scene numbering), or the index into scene.lights
-    glm::vec3 position{0.0f};   // a point light's
-    glm::vec3 intensity{0.0f};  // a point light's, P / (4 pi)
+    // The triangle (scene numbering), or the index into scene.lights, spot_lights or
+    // directional_lights.
+    uint32_t prim = 0;
+    glm::vec3 position{0.0f};   // a point or spot light's
+    glm::vec3 intensity{0.0f};  // a point light's, P / (4 pi); a spot light's on its axis
     float pmf = 0.0f;           // the probability of choosing it
     float area = 0.0f;          // a triangle's
   };
@@ -84,14 +94,18 @@ class BdptIntegrator final : public Integrator {
   std::vector<uint32_t> emissive_prims_;  // sorted, for the density of choosing a hit emitter
   std::vector<uint32_t> emissive_index_;  // parallel: the emitter's index in emitters_
 
+  // Appends the scene's spot and directional lights to emitters_ with their selection weights.
+  void add_delta_lights(const Scene& scene, std::vector<float>& power);
+
   // The area density with which a light subpath starts at point of triangle `prim` (pmf / area);
   // 0 for a triangle that is not an emitter.
   float origin_pdf(uint32_t prim) const;
 
   // The environment (a map, or a constant colour that is not black): its radiance from direction
   // w (pointing away from the scene), the solid-angle density with which light subpaths choose w,
-  // and that choice. Light subpaths from it start on the disk of radius environment_radius_ about
-  // environment_centre_ across w (the scene's bounding sphere), density environment_pdf_pos_.
+  // and that choice. Light subpaths from it (and from directional lights) start on the disk of
+  // radius environment_radius_ about environment_centre_ across w (the scene's bounding sphere),
+  // density environment_pdf_pos_.
   glm::vec3 environment_radiance(glm::vec3 w) const;
   float environment_dir_pdf(glm::vec3 w) const;
   glm::vec3 sample_environment(glm::vec2 u, float& pdf) const;

@@ -1466,13 +1466,7 @@ class Interpreter {
   void bdpt_or_path() {
     if (out_.integrator.kind != IntegratorSpec::Kind::kBdpt) return;
     std::string why;
-    if (!out_.scene.spot_lights.empty() || !out_.scene.directional_lights.empty()) {
-      why = "spot and distant lights";
-    } else if (lens_radius_ > 0.0) {
-      why = "a lens (lensradius > 0)";
-    } else if (orthographic_) {
-      why = "an orthographic camera";
-    }
+    if (orthographic_ && lens_radius_ > 0.0) why = "an orthographic camera with a lens";
     if (why.empty()) return;
     warn(integrator_at_,
          "Integrator \"bdpt\" replaced by tritrace's path tracer: tritrace's bdpt refuses " + why);
