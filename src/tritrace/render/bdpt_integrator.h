@@ -1,9 +1,10 @@
 // BdptIntegrator: bidirectional path tracing (Veach 1997, chapter 10; Lafortune and Willems 1993):
 // per camera sample one camera subpath and one light subpath, every connection strategy (s, t)
 // with t >= 2, and light tracing to the camera (t = 1, s >= 2: a light subpath vertex connected to
-// the pinhole, added to the pixel it projects to through the film's SplatBuffer), combined by
-// multiple importance sampling (power heuristic). Point lights, emissive triangles and the
-// environment (a constant colour or a map). docs/BDPT.md has the design.
+// the pinhole or the lens, added to the pixel it projects to through the film's SplatBuffer; not
+// to an orthographic camera, which it cannot reach), combined by multiple importance sampling
+// (power heuristic). Point, spot and directional lights, emissive triangles and the environment
+// (a constant colour or a map). docs/BDPT.md has the design.
 #pragma once
 
 #include <cstdint>
