@@ -105,6 +105,34 @@ TEST(BdptLightTracing, EachUnweightedStrategyAloneConvergesToThePathTracersBand)
   }
 }
 
+// The same for (2, 1) through a thin lens and through an orthographic camera with a lens, where
+// light tracing joins a lens point of its own (the perspective lens: the camera subpath's; the
+// orthographic one: the vertex's foot plus the lens offset scaled by depth over focus distance).
+TEST(BdptLightTracing, UnweightedStrategyThroughLensesConvergesToThePathTracersBand) {
+  Scene perspective = make_cornell_area({.width = 16, .height = 16});
+  perspective.camera = perspective.camera.with_lens(0.2f, 2.5f);
+  Scene orthographic = make_cornell_area({.width = 16, .height = 16});
+  orthographic.camera = orthographic.camera.orthographic(2.2f / 16.0f).with_lens(0.2f, 2.5f);
+  for (const Scene* scene : {&perspective, &orthographic}) {
+    const BvhAccel accel(scene->mesh, kDefaultKernel);
+    const BdptIntegrator alone(*scene,
+                               {.max_depth = 1, .only_s = 2, .only_t = 1, .unweighted = true});
+    const MeanAndError light = mean_of(8, [&](int i) {
+      return luminance_mean(render(*scene, accel, alone, {.spp = 32, .seed = 80u + i}));
+    });
+    const PathIntegrator longer(*scene, {.max_depth = 1});
+    const PathIntegrator shorter(*scene, {.max_depth = 0});
+    const MeanAndError path = mean_of(8, [&](int i) {
+      const RenderOptions o{.spp = 64, .seed = 90u + i};
+      return luminance_mean(render(*scene, accel, longer, o)) -
+             luminance_mean(render(*scene, accel, shorter, o));
+    });
+    std::printf("  (2, 1) alone through %s lens vs path's direct light:\n",
+                scene->camera.is_orthographic() ? "an orthographic" : "a perspective");
+    expect_same_mean(light, path, 0.02);
+  }
+}
+
 // Splats are integer sums: the image is the same bits for any thread count and tile size,
 // rendered straight to an image or through a film in one go or in passes (the viewer's and
 // --time-limit's way), on the lab's point-light box where light tracing carries light paths
@@ -367,7 +395,9 @@ TEST(BdptLightTracing, PointLightCausticUnderGlassCarriesTheFresnelTransmittedFl
 // first hit connected to the camera) estimates each pixel's mean of L over the points it sees:
 // integrated here by 16 x 16 pinhole rays per pixel. A lens of radius 0.3 focused on the plane
 // (distance 2.2) sees every point of it in the pixel the pinhole does, and a diffuse point looks
-// the same from every lens point, so the expected image is the pinhole's.
+// the same from every lens point, so the expected image is the pinhole's. The same for an
+// orthographic camera with that lens (parallel rays without it, which light tracing cannot reach):
+// the plane points under the pixel's square.
 constexpr float kPlaneY = 1.0f;
 constexpr float kPlaneAlbedo = 0.5f;
 const glm::vec3 kEye(0.3f, -1.2f, -0.2f);
@@ -375,6 +405,7 @@ const glm::vec3 kEye(0.3f, -1.2f, -0.2f);
 struct PlaneCase {
   bool sun;
   bool lens;
+  bool orthographic = false;  // showing 3 x 3 of the plane (the perspective view 4.4 x 4.4)
 };
 
 Scene plane_scene(const PlaneCase& c, int side) {
@@ -399,6 +430,7 @@ Scene plane_scene(const PlaneCase& c, int side) {
   scene.camera =
       Camera::look_at(side, side, kEye, kEye + glm::vec3(0.0f, 1.0f, 0.0f),
                       glm::vec3(0.0f, 0.0f, 1.0f), Camera::focal_for_vertical_fov(side, 90.0));
+  if (c.orthographic) scene.camera = scene.camera.orthographic(3.0f / static_cast<float>(side));
   if (c.lens) scene.camera = scene.camera.with_lens(0.3f, kPlaneY - kEye.y);
   return scene;
 }
@@ -416,8 +448,14 @@ double expected_pixel(const Scene& scene, const PlaneCase& c, int x, int y) {
     for (int i = 0; i < kSub; ++i) {
       const double px = x + (i + 0.5) / kSub - cam.width() / 2;
       const double py = y + (j + 0.5) / kSub - cam.height() / 2;
-      const glm::dvec3 d = right * px + down * py + forward * f;
-      const glm::dvec3 p = eye + d * ((kPlaneY - eye.y) / d.y);
+      glm::dvec3 p;
+      if (c.orthographic) {
+        const double s = cam.ortho_scale();
+        p = eye + right * (px * s) + down * (py * s) + forward * (kPlaneY - eye.y);
+      } else {
+        const glm::dvec3 d = right * px + down * py + forward * f;
+        p = eye + d * ((kPlaneY - eye.y) / d.y);
+      }
       double e;
       if (c.sun) {
         e = 2.0 * std::cos(pi / 6.0);  // the channels' mean irradiance, 2
@@ -478,7 +516,8 @@ TEST_P(LightTracingOntoAPlane, GivesTheHandComputedRadiance) {
 
 INSTANTIATE_TEST_SUITE_P(SpotAndSun, LightTracingOntoAPlane,
                          ::testing::Values(PlaneCase{false, false}, PlaneCase{false, true},
-                                           PlaneCase{true, true}));
+                                           PlaneCase{true, true}, PlaneCase{false, true, true},
+                                           PlaneCase{true, true, true}));
 
 }  // namespace
 }  // namespace tritrace

@@ -615,6 +615,12 @@ Scene orthographic_cornell_area(int side) {
   return scene;
 }
 
+Scene orthographic_lens_cornell_area(int side) {
+  Scene scene = orthographic_cornell_area(side);
+  scene.camera = scene.camera.with_lens(0.1f, 3.0f);
+  return scene;
+}
+
 // The O(1) weight recursion (prepare_weights and mis_weight_recursive in bdpt_integrator.cpp)
 // against the ratio walk over the whole path that it replaced (Veach 1997, sec. 10.2), kept in
 // the integrator as the oracle: every weight of every connection of small renders, on scenes with
@@ -645,7 +651,8 @@ TEST(Bdpt, WeightRecursionEqualsTheRatioWalk) {
       {"sky.json", example("sky.json", 12)},
       {"spot and sun", spot_and_sun(12, true, true)},
       {"thin lens", lensed_cornell_area(12)},
-      {"orthographic", orthographic_cornell_area(12)}};
+      {"orthographic", orthographic_cornell_area(12)},
+      {"orthographic lens", orthographic_lens_cornell_area(12)}};
   for (const auto& [name, scene] : scenes) {
     const BvhAccel accel(scene.mesh, kDefaultKernel);
     for (const bool light_tracing : {true, false}) {
@@ -720,17 +727,24 @@ TEST(Bdpt, AgreesWithThePathTracerThroughAnOrthographicCamera) {
   EXPECT_FALSE(bdpt.splats());
   expect_agree(render(scene, accel, bdpt, {.spp = 128, .seed = 1}),
                render_path(scene, accel, {.spp = 1024, .seed = 2}), 0.005, 16, 0.03, 0.99);
-  // With a lens as well it is refused (not done yet), unless light tracing is off.
-  Scene lensed = scene;
-  lensed.camera = lensed.camera.with_lens(0.1f, 3.0f);
-  EXPECT_THROW(BdptIntegrator{lensed}, Error);
-  EXPECT_NO_THROW(BdptIntegrator(lensed, {.light_tracing = false}));
+}
+
+// With a lens an orthographic camera's rays spread, and light tracing reaches it: each light
+// vertex joins the lens point o = its foot on the camera's plane + l z / F (l uniform on the lens,
+// z its depth), with the weights' camera density ortho_lens_pdf.
+TEST(Bdpt, AgreesWithThePathTracerThroughAnOrthographicCameraWithALens) {
+  const Scene scene = orthographic_lens_cornell_area(32);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const BdptIntegrator bdpt(scene);
+  EXPECT_TRUE(bdpt.splats());
+  expect_agree(render(scene, accel, bdpt, {.spp = 128, .seed = 1}),
+               render_path(scene, accel, {.spp = 1024, .seed = 2}), 0.005, 16, 0.03, 0.99);
 }
 
 // The weights of every strategy add up to one on the paths of the new light and camera kinds.
 TEST(Bdpt, WeightedStrategiesSumToTheImageWithTheNewLightsAndCameras) {
-  for (const Scene& scene :
-       {spot_and_sun(12, true, true), lensed_cornell_area(12), orthographic_cornell_area(12)}) {
+  for (const Scene& scene : {spot_and_sun(12, true, true), lensed_cornell_area(12),
+                             orthographic_cornell_area(12), orthographic_lens_cornell_area(12)}) {
     expect_weighted_strategies_sum_to_the_image(scene);
   }
 }

@@ -47,15 +47,8 @@ void check_bdpt(const Scene& scene, const IntegratorSpec& spec) {
 // Light tracing (bdpt's t = 1) splats onto any pixel, and estimates each pixel from all pixels'
 // samples together (Integrator::splats): refused where that cannot hold (docs/BDPT.md).
 void check_light_tracing(const JobSettings& settings, const Camera& camera) {
-  // Its connections reach a pinhole or a thin lens; an orthographic camera has none (bdpt turns
-  // light tracing off for it, so the rules below do not apply), and one with a lens is refused
-  // (docs/BDPT.md).
-  if (camera.is_orthographic() && camera.has_lens()) {
-    throw Error("--aperture",
-                "bdpt's light tracing does not connect to an orthographic camera with a lens "
-                "(aperture radius > 0) yet: render it with path, or without the lens",
-                ExitCode::kUsage);
-  }
+  // Its connections reach a pinhole or a lens; an orthographic camera without a lens has none
+  // (bdpt turns light tracing off for it, so the rules below do not apply; docs/BDPT.md).
   if (!camera_light_tracing(camera)) return;
   if (!settings.tile.empty()) {
     throw Error("--tile",

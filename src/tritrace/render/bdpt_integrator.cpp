@@ -249,15 +249,47 @@ float camera_pdf(const Camera& camera, glm::vec3 w) {
          (static_cast<float>(camera.width()) * static_cast<float>(camera.height()) * c * c * c);
 }
 
+// An orthographic camera with a lens (Camera::lens_ray): a ray leaves the film's point a, uniform
+// over its W H s^2 area in the plane through the camera (s: ortho_scale), moved by a lens offset l
+// uniform over the disk of radius R, towards a + F forward, its point in focus. Per area of the
+// lens point o and solid angle it has the density F^2 / (W H s^2 pi R^2 cos^3(theta)) (dA on the
+// plane in focus = F^2 / cos^3 dw). Light tracing joins a vertex q at depth z (along forward) to
+// the lens point o = q's foot on the camera's plane + l z / F for a uniform l (the ray from o
+// through q then passes a + F forward with a = o - l), density (F / z)^2 / (pi R^2) by area: the
+// two kinds of strategy sample o with different densities, and the weights need their ratio. Both
+// folded into one "camera density" of the direction from o towards a point at distance d,
+// z = d cos(theta), the joint density over light tracing's density of o is
+// d^2 / (W H s^2 cos(theta)) per solid angle, which is also the light image's importance, as the
+// pinhole's camera_pdf is (docs/BDPT.md).
+float ortho_lens_pdf(const Camera& camera, glm::vec3 w, float dist2) {
+  const float c = glm::dot(w, camera.forward());
+  if (!(c > 0.0f)) return 0.0f;
+  const float s = camera.ortho_scale();
+  return dist2 /
+         (static_cast<float>(camera.width()) * static_cast<float>(camera.height()) * s * s * c);
+}
+
+// The camera's density of direction w from its vertex, towards a point dist2 away (only an
+// orthographic camera's, which light tracing reaches only with a lens, depends on the distance).
+float camera_dir_pdf(const Camera& camera, glm::vec3 w, float dist2) {
+  return camera.is_orthographic() ? ortho_lens_pdf(camera, w, dist2) : camera_pdf(camera, w);
+}
+
 // Where direction w (unit, from the camera vertex `eye`) meets the image, in pixels from its
 // top-left corner (Camera::ray_through inverted; with a lens, Camera::lens_ray: from the lens point
-// along w to the plane in focus, then through the pinhole); false where it misses the film.
+// along w to the plane in focus, then through the pinhole, or along forward to the film's plane
+// for an orthographic camera); false where it misses the film.
 bool project(const Camera& camera, glm::vec3 eye, glm::vec3 w, int& x, int& y) {
   const float c = glm::dot(w, camera.forward());
   if (!(c > 0.0f)) return false;
   const float f = camera.focal_px();
   float px, py;
-  if (camera.has_lens()) {
+  if (camera.is_orthographic()) {
+    const glm::vec3 v = eye + w * (camera.focus_distance() / c) - camera.position();
+    const float s = camera.ortho_scale();
+    px = glm::dot(v, camera.right()) / s + static_cast<float>(camera.width() / 2);
+    py = glm::dot(v, camera.down()) / s + static_cast<float>(camera.height() / 2);
+  } else if (camera.has_lens()) {
     const glm::vec3 v = eye + w * (camera.focus_distance() / c) - camera.position();
     const float cv = glm::dot(v, camera.forward());
     if (!(cv > 0.0f)) return false;
@@ -336,6 +368,23 @@ class BdptTracer {
   void flush();
   // Light tracing: the (s, 1) connections of the light subpath's vertices to the camera.
   void splat_light_subpath(int nl);
+  // The camera's density of sampling vertex q from camera vertex `eye`, by area at q.
+  float camera_area_pdf(const Vertex& eye, const Vertex& q) const {
+    const glm::vec3 d = q.p - eye.p;
+    return to_area(camera_dir_pdf(scene_.camera, direction(eye, q), glm::dot(d, d)), eye, q);
+  }
+  // Light tracing to an orthographic camera with a lens: the lens point through which it joins
+  // point q (ortho_lens_pdf), with this sample's lens offset.
+  glm::vec3 ortho_lens_point(glm::vec3 q) const {
+    const Camera& cam = scene_.camera;
+    const float z = glm::dot(q - cam.position(), cam.forward());
+    return q - cam.forward() * z +
+           (cam.right() * lens_offset_.x + cam.down() * lens_offset_.y) *
+               (z / cam.focus_distance());
+  }
+  // The weight of a queued connection: mis_weight, with the camera vertex moved to the lens point
+  // of light tracing's connection to an orthographic camera with a lens.
+  float connection_weight(int s, int t);
   // The MIS weights' partial sums (Vertex::mis_sum) along both subpaths, once per sample.
   void prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) const;
   // The weight of strategy (s, t): O(1) from the partial sums (with the settings' weight_check,
@@ -366,6 +415,7 @@ class BdptTracer {
   glm::vec3 total_{0.0f};
   SplatBuffer* splats_ = nullptr;
   float u_round_ = 0.0f;
+  glm::vec2 lens_offset_{0.0f};  // an orthographic camera's lens offset for light tracing
   // Connections waiting for their shadow rays.
   struct Pending {
     glm::vec3 contribution{0.0f};  // unweighted, if unblocked
@@ -743,7 +793,7 @@ void BdptTracer::flush() {
   for (int k = 0; k < pending_count_; ++k) {
     const Pending& p = pending_[static_cast<size_t>(k)];
     if (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)]) continue;
-    const float weight = unweighted ? 1.0f : mis_weight(light_, camera_, p.s, p.t);
+    const float weight = unweighted ? 1.0f : connection_weight(p.s, p.t);
     const glm::vec3 term = p.contribution * weight;
     // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
     // dropped rather than let a NaN or infinity into the pixel.
@@ -783,7 +833,7 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t) c
   if (t == 1) {
     // Light tracing: the camera's density of sampling qs (camera_pdf) is its pdf_rev. The
     // camera's own pdf_rev is never read (no strategy has t = 0).
-    qs->pdf_rev = to_area(camera_pdf(scene_.camera, direction(pt, *qs)), pt, *qs);
+    qs->pdf_rev = camera_area_pdf(pt, *qs);
     if (qs_minus != nullptr) qs_minus->pdf_rev = pdf_area(*qs, &pt, *qs_minus);
   } else if (s > 0) {
     pt.pdf_rev = pdf_area(*qs, qs_minus, pt);
@@ -874,7 +924,7 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
   // The four densities that depend on the connection, as the walk sets them.
   float pt_rev = 0.0f, pt_minus_rev = 0.0f, qs_rev = 0.0f, qs_minus_rev = 0.0f;
   if (t == 1) {
-    qs_rev = to_area(camera_pdf(scene_.camera, direction(pt, *qs)), pt, *qs);
+    qs_rev = camera_area_pdf(pt, *qs);
     if (qs_minus != nullptr) qs_minus_rev = pdf_area(*qs, &pt, *qs_minus);
   } else {
     const Vertex& pt_minus = camera[t - 2];
@@ -934,29 +984,42 @@ float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const 
   return w;
 }
 
+float BdptTracer::connection_weight(int s, int t) {
+  if (t != 1 || !scene_.camera.is_orthographic()) return mis_weight(light_, camera_, s, t);
+  Vertex& eye = camera_[0];
+  const glm::vec3 saved = eye.p;
+  eye.p = ortho_lens_point(light_[s - 1].p);
+  const float w = mis_weight(light_, camera_, s, t);
+  eye.p = saved;
+  return w;
+}
+
 void BdptTracer::splat_light_subpath(int nl) {
   const BdptSettings& settings = it_.settings_;
   const bool only = settings.only_s >= 0 && settings.only_t >= 0;
   const Camera& cam = scene_.camera;
-  const Vertex& eye = camera_[0];
+  const bool ortho = cam.is_orthographic();
   const Vertex* light = light_;
   for (int s = 2; s <= nl && s + 1 <= settings.max_depth + 2; ++s) {
     if (only && s != settings.only_s) continue;
     const Vertex& qs = light[s - 1];
     if (!qs.connectible || infinite(qs)) continue;
-    const glm::vec3 d = eye.p - qs.p;
+    // The camera's point: the pinhole, the camera subpath's lens point, or an orthographic lens's
+    // point for qs.
+    const glm::vec3 eye = ortho ? ortho_lens_point(qs.p) : camera_[0].p;
+    const glm::vec3 d = eye - qs.p;
     const float dist2 = glm::dot(d, d);
     if (!(dist2 > 0.0f)) continue;
     const glm::vec3 w = d * (1.0f / std::sqrt(dist2));  // from qs towards the camera
     int px = 0, py = 0;
-    if (!project(cam, eye.p, -w, px, py)) continue;
+    if (!project(cam, eye, -w, px, py)) continue;
     const glm::vec3 f_light = surface_f(qs, w, qs.wo);
     if (!(max_component(f_light) > 0.0f)) continue;
     const float g = std::abs(glm::dot(qs.ng, w)) / dist2;
-    const glm::vec3 contribution = qs.beta * f_light * (g * camera_pdf(cam, -w));
+    const glm::vec3 contribution = qs.beta * f_light * (g * camera_dir_pdf(cam, -w, dist2));
     if (!(max_component(contribution) > 0.0f)) continue;
     Ray ray;
-    const bool has_ray = camera_shadow_ray(qs, eye.p, ray);
+    const bool has_ray = camera_shadow_ray(qs, eye, ray);
     queue(s, 1, contribution, has_ray, ray, px, py);
   }
 }
@@ -987,6 +1050,11 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, const Hit& camera_hit, Sampl
   const int nc = walk(sub.camera, 1, max_camera, camera_ray, glm::vec3(1.0f), camera_dir_pdf, false,
                       sampler, &camera_hit);
   camera_count_ = nc;
+  if (settings.light_tracing && scene_.camera.is_orthographic() && nc >= 2 &&
+      !infinite(sub.camera[1])) {
+    // An orthographic lens's density depends on the distance to the first hit (ortho_lens_pdf).
+    sub.camera[1].pdf_fwd = camera_area_pdf(sub.camera[0], sub.camera[1]);
+  }
   const int nl = light_subpath(sub.light, max_light, sampler);
   // The subpaths no longer grow: plain pointers from here.
   Vertex* camera = sub.camera.data();
@@ -1039,6 +1107,10 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, const Hit& camera_hit, Sampl
     // One number per sample for the splats' stochastic rounding (SplatBuffer::add), drawn after
     // every dimension the subpaths use.
     u_round_ = sampler.get_1d();
+    if (scene_.camera.is_orthographic()) {
+      // Light tracing's lens offset for an orthographic camera (ortho_lens_point), one per sample.
+      lens_offset_ = scene_.camera.lens_radius() * sample_uniform_disk_concentric(sampler.get_2d());
+    }
     splat_light_subpath(nl);
   }
   flush();
@@ -1046,14 +1118,11 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, const Hit& camera_hit, Sampl
 }
 
 bool camera_light_tracing(const Camera& camera) {
-  if (!camera.is_orthographic()) return true;
-  // An orthographic camera sees along forward only: a light vertex joins it with probability zero
-  // (its direction is a delta), so light tracing's strategies (s, 1) do not exist, and the weights
-  // of t >= 2, light tracing off, are exactly the weights over the strategies that do.
-  if (!camera.has_lens()) return false;
-  throw Error("integrator",
-              "bdpt's light tracing does not connect to an orthographic camera with a lens yet; "
-              "render it with path");
+  // An orthographic camera without a lens sees along forward only: a light vertex joins it with
+  // probability zero (its direction is a delta), so light tracing's strategies (s, 1) do not
+  // exist, and the weights of t >= 2, light tracing off, are exactly the weights over the
+  // strategies that do. With a lens its rays spread (ortho_lens_pdf).
+  return !camera.is_orthographic() || camera.has_lens();
 }
 
 std::string bdpt_unsupported(const Scene& scene) {

@@ -2,9 +2,9 @@
 // per camera sample one camera subpath and one light subpath, every connection strategy (s, t)
 // with t >= 2, and light tracing to the camera (t = 1, s >= 2: a light subpath vertex connected to
 // the pinhole or the lens, added to the pixel it projects to through the film's SplatBuffer; not
-// to an orthographic camera, which it cannot reach), combined by multiple importance sampling
-// (power heuristic). Point, spot and directional lights, emissive triangles and the environment
-// (a constant colour or a map). docs/BDPT.md has the design.
+// to an orthographic camera without a lens, which it cannot reach), combined by multiple importance
+// sampling (power heuristic). Point, spot and directional lights, emissive triangles and the
+// environment (a constant colour or a map). docs/BDPT.md has the design.
 #pragma once
 
 #include <cstdint>
@@ -52,9 +52,9 @@ struct BdptSettings {
 // Why bdpt cannot render `scene` correctly yet (empty when it can): the caller refuses it.
 std::string bdpt_unsupported(const Scene& scene);
 
-// Whether light tracing (t = 1) can reach `camera`: a pinhole or a thin lens can; an orthographic
-// camera cannot (its direction is a delta, so those strategies do not exist: BdptIntegrator turns
-// light tracing off for it). Throws Error for an orthographic camera with a lens, not done yet.
+// Whether light tracing (t = 1) can reach `camera`: a pinhole, a thin lens and an orthographic
+// camera with a lens can; an orthographic camera without one cannot (its direction is a delta, so
+// those strategies do not exist: BdptIntegrator turns light tracing off for it).
 bool camera_light_tracing(const Camera& camera);
 
 class BdptIntegrator final : public Integrator {
