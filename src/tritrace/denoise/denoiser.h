@@ -49,11 +49,18 @@ struct DenoiseOptions {
   // the new weights. The first result's errors are correlated between neighbours (they share
   // inputs), so its distances need a larger k than the noisy colour's (docs/DENOISING.md).
   bool guided_pass = true;
-  float guided_colour_strength = 4.0f;
+  float guided_colour_strength = 3.0f;
   // Blend the two passes per pixel, each weighted by the other's estimated error (Stein's
   // unbiased risk estimate, averaged over the (2 sure_radius + 1)^2 pixels around); negative:
   // the guided pass's result alone (docs/DENOISING.md).
   int sure_radius = 3;
+  // The variance the filter uses is at least this times the variance estimated from the image
+  // itself (estimate_variance_spatially, in the demodulated colour): the renderer's half-buffer
+  // variance has one degree of freedom per pixel and misses the coverage noise of a pixel that
+  // a very bright edge (a light seen directly) crosses, where 16 samples either happen to hit
+  // the light or not and both halves agree (docs/DENOISING.md measures it). 0 trusts the given
+  // variance alone (then a variance of 0 returns the image unchanged).
+  float spatial_variance_floor = 0.5f;
   // Scale each channel of the result so that its sum is the input's (where both are positive):
   // the weighted means do not keep the total exactly around fireflies.
   bool keep_mean = true;
