@@ -208,7 +208,7 @@ bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray) {
 // "asynchronous memory access chaining" of Kocberber et al., "Asynchronous Memory Access
 // Chaining", VLDB 2015, applied to BVH traversal. Every ray is still traversed alone, in the
 // order closest_hit_from and any_hit use, so the answers are theirs bit for bit.
-inline constexpr int kInFlight = 8;
+inline constexpr int kInFlight = 12;
 // Rays are taken in chunks, grouped by their dominant axis (the watertight kernel's kz, a template
 // argument of the block test) so that the leaf test has no switch per block.
 inline constexpr size_t kChunk = 256;
