@@ -68,12 +68,6 @@ void check_light_tracing(const JobSettings& settings, const Camera& camera) {
                 "its image; split a bdpt render with --spp-range",
                 ExitCode::kUsage);
   }
-  if (!settings.noise_threshold.empty()) {
-    throw Error("--noise-threshold",
-                "bdpt's light tracing estimates every pixel from all pixels' samples, so pixels "
-                "cannot stop apart",
-                ExitCode::kUsage);
-  }
   if (filter_choice(settings) != FilterKind::kBox) {
     throw Error("--filter", "bdpt's light tracing has the camera's density for the box filter only",
                 ExitCode::kUsage);
