@@ -591,7 +591,13 @@ class Viewer {
     options.tile_parts = level.parts;
     job_->render_to_film(part, options, &stats);
     level.milliseconds += stats.milliseconds;
-    copy_tile_part(part, level.next_part, level.parts, level.film);
+    // One part is the whole level, light image (bdpt's splats) included; copy_tile_part copies
+    // the sums only.
+    if (level.parts == 1) {
+      level.film = std::move(part);
+    } else {
+      copy_tile_part(part, level.next_part, level.parts, level.film);
+    }
     if (++level.next_part < level.parts) return false;
     level_ms_per_sample_ = level.milliseconds / level.spp;
     float most = 0.0f;

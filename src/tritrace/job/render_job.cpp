@@ -342,9 +342,13 @@ void RenderJob::set_up() {
                 ExitCode::kUsage);
   }
   if (!settings_.noise_threshold.empty() && !settings_.spp_range.empty()) {
+    // bdpt's light tracing cannot be split into tiles either (check_light_tracing).
+    const bool bdpt = spec_.kind == IntegratorSpec::Kind::kBdpt;
     throw Error("--noise-threshold",
-                "decides per pixel from all its samples [0, spp), so a sample range cannot be "
-                "rendered apart; split the image with --tile instead of --spp-range",
+                std::string("decides per pixel from all its samples [0, spp), so a sample range "
+                            "cannot be rendered apart; ") +
+                    (bdpt ? "with bdpt, render the whole image in one go"
+                          : "split the image with --tile instead of --spp-range"),
                 ExitCode::kUsage);
   }
   if (spec_.kind == IntegratorSpec::Kind::kBdpt) {
