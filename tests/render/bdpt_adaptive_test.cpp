@@ -133,12 +133,19 @@ TEST(BdptAdaptive, ImageMeanOverSeedsAgreesWithUniformBdptAndThePathTracer) {
 // vertex 1 and in light tracing's density of its light vertex) against the walk over the whole
 // path (the ratio as a factor of light tracing's strategies), with ratios far from 1 (the tests'
 // scale on the weights alone) and with adaptive sampling's own (the pilot's (P - neighbours) / P,
-// then the share of pixels taking each pass), on scenes with delta vertices and a point light.
+// then the share of pixels taking each pass), on scenes with delta vertices and a point light,
+// through a thin lens and an orthographic camera with a lens.
 TEST(BdptAdaptive, WeightRecursionEqualsTheRatioWalkWithCountRatios) {
+  Scene lens = make_cornell_area({.width = 12, .height = 12});
+  lens.camera = lens.camera.with_lens(0.15f, 2.5f);
+  Scene ortho_lens = make_cornell_area({.width = 12, .height = 12});
+  ortho_lens.camera = ortho_lens.camera.orthographic(2.2f / 12.0f).with_lens(0.1f, 3.0f);
   const std::vector<std::pair<const char*, Scene>> scenes = {
       {"cornell-area", make_cornell_area({.width = 12, .height = 12})},
       {"point light box", make_cornell_box({.width = 12, .height = 12})},
-      {"glass.json", example("glass.json", 12)}};
+      {"glass.json", example("glass.json", 12)},
+      {"thin lens", lens},
+      {"orthographic with a lens", ortho_lens}};
   for (const auto& [name, scene] : scenes) {
     const BvhAccel accel(scene.mesh, kDefaultKernel);
     for (const float scale : {0.05f, 1.0f, 20.0f}) {
