@@ -10,6 +10,7 @@ time of the summary line and by the process's CPU time (steadier on a shared mac
 configuration ends with the medians of its rounds.
 
 Usage: bench/adaptive_rmse.py TRITRACE [--size 128] [--ref-spp 8192] [--rounds 2]
+       [--integrator bdpt] [--ref-integrator path]
 No NumPy: PFM files are read with the standard library.
 """
 import argparse
@@ -67,7 +68,11 @@ def render(tritrace, scene, size, extra, out):
     """Runs one render: (render ms from the summary line, the process's CPU ms, mean spp or None,
     the command). CPU time (user + system of the process and its threads) is the steadier clock
     on a machine shared with other work: wall time there depends on what else runs."""
-    cmd = [tritrace, "render", *SCENES[scene], "--width", str(size), "--height", str(size),
+    base = list(SCENES[scene])
+    if "--integrator" in extra and "--integrator" in base:  # the caller's choice replaces it
+        i = base.index("--integrator")
+        del base[i:i + 2]
+    cmd = [tritrace, "render", *base, "--width", str(size), "--height", str(size),
            "-o", out, *extra]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
     text = proc.stdout.read()
@@ -89,16 +94,23 @@ def main():
     p.add_argument("--rounds", type=int, default=2)
     p.add_argument("--first-seed", type=int, default=0, help="round r uses seed first-seed + r + 1")
     p.add_argument("--ref-dir", default=None, help="reuse <scene>_ref.pfm from here")
+    p.add_argument("--integrator", default=None,
+                   help="--integrator for the adaptive and uniform renders (default: the scene's)")
+    p.add_argument("--ref-integrator", default=None,
+                   help="--integrator for the reference (default: the scene's)")
     p.add_argument("--configs", default="glass:0.05:1024:128,cornell-area:0.05:1024:128",
                    help="scene:threshold:max_spp:uniform_spp,...")
     a = p.parse_args()
     tmp = tempfile.mkdtemp()
+    chosen = ["--integrator", a.integrator] if a.integrator else []
+    ref_chosen = ["--integrator", a.ref_integrator] if a.ref_integrator else []
     for config in a.configs.split(","):
         scene, t, most, uni = config.split(":")
         ref_path = os.path.join(a.ref_dir or tmp, scene + "_ref.pfm")
         if not os.path.exists(ref_path):
             ms, _, _, cmd = render(a.tritrace, scene, a.size,
-                                   ["--spp", str(a.ref_spp), "--seed", "99"], ref_path)
+                                   ["--spp", str(a.ref_spp), "--seed", "99", *ref_chosen],
+                                   ref_path)
             print("reference: %s (%.0f ms)" % (cmd, ms))
         ref = read_pfm(ref_path)
         ratios, cpu_ratios, mean_diffs, uniform_diffs = [], [], [], []
@@ -107,13 +119,13 @@ def main():
             seed = str(r + 1 + a.first_seed)
             out = os.path.join(tmp, "x.pfm")
             ta, ca, mean, cmd_a = render(a.tritrace, scene, a.size,
-                                         ["--spp", most, "--noise-threshold", t, "--seed", seed],
-                                         out)
+                                         ["--spp", most, "--noise-threshold", t, "--seed", seed,
+                                          *chosen], out)
             img = read_pfm(out)
             ea, ra, da = rmse(img, ref), relmse(img, ref), display_rmse(img, ref)
             mean_diffs.append(sum(img) / len(img) - ref_mean)
-            tu, cu, _, cmd_u = render(a.tritrace, scene, a.size, ["--spp", uni, "--seed", seed],
-                                      out)
+            tu, cu, _, cmd_u = render(a.tritrace, scene, a.size,
+                                      ["--spp", uni, "--seed", seed, *chosen], out)
             img = read_pfm(out)
             eu, ru, du = rmse(img, ref), relmse(img, ref), display_rmse(img, ref)
             uniform_diffs.append(sum(img) / len(img) - ref_mean)

@@ -573,7 +573,10 @@ class Viewer {
           level_ms_per_sample_ > 0.0 ? level_ms_per_sample_ : schedule_->ms_per_sample();
       level_.emplace();
       level_->spp = spp;
-      level_->parts = level_parts(ms_per_sample, spp, kFrameBudgetMs, tiles);
+      // Light tracing (bdpt) splats onto every tile, so its levels cannot be split into tile
+      // parts: a level is one render (longer frames while it refines).
+      level_->parts =
+          job_->integrator().splats() ? 1 : level_parts(ms_per_sample, spp, kFrameBudgetMs, tiles);
     }
     Level& level = *level_;
     // The spp AOV says whether every pixel stopped before the level's end (converged).
@@ -588,7 +591,13 @@ class Viewer {
     options.tile_parts = level.parts;
     job_->render_to_film(part, options, &stats);
     level.milliseconds += stats.milliseconds;
-    copy_tile_part(part, level.next_part, level.parts, level.film);
+    // One part is the whole level, light image (bdpt's splats) included; copy_tile_part copies
+    // the sums only.
+    if (level.parts == 1) {
+      level.film = std::move(part);
+    } else {
+      copy_tile_part(part, level.next_part, level.parts, level.film);
+    }
     if (++level.next_part < level.parts) return false;
     level_ms_per_sample_ = level.milliseconds / level.spp;
     float most = 0.0f;

@@ -61,6 +61,13 @@ for np in 2 4; do
   "${run_mpi[@]}" -np "$np" "$cli" render "${bdpt[@]}" --mpi -o "$dir/bdpt_mpi$np.pfm"
   cmp "$dir/bdpt.pfm" "$dir/bdpt_mpi$np.pfm" || fail "bdpt on $np ranks: the image differs"
 done
+# bdpt with adaptive sampling: one unit (the whole image, samples from 0), rendered in passes.
+bdpt_adaptive=(--scene cornell-area --integrator bdpt --noise-threshold 0.1 --spp 128 --width 32
+  --height 24 -q)
+"$cli" render "${bdpt_adaptive[@]}" -o "$dir/bdpt_adaptive.pfm"
+"${run_mpi[@]}" -np 3 "$cli" render "${bdpt_adaptive[@]}" --mpi -o "$dir/bdpt_adaptive_mpi.pfm"
+cmp "$dir/bdpt_adaptive.pfm" "$dir/bdpt_adaptive_mpi.pfm" ||
+  fail "bdpt with adaptive sampling on 3 ranks: the image differs"
 # The lab image too (one sample per pixel, tile parts only).
 "$cli" render --width 48 --height 40 -q -o "$dir/lab.png"
 "${run_mpi[@]}" -np 3 "$cli" render --width 48 --height 40 -q --mpi -o "$dir/lab_mpi.png"

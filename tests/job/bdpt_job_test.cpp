@@ -1,8 +1,9 @@
 // `--integrator bdpt` through the render job (every front end's set-up): the job's image is the
 // renderer's with BdptIntegrator called directly, sample-range parts add up to the whole film
 // bit for bit (light tracing's splats included, through partial films and the merge), scene
-// files ask for it by name, and what bdpt cannot do (--clamp; with light tracing --tile,
-// --noise-threshold, other filters) is refused as a usage error rather than rendered wrong.
+// files ask for it by name, --noise-threshold's passes are its one render, and what bdpt cannot
+// do (--clamp; with light tracing --tile, other filters) is refused as a usage error rather than
+// rendered wrong.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -112,15 +113,14 @@ TEST(BdptJob, RefusesClampAsAUsageError) {
   EXPECT_EQ(job.render().image.width(), 24);
 }
 
-// Light tracing's splats land on any pixel: --tile parts, adaptive sampling and filters other
-// than the box are usage errors with bdpt rather than images estimated wrong.
-TEST(BdptJob, RefusesTilePartsAdaptiveSamplingAndOtherFiltersAsUsageErrors) {
+// Light tracing's splats land on any pixel: --tile parts and filters other than the box are
+// usage errors with bdpt rather than images estimated wrong.
+TEST(BdptJob, RefusesTilePartsAndOtherFiltersAsUsageErrors) {
   const struct {
     const char* flag;
     void (*set)(JobSettings&);
   } cases[] = {
       {"--tile", [](JobSettings& s) { s.tile = "0/2"; }},
-      {"--noise-threshold", [](JobSettings& s) { s.noise_threshold = "0.05"; }},
       {"--filter", [](JobSettings& s) { s.filter = "gaussian"; }},
   };
   for (const auto& c : cases) {
@@ -130,6 +130,39 @@ TEST(BdptJob, RefusesTilePartsAdaptiveSamplingAndOtherFiltersAsUsageErrors) {
     EXPECT_EQ(e.subject(), c.flag);
     EXPECT_EQ(e.exit_code(), ExitCode::kUsage);
   }
+}
+
+// --noise-threshold with bdpt through the job: --time-limit's passes (a limit that never ends)
+// give the threshold's one render bit for bit, image and spp AOV, and the record says how many
+// samples a pixel took on average; --spp-range stays a usage error, as for path.
+TEST(BdptJob, NoiseThresholdWithTimeLimitPassesIsTheOneRender) {
+  const auto run = [](JobSettings s) {
+    s.aovs = "spp";
+    RenderJob job(s, load_job_scene(s));
+    job.prepare();
+    return job.render();
+  };
+  JobSettings s = small_bdpt("cornell-area", "128");
+  s.noise_threshold = "0.3";
+  const RenderedImage alone = run(s);
+  EXPECT_EQ(alone.record.noise_threshold, 0.3f);
+  double taken = 0.0;
+  float least = 1e9f;
+  for (const glm::vec3& p : alone.aovs.spp.pixels()) {
+    taken += p.x;
+    least = std::min(least, p.x);
+  }
+  EXPECT_EQ(least, 64.0f);
+  EXPECT_EQ(alone.record.mean_spp, taken / static_cast<double>(alone.aovs.spp.pixels().size()));
+  s.time_limit = "1e6";
+  const RenderedImage passes = run(s);
+  EXPECT_TRUE(same_pixels(passes.image, alone.image));
+  EXPECT_TRUE(same_pixels(passes.aovs.spp, alone.aovs.spp));
+  s.time_limit.clear();
+  s.spp_range = "0:64";
+  const Error e = error_of([&] { RenderJob(s, load_job_scene(s)); });
+  EXPECT_EQ(e.subject(), "--noise-threshold");
+  EXPECT_EQ(e.exit_code(), ExitCode::kUsage);
 }
 
 // --spp-range parts of a bdpt render (light tracing's splats included), written as partial films

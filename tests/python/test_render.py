@@ -267,6 +267,20 @@ def test_noise_threshold_renders_the_clis_adaptive_image(tmp_path):
         tritrace.render(scene, noise_threshold=1.5)
 
 
+def test_bdpt_noise_threshold_renders_the_clis_adaptive_image(tmp_path):
+    # bdpt's light tracing is rendered pass by pass with adaptive sampling (docs/BDPT.md): the
+    # module's image is the CLI's bit for bit, and the spp map shows pixels that went past the
+    # pilot of 64 beside pixels that stopped there.
+    scene = tritrace.Scene.builtin("cornell-area")
+    frame = tritrace.render(scene, integrator="bdpt", width=24, height=16, spp=128,
+                            noise_threshold=0.1, aovs=("spp",))
+    assert frame.integrator == "bdpt" and frame.spp == 128
+    assert frame.spp_map.min() == 64 and frame.spp_map.max() == 128
+    assert_same_bits(frame.image, cli_image(tmp_path, "--scene", "cornell-area", "--integrator",
+                                            "bdpt", "--width", 24, "--height", 16, "--spp", 128,
+                                            "--noise-threshold", 0.1))
+
+
 def test_a_gltfs_spot_and_directional_lights_are_listed_and_render_as_the_clis(tmp_path):
     # tests/data/gltf/plane_lights.gltf: 1366 cd and 683 lux, converted at 683 lm/W (Blender's
     # glTF importer's default) to 2 W/sr and 1 W/m^2 (times the sun's colour (1, 0.5, 0.25)).

@@ -172,14 +172,13 @@ TEST(BdptLightTracing, ImageIsTheSameForThreadsTilesPassesAndFilms) {
 }
 
 // What light tracing cannot estimate is refused, not rendered wrong: tile parts (splats land
-// outside them), adaptive sampling (pixels would take different sample counts) and filters other
-// than the box (the camera density is the box filter's).
-TEST(BdptLightTracing, RendererRefusesTilePartsAdaptiveSamplingAndOtherFilters) {
+// outside them) and filters other than the box (the camera density is the box filter's).
+// (Adaptive sampling is rendered pass by pass: bdpt_adaptive_test.cpp.)
+TEST(BdptLightTracing, RendererRefusesTilePartsAndOtherFilters) {
   const Scene scene = make_cornell_box({.width = 16, .height = 16});
   const BvhAccel accel(scene.mesh, kDefaultKernel);
   const BdptIntegrator bdpt(scene);
   EXPECT_THROW(render(scene, accel, bdpt, {.spp = 8, .tile_part = 0, .tile_parts = 2}), Error);
-  EXPECT_THROW(render(scene, accel, bdpt, {.spp = 64, .noise_threshold = 0.1f}), Error);
   EXPECT_THROW(render(scene, accel, bdpt, {.spp = 8, .filter = FilterKind::kGaussian}), Error);
   Film film(16, 16);
   EXPECT_THROW(

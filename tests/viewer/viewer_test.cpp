@@ -654,6 +654,25 @@ TEST_F(ViewerTest, PathScreenshotsAreTheCliImageAtTheirSamples) {
   EXPECT_NE(ReadFile(turned.path), ReadFile(done.path));
 }
 
+// bdpt with --noise-threshold: its levels are whole images rendered in one part (light tracing
+// splats onto every tile, docs/BDPT.md); the converged level's screenshot is the CLI's adaptive
+// render of its command byte for byte.
+TEST_F(ViewerTest, BdptNoiseThresholdRefinesInWholeLevelsUntilConverged) {
+  ASSERT_NO_FATAL_FAILURE(
+      StartViewer({"--scene", "cornell-area", "--integrator", "bdpt", "--width", "32", "--height",
+                   "24", "--spp", "1024", "--noise-threshold", "0.3", "-q"}));
+  EXPECT_TRUE(WaitForTitle([](const std::string& t) {
+    return t.find("stopped: converged") != std::string::npos;
+  })) << Title()
+      << "; stderr: " << Err();
+  const Shot shot = Screenshot(1);
+  ASSERT_FALSE(shot.command.empty());
+  EXPECT_EQ(Value(shot, "--integrator"), "bdpt");
+  EXPECT_EQ(Value(shot, "--noise-threshold"), "0.3");
+  RenderWithCli(shot.command, "cli.png");
+  EXPECT_EQ(ReadFile(shot.path), ReadFile(work_.path() / "cli.png"));
+}
+
 // With --noise-threshold the resting view is refined in whole adaptive images of 128, 256, ...
 // spp, each a few tiles a frame, until a level stops every pixel before its end: the title says
 // "stopped: converged", and the screenshot's command (with --noise-threshold and the level's spp)

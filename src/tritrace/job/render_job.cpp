@@ -56,12 +56,6 @@ void check_light_tracing(const JobSettings& settings, const Camera& camera) {
                 "its image; split a bdpt render with --spp-range",
                 ExitCode::kUsage);
   }
-  if (!settings.noise_threshold.empty()) {
-    throw Error("--noise-threshold",
-                "bdpt's light tracing estimates every pixel from all pixels' samples, so pixels "
-                "cannot stop apart",
-                ExitCode::kUsage);
-  }
   if (filter_choice(settings) != FilterKind::kBox) {
     throw Error("--filter", "bdpt's light tracing has the camera's density for the box filter only",
                 ExitCode::kUsage);
@@ -336,9 +330,13 @@ void RenderJob::set_up() {
                 ExitCode::kUsage);
   }
   if (!settings_.noise_threshold.empty() && !settings_.spp_range.empty()) {
+    // bdpt's light tracing cannot be split into tiles either (check_light_tracing).
+    const bool bdpt = spec_.kind == IntegratorSpec::Kind::kBdpt;
     throw Error("--noise-threshold",
-                "decides per pixel from all its samples [0, spp), so a sample range cannot be "
-                "rendered apart; split the image with --tile instead of --spp-range",
+                std::string("decides per pixel from all its samples [0, spp), so a sample range "
+                            "cannot be rendered apart; ") +
+                    (bdpt ? "with bdpt, render the whole image in one go"
+                          : "split the image with --tile instead of --spp-range"),
                 ExitCode::kUsage);
   }
   if (spec_.kind == IntegratorSpec::Kind::kBdpt) {

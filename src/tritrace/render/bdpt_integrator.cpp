@@ -308,6 +308,24 @@ bool project(const Camera& camera, glm::vec3 eye, glm::vec3 w, int& x, int& y) {
   return true;
 }
 
+// A light-tracing splat's value in its pixel's light image: with adaptive sampling a pass's splats
+// onto a pixel are an estimate over count_ratio P m light subpaths (P pixels, m samples each in
+// the pass) rather than P m, so they weigh 1 / count_ratio, and the pixel's resolve (the sum over
+// its own sample count) is then the sample-weighted mean of its passes' estimates (docs/BDPT.md,
+// "Adaptive sampling"). count_ratio is 1 without adaptive sampling: the splat is unchanged.
+glm::vec3 splat_value(glm::vec3 term, float count_ratio) {
+  return term / count_ratio;
+}
+
+// The camera's density as the MIS weights count it against light tracing's: divided by the pixel's
+// count ratio (light subpaths per camera sample, over the image's pixels; SplatPass::count_ratio),
+// which multiplies light tracing's strategies by the ratio against the camera's (Veach 1997,
+// sec. 9.2: the heuristics weigh each strategy's density by its sample count). Where every
+// pixel takes every sample the ratio is 1 and the density is camera_pdf's, bit for bit.
+float light_tracing_camera_pdf(float pdf, float count_ratio) {
+  return pdf / count_ratio;
+}
+
 // Per thread: the two subpaths. They grow (doubling) as long subpaths need, up to the depth limit,
 // rather than to it at once: --max-depth 65536 would otherwise take tens of megabytes per thread.
 inline constexpr size_t kInitialSubpathVertices = 16;
@@ -333,6 +351,9 @@ class BdptTracer {
   // `camera_hit` is the camera ray's first hit (the batch's camera rays are traced together).
   glm::vec3 sample(const Ray& camera_ray, const Hit& camera_hit, Sampler& sampler,
                    SplatBuffer* splats);
+  // Adaptive sampling's pass (SplatPass; null: every pixel takes every sample) and the pixel of
+  // the next sample, set before sample().
+  void set_pass(const SplatPass* pass, uint32_t pixel);
   uint64_t traced() const { return traced_; }
   // The albedo and normal AOVs of the last sample's camera subpath, as the path tracer writes them
   // (path_integrator.cpp): those of the first surface that is not specular, seen through perfect
@@ -362,7 +383,7 @@ class BdptTracer {
   // Queues connection (s, t) with its unweighted contribution (t = 1: onto pixel (px, py)) and
   // its shadow ray, if it needs one; flushes the queue when full.
   void queue(int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray, int px = 0,
-             int py = 0);
+             int py = 0, float count_ratio = 1.0f);
   // Traces the queued shadow rays in one batch query and adds the unblocked connections, weighted,
   // in the order they were queued (the sums are those of one connection at a time, bit for bit).
   void flush();
@@ -383,16 +404,24 @@ class BdptTracer {
                (z / cam.focus_distance());
   }
   // The weight of a queued connection: mis_weight, with the camera vertex moved to the lens point
-  // of light tracing's connection to an orthographic camera with a lens.
-  float connection_weight(int s, int t);
+  // of light tracing's connection to an orthographic camera with a lens; `ratio` as mis_weight's.
+  float connection_weight(int s, int t, float ratio);
   // The MIS weights' partial sums (Vertex::mis_sum) along both subpaths, once per sample.
   void prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) const;
   // The weight of strategy (s, t): O(1) from the partial sums (with the settings' weight_check,
   // also compared with mis_weight_walk).
-  float mis_weight(Vertex* light, Vertex* camera, int s, int t) const;
-  float mis_weight_recursive(const Vertex* light, const Vertex* camera, int s, int t) const;
-  // The ratio walk over the whole path that the recursion replaced: the tests' oracle.
-  float mis_weight_walk(Vertex* light, Vertex* camera, int s, int t) const;
+  // `ratio` is the light-tracing count ratio (count_ratio below) of the path's pixel: the splat's
+  // pixel for t = 1, the sample's own otherwise (where the recursion has it already, in the
+  // camera's density at camera vertex 1).
+  float mis_weight(Vertex* light, Vertex* camera, int s, int t, float ratio) const;
+  float mis_weight_recursive(const Vertex* light, const Vertex* camera, int s, int t,
+                             float ratio) const;
+  // The ratio walk over the whole path that the recursion replaced: the tests' oracle. It applies
+  // the count ratio as a factor of light tracing's strategies (not through the densities).
+  float mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, float ratio) const;
+  // Light tracing's count ratio at pixel (x, y) for the MIS weights (SplatPass::count_ratio,
+  // times the tests' BdptSettings::mis_count_scale).
+  float mis_count_ratio(int x, int y) const;
   // The heuristic's ratio of two strategies' densities across one vertex: (rev / fwd)^2 for the
   // power heuristic; a zero density (delta scattering, stored as 0) counts as 1.
   float density_ratio(float rev, float fwd) const {
@@ -416,17 +445,27 @@ class BdptTracer {
   SplatBuffer* splats_ = nullptr;
   float u_round_ = 0.0f;
   glm::vec2 lens_offset_{0.0f};  // an orthographic camera's lens offset for light tracing
+  // Adaptive sampling's pass, the sample's pixel and its count ratio for the weights.
+  const SplatPass* pass_ = nullptr;
+  uint32_t pixel_ = 0;
+  float pixel_ratio_ = 1.0f;
   // Connections waiting for their shadow rays.
   struct Pending {
     glm::vec3 contribution{0.0f};  // unweighted, if unblocked
     int s = 0, t = 0;
     int ray = -1;  // into rays_; -1: no shadow ray
     int px = 0, py = 0;
+    float count_ratio = 1.0f;  // t = 1: the splat's pixel's (SplatPass::count_ratio)
   };
   static constexpr int kMaxPending = 64;
   std::array<Pending, kMaxPending> pending_{};
   std::array<Ray, kMaxPending> rays_{};
   std::array<uint8_t, kMaxPending> blocked_{};
+  // The MIS weight of a queued connection, with its pixel's count ratio.
+  float weight_of(const Pending& p) {
+    return connection_weight(
+        p.s, p.t, p.t == 1 ? p.count_ratio * it_.settings_.mis_count_scale : pixel_ratio_);
+  }
   int pending_count_ = 0;
   int ray_count_ = 0;
   int camera_count_ = 0;
@@ -767,7 +806,7 @@ bool BdptTracer::camera_shadow_ray(const Vertex& l, glm::vec3 eye, Ray& r) const
 }
 
 void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray, int px,
-                       int py) {
+                       int py, float count_ratio) {
   if (pending_count_ == kMaxPending) flush();
   Pending& p = pending_[static_cast<size_t>(pending_count_++)];
   p.contribution = contribution;
@@ -775,6 +814,7 @@ void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const
   p.t = t;
   p.px = px;
   p.py = py;
+  p.count_ratio = count_ratio;
   p.ray = -1;
   if (has_ray) {
     p.ray = ray_count_;
@@ -793,13 +833,13 @@ void BdptTracer::flush() {
   for (int k = 0; k < pending_count_; ++k) {
     const Pending& p = pending_[static_cast<size_t>(k)];
     if (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)]) continue;
-    const float weight = unweighted ? 1.0f : connection_weight(p.s, p.t);
+    const float weight = unweighted ? 1.0f : weight_of(p);
     const glm::vec3 term = p.contribution * weight;
     // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
     // dropped rather than let a NaN or infinity into the pixel.
     if (!std::isfinite(term.x + term.y + term.z)) continue;
     if (p.t == 1) {
-      splats_->add(p.px, p.py, term, u_round_);
+      splats_->add(p.px, p.py, splat_value(term, p.count_ratio), u_round_);
       // Each further splat shifts the rounding's number by the golden ratio: each stays uniform.
       u_round_ += 0.618034f;
       if (u_round_ >= 1.0f) u_round_ -= 1.0f;
@@ -815,7 +855,7 @@ void BdptTracer::flush() {
 // connection one vertex multiplies the strategy's density by pdf_rev / pdf_fwd of the vertex that
 // changes sides. The connection's four neighbouring pdf_rev values are set for this path and
 // restored afterwards.
-float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t) const {
+float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, float ratio) const {
   if (s + t == 2) return 1.0f;  // an emitter seen by the camera: (1, 1) is not a strategy here
   const bool balance = it_.settings_.balance;
   const auto remap = [balance](float f) { return f != 0.0f ? (balance ? f : f * f) : 1.0f; };
@@ -856,11 +896,19 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t) c
   // tracing, a strategy only with it on and with at least two light vertices ((1, 1), an emitter
   // seen by the camera, is left to (0, 2)).
   const int last_i = it_.settings_.light_tracing && s + t >= 3 ? 1 : 2;
+  // Light tracing takes `ratio` light subpaths per camera sample of the pixel (adaptive sampling;
+  // 1 otherwise): its strategies' densities count `ratio` times, against the camera's own
+  // density at vertex 1 (stored divided by the ratio for the recursion, undone here).
   for (int i = t - 1; i >= last_i; --i) {
-    r *= remap(camera[i].pdf_rev) / remap(camera[i].pdf_fwd);
+    if (i == 1) {
+      r *= remap(camera[1].pdf_rev) / remap(camera[1].pdf_fwd * ratio) * remap(ratio);
+    } else {
+      r *= remap(camera[i].pdf_rev) / remap(camera[i].pdf_fwd);
+    }
     if (!camera[i].delta && !camera[i - 1].delta) sum += r;
   }
-  r = 1.0f;
+  // From light tracing (t = 1) every strategy on the light side is one of the camera's.
+  r = t == 1 ? 1.0f / remap(ratio) : 1.0f;
   for (int i = s - 1; i >= 0; --i) {
     r *= remap(light[i].pdf_rev) / remap(light[i].pdf_fwd);
     const bool delta_light_side = i > 0 ? light[i - 1].delta : delta_light(light[0]);
@@ -915,8 +963,8 @@ void BdptTracer::prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) 
   }
 }
 
-float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera, int s,
-                                       int t) const {
+float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera, int s, int t,
+                                       float ratio) const {
   if (s + t == 2) return 1.0f;  // an emitter seen by the camera: (1, 1) is not a strategy here
   const Vertex& pt = camera[t - 1];
   const Vertex* qs = s > 0 ? &light[s - 1] : nullptr;
@@ -924,7 +972,7 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
   // The four densities that depend on the connection, as the walk sets them.
   float pt_rev = 0.0f, pt_minus_rev = 0.0f, qs_rev = 0.0f, qs_minus_rev = 0.0f;
   if (t == 1) {
-    qs_rev = camera_area_pdf(pt, *qs);
+    qs_rev = light_tracing_camera_pdf(camera_area_pdf(pt, *qs), ratio);
     if (qs_minus != nullptr) qs_minus_rev = pdf_area(*qs, &pt, *qs_minus);
   } else {
     const Vertex& pt_minus = camera[t - 2];
@@ -970,10 +1018,10 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
   return 1.0f / (1.0f + sum);
 }
 
-float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const {
-  const float w = mis_weight_recursive(light, camera, s, t);
+float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t, float ratio) const {
+  const float w = mis_weight_recursive(light, camera, s, t, ratio);
   if (BdptSettings::WeightCheck* check = it_.settings_.weight_check) {
-    const float walked = mis_weight_walk(light, camera, s, t);
+    const float walked = mis_weight_walk(light, camera, s, t, ratio);
     // A NaN from either, but not both, is a difference that no tolerance passes.
     const double difference =
         std::isnan(w) && std::isnan(walked) ? 0.0 : std::abs(static_cast<double>(w) - walked);
@@ -984,12 +1032,23 @@ float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const 
   return w;
 }
 
-float BdptTracer::connection_weight(int s, int t) {
-  if (t != 1 || !scene_.camera.is_orthographic()) return mis_weight(light_, camera_, s, t);
+float BdptTracer::mis_count_ratio(int x, int y) const {
+  return (pass_ ? pass_->count_ratio(x, y) : 1.0f) * it_.settings_.mis_count_scale;
+}
+
+void BdptTracer::set_pass(const SplatPass* pass, uint32_t pixel) {
+  pass_ = pass;
+  pixel_ = pixel;
+  const uint32_t width = pass ? static_cast<uint32_t>(pass->width) : 1;
+  pixel_ratio_ = mis_count_ratio(static_cast<int>(pixel % width), static_cast<int>(pixel / width));
+}
+
+float BdptTracer::connection_weight(int s, int t, float ratio) {
+  if (t != 1 || !scene_.camera.is_orthographic()) return mis_weight(light_, camera_, s, t, ratio);
   Vertex& eye = camera_[0];
   const glm::vec3 saved = eye.p;
   eye.p = ortho_lens_point(light_[s - 1].p);
-  const float w = mis_weight(light_, camera_, s, t);
+  const float w = mis_weight(light_, camera_, s, t, ratio);
   eye.p = saved;
   return w;
 }
@@ -1013,6 +1072,9 @@ void BdptTracer::splat_light_subpath(int nl) {
     const glm::vec3 w = d * (1.0f / std::sqrt(dist2));  // from qs towards the camera
     int px = 0, py = 0;
     if (!project(cam, eye, -w, px, py)) continue;
+    // Adaptive sampling: not onto a pixel finished before this pass, nor in the pilot onto a
+    // neighbour whose budget this sample's pixel helps set (SplatPass::keeps).
+    if (pass_ && !pass_->keeps(pixel_, px, py)) continue;
     const glm::vec3 f_light = surface_f(qs, w, qs.wo);
     if (!(max_component(f_light) > 0.0f)) continue;
     const float g = std::abs(glm::dot(qs.ng, w)) / dist2;
@@ -1020,7 +1082,7 @@ void BdptTracer::splat_light_subpath(int nl) {
     if (!(max_component(contribution) > 0.0f)) continue;
     Ray ray;
     const bool has_ray = camera_shadow_ray(qs, eye, ray);
-    queue(s, 1, contribution, has_ray, ray, px, py);
+    queue(s, 1, contribution, has_ray, ray, px, py, pass_ ? pass_->count_ratio(px, py) : 1.0f);
   }
 }
 
@@ -1046,14 +1108,18 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, const Hit& camera_hit, Sampl
   // The camera's density of the ray: the first camera vertex's pdf_fwd, read by the weights of
   // light tracing (1 stands for it without).
   const float camera_dir_pdf =
-      settings.light_tracing ? camera_pdf(scene_.camera, glm::normalize(camera_ray.dir)) : 1.0f;
+      settings.light_tracing
+          ? light_tracing_camera_pdf(camera_pdf(scene_.camera, glm::normalize(camera_ray.dir)),
+                                     pixel_ratio_)
+          : 1.0f;
   const int nc = walk(sub.camera, 1, max_camera, camera_ray, glm::vec3(1.0f), camera_dir_pdf, false,
                       sampler, &camera_hit);
   camera_count_ = nc;
   if (settings.light_tracing && scene_.camera.is_orthographic() && nc >= 2 &&
       !infinite(sub.camera[1])) {
     // An orthographic lens's density depends on the distance to the first hit (ortho_lens_pdf).
-    sub.camera[1].pdf_fwd = camera_area_pdf(sub.camera[0], sub.camera[1]);
+    sub.camera[1].pdf_fwd =
+        light_tracing_camera_pdf(camera_area_pdf(sub.camera[0], sub.camera[1]), pixel_ratio_);
   }
   const int nl = light_subpath(sub.light, max_light, sampler);
   // The subpaths no longer grow: plain pointers from here.
@@ -1294,6 +1360,7 @@ uint64_t BdptIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
   std::array<Hit, kMaxBatch> first_hits;
   accel.intersect(batch.rays, std::span<Hit>(first_hits.data(), n));
   for (size_t i = 0; i < n; ++i) {
+    tracer.set_pass(out.pass, out.pass ? batch.pixels[i] : 0);
     out.radiance[i] = tracer.sample(batch.rays[i], first_hits[i], batch.samplers[i], out.splats);
     if (!out.albedo.empty() || !out.normal.empty()) {
       glm::vec3 albedo, normal;

@@ -47,6 +47,10 @@ struct BdptSettings {
     uint64_t count = 0;
   };
   WeightCheck* weight_check = nullptr;
+  // For tests: multiplies the light-tracing count ratio that the MIS weights use (not the
+  // splats' normalisation), so that a test can render with ratios other than 1 and check that the
+  // weights stay a partition of unity (the image mean does not move).
+  float mis_count_scale = 1.0f;
 };
 
 // Why bdpt cannot render `scene` correctly yet (empty when it can): the caller refuses it.

@@ -65,10 +65,13 @@ Image Film::resolve() const {
     for (int x = 0; x < width_; ++x) image.at(x, y) = resolve_pixel(pixel_sums(x, y));
   }
   if (has_splats()) {
-    const uint32_t spp = end_ - first_;
+    // The pixel's own sample count: its weight, as splatting needs the box filter (weight 1 per
+    // sample). That is end - first for every pixel unless adaptive sampling stopped it early.
     for (int y = 0; y < height_; ++y) {
-      for (int x = 0; x < width_; ++x)
-        image.at(x, y) = add_splats(image.at(x, y), splats_.raw(x, y), spp);
+      for (int x = 0; x < width_; ++x) {
+        const auto samples = static_cast<uint32_t>(pixel_sums(x, y).w);
+        image.at(x, y) = add_splats(image.at(x, y), splats_.raw(x, y), samples);
+      }
     }
   }
   return image;

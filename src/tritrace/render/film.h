@@ -98,10 +98,12 @@ class SplatBuffer {
 };
 
 // A pixel's resolved value with its light image: the mean of its own samples plus the light
-// image's sum over the samples per pixel that all pixels took, spp (every light subpath starts
-// from one camera sample, so the light image's estimate divides by the light subpaths per pixel;
-// docs/BDPT.md). The one formula for Film::resolve and the renderer's direct-to-image path, so
-// that both give the same bits.
+// image's sum over the samples the pixel took, spp (every light subpath starts from one camera
+// sample, so the light image's estimate divides by the light subpaths per pixel; with adaptive
+// sampling each pass's splats are already scaled by its count ratio, so that the sum over the
+// pixel's count is the sample-weighted mean of its passes' estimates; docs/BDPT.md). The one
+// formula for Film::resolve and the renderer's direct-to-image path, so that both give the same
+// bits.
 inline glm::vec3 add_splats(glm::vec3 mean, const uint64_t* sums, uint32_t spp) {
   if (spp == 0) return mean;
   const double scale = SplatBuffer::kSplatUnit / static_cast<double>(spp);

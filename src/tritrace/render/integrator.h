@@ -10,6 +10,7 @@
 #include "tritrace/accel/accel.h"
 #include "tritrace/render/film.h"
 #include "tritrace/render/sampler.h"
+#include "tritrace/render/splat_pass.h"
 #include "tritrace/scene/scene.h"
 
 namespace tritrace {
@@ -21,6 +22,9 @@ inline constexpr size_t kMaxBatch = 256;
 struct SampleBatch {
   std::span<const Ray> rays{};
   std::span<Sampler> samplers{};
+  // pixels[i] is sample i's pixel (y * width + x); given to integrators that splat (may be empty
+  // for others).
+  std::span<const uint32_t> pixels{};
 };
 
 // Where an integrator writes: radiance always; the AOVs when their spans are not empty: albedo and
@@ -35,6 +39,9 @@ struct SampleOutput {
   // The film's light image, for integrators whose splats() is true (never null for them): the
   // contributions that land on other pixels (Integrator::splats).
   SplatBuffer* splats = nullptr;
+  // With adaptive sampling, the pass's light-tracing counts (SplatPass); null when every pixel
+  // takes every sample.
+  const SplatPass* pass = nullptr;
 };
 
 // Fills out's AOV spans (those not empty) from the camera rays' first hits: the hit material's
@@ -53,10 +60,10 @@ class Integrator {
 
   // True for an integrator that also adds to other pixels than the sample's own (bdpt's light
   // tracing): the renderer then gives it the film's SplatBuffer in SampleOutput::splats, and the
-  // image is each pixel's mean plus the light image over the samples per pixel. Such
-  // contributions are estimates over every pixel's samples together, so they need every pixel to
-  // take the same samples with the box filter: the renderer refuses adaptive sampling, tile parts
-  // and other filters with them.
+  // image is each pixel's mean plus the light image over the pixel's sample count. Such
+  // contributions are estimates over every pixel's samples together: the renderer refuses tile
+  // parts and filters other than the box with them, and renders adaptive sampling pass by pass
+  // with each pass's counts in SampleOutput::pass.
   virtual bool splats() const { return false; }
 
   // out.radiance.size() == batch.rays.size() <= kMaxBatch. Returns the number of rays traced

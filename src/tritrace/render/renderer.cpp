@@ -115,7 +115,7 @@ template <typename Target>
 void render_tiles(const Scene& scene, const Accel& accel, const Integrator& integrator,
                   const RenderOptions& options, const AovSet& aovs,
                   const BlockCounter& nodes_before, uint32_t first, uint32_t spp, Target& target,
-                  SplatBuffer* splats, RenderStats* stats) {
+                  SplatBuffer* splats, const SplatPass* splat_pass, RenderStats* stats) {
   const Camera& camera = scene.camera;
   const int width = camera.width();
   const int height = camera.height();
@@ -167,6 +167,7 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
     thread_local std::array<uint32_t, kMaxBatch> budget;       // 0: not yet set
     thread_local std::array<uint16_t, kMaxBatch> slot_xy;      // slot of tile pixel (x, y)
     thread_local std::array<uint16_t, kMaxBatch> slot_of;
+    thread_local std::array<uint32_t, kMaxBatch> pixel_of;  // sample i's pixel, for splats
     uint64_t traced = 0, taken = 0;
     bool rendered = false;
     for (int k = next_tile.fetch_add(1, std::memory_order_relaxed); k < tiles_total;
@@ -219,6 +220,8 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
                 batch[n] = lens ? camera.lens_ray(px, py, sampler.get_lens_2d())
                                 : camera.ray_through(px, py);
                 weight[n] = f.weight;
+                pixel_of[n] = static_cast<uint32_t>(y) * static_cast<uint32_t>(width) +
+                              static_cast<uint32_t>(x);
                 ++n;
               }
             }
@@ -230,12 +233,16 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
         const bool all = count == pixels;
         const auto slot_at = [&](size_t i) -> size_t { return all ? i : slot_of[i]; };
         const SampleBatch in{std::span<const Ray>(batch.data(), count),
-                             corner ? std::span<Sampler>() : std::span(samplers).first(count)};
+                             corner ? std::span<Sampler>() : std::span(samplers).first(count),
+                             corner ? std::span<const uint32_t>()
+                                    : std::span<const uint32_t>(pixel_of).first(count)};
         const SampleOutput out{
             std::span(radiance).first(count),
             aovs.albedo ? std::span(albedo).first(count) : std::span<glm::vec3>(),
             aovs.normal ? std::span(normal).first(count) : std::span<glm::vec3>(),
-            aovs.depth ? std::span(depth).first(count) : std::span<float>(), splats};
+            aovs.depth ? std::span(depth).first(count) : std::span<float>(),
+            splats,
+            splat_pass};
         if (count > 0) traced += integrator.radiance(in, out, scene, accel);
         // The same block order as the rays: sample i of the batch is slot i.
         glm::vec4* open = slots.slot(counter.size());
@@ -448,21 +455,15 @@ void check_splats(const Integrator& integrator, const RenderOptions& options) {
     throw Error("render",
                 "light tracing (bdpt) splats onto every pixel; a tile part cannot hold them");
   }
-  if (options.noise_threshold > 0.0f) {
-    throw Error("render",
-                "light tracing (bdpt) estimates every pixel from all pixels' samples; adaptive "
-                "sampling would change their count per pixel");
-  }
   if (options.filter != FilterKind::kBox) {
     throw Error("render", "light tracing (bdpt) has the camera's density for the box filter only");
   }
 }
 
-}  // namespace
-
-void render_to_film(const Scene& scene, const Accel& accel, const Integrator& integrator,
-                    Film& film, const RenderOptions& options, RenderStats* stats) {
-  check_splats(integrator, options);
+// render_to_film's work for samples that need no split into passes (below).
+void render_film_samples(const Scene& scene, const Accel& accel, const Integrator& integrator,
+                         Film& film, const RenderOptions& options, const SplatPass* splat_pass,
+                         RenderStats* stats) {
   const bool corner = integrator.pixel_corner_only();
   const uint32_t first = corner ? 0 : options.first_sample;
   const uint32_t spp = corner ? 1 : options.spp;
@@ -502,10 +503,82 @@ void render_to_film(const Scene& scene, const Accel& accel, const Integrator& in
   FilmTarget target{film, old_layers};
   if (integrator.splats()) film.enable_splats();
   render_tiles(scene, accel, integrator, options, film.aovs(), start, first, spp, target,
-               integrator.splats() ? &film.splats() : nullptr, stats);
+               integrator.splats() ? &film.splats() : nullptr, splat_pass, stats);
   if (state) state->end_sample = first + spp;
   film.set_layout(film.first_sample(), first + spp,
                   std::vector<BlockNode>(after.nodes().begin(), after.nodes().end()));
+}
+
+// The end of adaptive sampling's pass that sample `s` belongs to: the pilot [0, P), then
+// [P 2^(k - 1), P 2^k) (P = kAdaptivePilotSpp), the counts at which budgets end, so that every
+// pixel takes all of a pass's samples or none.
+uint32_t adaptive_pass_end(uint32_t s) {
+  uint32_t end = kAdaptivePilotSpp;
+  while (end <= s && end < kAdaptiveMostBudget) end *= 2;
+  return end;
+}
+
+// Adaptive sampling with an integrator that splats: a pixel's light image is an estimate over
+// the light subpaths of every pixel that takes samples with it, so the samples are rendered pass
+// by pass (adaptive_pass_end), the whole image's pilot before any budget is used, and each pass
+// gets the counts of the pixels that take it (SplatPass; docs/BDPT.md, "Adaptive sampling").
+// Passes continue the film and the state exactly as --time-limit's passes do, so the image is
+// the same bits as one pass would give.
+void render_film_in_passes(const Scene& scene, const Accel& accel, const Integrator& integrator,
+                           Film& film, const RenderOptions& options, RenderStats* stats) {
+  AdaptiveState own;
+  RenderOptions pass = options;
+  if (!pass.adaptive_state) pass.adaptive_state = &own;
+  const AdaptiveState& state = *pass.adaptive_state;
+  const size_t pixels = static_cast<size_t>(film.width()) * static_cast<size_t>(film.height());
+  std::vector<uint8_t> active;
+  RenderStats total;
+  const uint32_t end = options.first_sample + options.spp;
+  for (uint32_t at = options.first_sample; at < end;) {
+    const uint32_t stop = std::min(end, adaptive_pass_end(at));
+    SplatPass counts{.width = film.width(),
+                     .height = film.height(),
+                     .tile = kPartTileSize,
+                     .radius = kAdaptiveRadius,
+                     .pilot = at < kAdaptivePilotSpp};
+    if (!counts.pilot) {
+      // Every budget is set (the pilot is complete): the pixels whose budget goes past `at`.
+      active.assign(pixels, 0);
+      size_t taking = 0;
+      for (size_t p = 0; p < pixels; ++p) {
+        active[p] = state.budget[p] == 0 || at < state.budget[p];
+        taking += active[p];
+      }
+      counts.active = active.data();
+      counts.active_share =
+          static_cast<float>(static_cast<double>(taking) / static_cast<double>(pixels));
+    }
+    pass.first_sample = at;
+    pass.spp = stop - at;
+    RenderStats one;
+    render_film_samples(scene, accel, integrator, film, pass, &counts, &one);
+    total.milliseconds += one.milliseconds;
+    total.rays += one.rays;
+    total.samples += one.samples;
+    total.pixels = one.pixels;
+    total.threads = std::max(total.threads, one.threads);
+    at = stop;
+  }
+  total.spp = options.spp;
+  if (stats) *stats = total;
+}
+
+}  // namespace
+
+void render_to_film(const Scene& scene, const Accel& accel, const Integrator& integrator,
+                    Film& film, const RenderOptions& options, RenderStats* stats) {
+  check_splats(integrator, options);
+  if (integrator.splats() && options.noise_threshold > 0.0f && !integrator.pixel_corner_only() &&
+      options.spp > 0) {
+    render_film_in_passes(scene, accel, integrator, film, options, stats);
+  } else {
+    render_film_samples(scene, accel, integrator, film, options, nullptr, stats);
+  }
 }
 
 Image render(const Scene& scene, const Accel& accel, const Integrator& integrator,
@@ -521,6 +594,14 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
                               std::to_string(first));
   }
   check_splats(integrator, options);
+  if (integrator.splats() && options.noise_threshold > 0.0f && !corner) {
+    // Pass by pass through a film (render_film_in_passes), resolved as Film::resolve does.
+    Film film(scene.camera.width(), scene.camera.height());
+    RenderOptions one_go = options;
+    one_go.adaptive_state = nullptr;
+    render_to_film(scene, accel, integrator, film, one_go, stats);
+    return film.resolve();
+  }
   Image image(scene.camera.width(), scene.camera.height());
   ImageTarget target{image};
   RenderOptions one_go = options;
@@ -528,7 +609,8 @@ Image render(const Scene& scene, const Accel& accel, const Integrator& integrato
   SplatBuffer splats;
   if (integrator.splats()) splats = SplatBuffer(image.width(), image.height());
   render_tiles(scene, accel, integrator, one_go, AovSet{}, BlockCounter(), first,
-               corner ? 1 : options.spp, target, integrator.splats() ? &splats : nullptr, stats);
+               corner ? 1 : options.spp, target, integrator.splats() ? &splats : nullptr, nullptr,
+               stats);
   if (integrator.splats()) {
     // What Film::resolve adds, in the same operations.
     for (int y = 0; y < image.height(); ++y) {
