@@ -52,11 +52,11 @@ SANITIZE_FLAGS = -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRITRACE_BUILD_BENCH=OFF -D
 # under ASan in the watertight kernel's instances, each kernel in the SAH-built tree's), twelve of
 # bdpt's long statistical agreements whose code paths other tests run under ASan (the other bdpt
 # tests, instanced renders, glTF normal maps, the path tracer's textures; for spot and directional
-# lights, lenses and orthographic cameras the weight tests and light tracing onto a plane), bdpt's two statistical
-# tests of adaptive sampling (its bit comparisons and weight walk stay), the coherent-packet
-# comparisons of the inverse and Moller-Trumbore kernels (Cramer's and the watertight one's stay),
-# the brute-force accel's allocation count (the BVH's stays) and the slow render without a
-# terminal (its twin on a terminal stays). All of them run in `make test`.
+# lights, lenses and orthographic cameras the weight tests and light tracing onto a plane), bdpt's
+# two statistical tests of adaptive sampling (its bit comparisons and weight walk stay), the
+# coherent-packet comparisons of the inverse and Moller-Trumbore kernels (Cramer's and the
+# watertight one's stay), the brute-force accel's allocation count (the BVH's stays) and the slow
+# render without a terminal (its twin on a terminal stays). All of them run in `make test`.
 # One group of alternatives and one end anchor (a parameterised test's name is followed by
 # '  # GetParam()'): CMake's regular expressions allow at most ten groups and match nothing past
 # that, which would silently exclude nothing.
