@@ -10,6 +10,11 @@ reference's and against the noisy image's, and the fraction of 16 x 16 blocks wh
 within 3% of the reference's (all three channels). Writes small sRGB PNGs (noisy 16 spp,
 denoised 16 spp, reference) for the docs.
 
+With --seeds (e.g. 0-7) it also checks the cornell-area goal seed by seed: 16 spp denoised
+against 256 spp not denoised, both with each --seed, the relMSE split into the pixels within 2 of
+the light's boundary (the light seen directly: the reference's pixels brighter than 5, and the
+pixels they touch) and the rest, and the denoised image's mean against the noisy one's.
+
 Images are written as .pfm (trivial to read with numpy; no OpenEXR bindings needed). Renders
 that already exist in --out are reused unless --force is given, so the expensive references are
 rendered once.
@@ -100,6 +105,48 @@ def render(args, tritrace, scene_args, spp, seed, out, extra=()):
     return time.monotonic() - start
 
 
+def dilate(mask, steps):
+    for _ in range(steps):
+        grown = mask.copy()
+        grown[1:] |= mask[:-1]
+        grown[:-1] |= mask[1:]
+        grown[:, 1:] |= mask[:, :-1]
+        grown[:, :-1] |= mask[:, 1:]
+        mask = grown
+    return mask
+
+
+def seed_table(args):
+    """The cornell-area goal per seed, with the relMSE split at the light's boundary."""
+    first, _, last = args.seeds.partition("-")
+    seeds = range(int(first), int(last or first) + 1)
+    scene_args, _ = SCENES["cornell-area"]
+    path = lambda tag: os.path.join(args.out, f"cornell-area_{tag}.pfm")  # noqa: E731
+    render(args, args.tritrace, scene_args, args.ref_spp, REF_SEED, path(f"ref{args.ref_spp}"))
+    ref = read_pfm(path(f"ref{args.ref_spp}"))
+    light = ref.mean(axis=2) > 5.0
+    boundary = dilate(light, 2) & ~(light & ~dilate(~light, 2))
+    print("| seed | 16 spp denoised | of which within 2 px of the light's boundary | rest "
+          "| 256 spp not denoised | of which at the boundary | goal | denoised mean / noisy mean |")
+    print("|---|---|---|---|---|---|---|---|")
+    met = 0
+    for seed in seeds:
+        render(args, args.tritrace, scene_args, 16, seed, path(f"s{seed}_16"))
+        render(args, args.tritrace, scene_args, 16, seed, path(f"s{seed}_16d"), ["--denoise"])
+        render(args, args.tritrace, scene_args, 256, seed, path(f"s{seed}_256"))
+        noisy, den, long_img = (read_pfm(path(f"s{seed}_{t}")) for t in ("16", "16d", "256"))
+        e_den = ((den - ref) ** 2 / (ref ** 2 + 0.01)).mean(axis=2)
+        e_long = ((long_img - ref) ** 2 / (ref ** 2 + 0.01)).mean(axis=2)
+        n = e_den.size
+        ok = e_den.mean() < e_long.mean()
+        met += ok
+        print(f"| {seed} | {e_den.mean():.6f} | {e_den[boundary].sum() / n:.6f} "
+              f"| {e_den[~boundary].sum() / n:.6f} | {e_long.mean():.6f} "
+              f"| {e_long[boundary].sum() / n:.6f} | {'met' if ok else 'missed'} "
+              f"| {den.mean() / noisy.mean():.5f} |")
+    print(f"\ngoal met on {met} of {len(seeds)} seeds ({int(boundary.sum())} boundary pixels)\n")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--tritrace", default=os.path.join(ROOT, "build", "tritrace"))
@@ -112,10 +159,19 @@ def main():
     parser.add_argument("--threads", type=int, default=0)
     parser.add_argument("--png-dir", default="", help="write noisy/denoised/reference PNGs here")
     parser.add_argument("--force", action="store_true", help="render again what exists")
+    parser.add_argument("--seeds", default="",
+                        help="also the cornell-area goal per seed, e.g. 0-7 (renders 16 spp "
+                        "denoised and 256 spp per seed)")
+    parser.add_argument("--only-seeds", action="store_true",
+                        help="with --seeds: skip the scene table")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
     spps = [int(s) for s in args.spps.split(",")]
 
+    if args.seeds:
+        seed_table(args)
+        if args.only_seeds:
+            return
     rows = []
     for name in args.scenes.split(","):
         scene_args, long_spp = SCENES[name]

@@ -73,7 +73,7 @@ void add_scene_flags(CLI::App& app, JobSettings& flags) {
       ->type_name("X,Y,Z")
       ->check(rule("--light"));
   app.add_option("--aperture", flags.aperture,
-                 "Thin-lens depth of field for path: the lens radius in world units "
+                 "Thin-lens depth of field for path and bdpt: the lens radius in world units "
                  "(default: the scene's, 0, a pinhole)")
       ->type_name("R")
       ->check(rule("--aperture"));

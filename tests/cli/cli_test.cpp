@@ -601,19 +601,13 @@ INSTANTIATE_TEST_SUITE_P(
         ErrorCase{"ExposureNaN", {"--exposure", "nan"}, 2, "--exposure", kFinite},
         ErrorCase{"ExposureBeyondFloat", {"--exposure", "1e39"}, 2, "--exposure", kFinite},
         ErrorCase{"ExposureNotANumber", {"--exposure", "bright"}, 2, "--exposure", kFinite},
-        // A glTF sun (a directional light) is the path tracer's only.
+        // A glTF sun (a directional light) is for path and bdpt.
         ErrorCase{"LabRefusesADirectionalLight",
                   {std::string(TRITRACE_SOURCE_DIR) + "/tests/data/gltf/plane_sun.gltf",
                    "--integrator", "lab"},
                   2,
                   "--integrator",
                   "shades point lights only"},
-        ErrorCase{"BdptRefusesADirectionalLight",
-                  {std::string(TRITRACE_SOURCE_DIR) + "/tests/data/gltf/plane_sun.gltf",
-                   "--integrator", "bdpt"},
-                  2,
-                  "--integrator",
-                  "spot or directional lights"},
         // Runtime errors.
         ErrorCase{
             "OutputFolderMissing", {"-o", "nodir/x.png"}, 1, "nodir/x.png", "does not exist"}),
@@ -830,6 +824,19 @@ TEST_F(CliTest, BenchTimesTheBidirectionalPathTracer) {
   for (const nlohmann::json& rec : records) {
     EXPECT_EQ(rec["scene"], "cornell-area");
     EXPECT_EQ(rec["integrator"], "bdpt");
+  }
+}
+
+// The example scene with a spot light and a sun, and a glTF sun, render with bdpt (its light
+// subpaths start on them), through a lens too.
+TEST_F(CliTest, BdptRendersSpotAndDirectionalLightsThroughALens) {
+  for (const std::string& scene :
+       {std::string(TRITRACE_SOURCE_DIR) + "/scenes/spot_and_sun.json",
+        std::string(TRITRACE_SOURCE_DIR) + "/tests/data/gltf/plane_sun.gltf"}) {
+    const RunResult r = Run({"render", scene, "--integrator", "bdpt", "--width", "16", "--height",
+                             "16", "--spp", "2", "--aperture", "0.05", "-o", "s.png", "-q"});
+    EXPECT_EQ(r.exit_code, 0) << scene << ": " << r.err;
+    EXPECT_TRUE(std::filesystem::exists(work_ / "s.png")) << scene;
   }
 }
 

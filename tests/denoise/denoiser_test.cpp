@@ -539,10 +539,11 @@ TEST(Denoiser, EdgeOfALightGainsNoLight) {
 // A noisy smooth image with a soft shadow's edge that no feature sees, from independent half
 // buffers (exact variance), against the known clean image, through the first pass alone, the
 // guided pass alone (sure_radius -1) and the default (the two blended by their SURE).
-// The guided pass lowers the error at 4 spp; its k (4) was tuned on rendered scenes
-// (docs/DENOISING.md) and on this image it smooths the shading too much at higher spp, which the
-// blend catches: it is never far from the better of the two (measured: 1.05x the guided pass
-// at 4 spp, 0.99x and 0.98x the first pass at 16 and 64).
+// The guided pass lowers the error at 4 spp; its k (3) was tuned on rendered scenes
+// (docs/DENOISING.md), and on this image it gains less as the spp grow (at 64 spp it is 1.01x the
+// first pass), which the blend catches: it is never far from the better of the two (measured:
+// 1.05x and 1.02x the guided pass at 4 and 16 spp, 0.96x the first pass at 64; with the guided
+// k of 4 before the variance floor: 1.05x, 0.99x and 0.98x).
 TEST(Denoiser, GuidedPassAndTheSureBlend) {
   const int w = 128, h = 128;
   const Image clean = from_function(w, h, [&](int x, int y) {
@@ -678,6 +679,120 @@ TEST(Denoiser, RejectsASureRadiusAbove32) {
   EXPECT_THROW((void)denoise(c, c, flat.features(), options), Error);
   options.sure_radius = -5;
   EXPECT_EQ(denoise(c, c, flat.features(), options).pixels().size(), 64u);
+}
+
+// The variance the filter uses is at least spatial_variance_floor (0.5) times the image's own
+// estimate (estimate_variance_spatially), but at most spatial_variance_floor_limit (16) times the
+// given variance. A noisy image (sigma 0.1) given a variance 200 times too small: with the
+// default the filter uses 16 times it (the limit, below half the spatial estimate everywhere
+// here), so it denoises as the given variance times 16 with the floor off does (within rounding:
+// one multiplies where the other divides by the albedo), closer to the known clean image than
+// with the floor off (measured: 0.93 and 1.00 of the noise). Without the limit it denoises as
+// half the spatial estimate given, and removes most of the noise (0.21). A variance of 0 returns
+// the image unchanged.
+TEST(Denoiser, SpatialVarianceFloorIsHalfTheImagesOwnEstimateUpToALimit) {
+  const int w = 48, h = 40;
+  const Image clean =
+      from_function(w, h, [&](int x, int y) { return smooth_function(x, y, w, h); });
+  const Image noisy = add_noise(clean, 0.1f, 71);
+  const Flat flat(w, h);
+  const auto largest_difference = [&](const Image& a, const Image& b) {
+    float largest = 0.0f;
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        for (int k = 0; k < 3; ++k) {
+          largest = std::max(largest, std::abs(a.at(x, y)[k] - b.at(x, y)[k]));
+        }
+      }
+    }
+    return largest;
+  };
+  const float small = 0.01f / 200.0f;
+  const Image floored = denoise(noisy, filled(w, h, glm::vec3(small)), flat.features());
+  DenoiseOptions no_floor;
+  no_floor.spatial_variance_floor = 0.0f;
+  EXPECT_LT(largest_difference(floored, denoise(noisy, filled(w, h, glm::vec3(16.0f * small)),
+                                                flat.features(), no_floor)),
+            1e-4f);
+  const double noise = rmse(noisy, clean);
+  EXPECT_LT(rmse(floored, clean),
+            0.97 * rmse(denoise(noisy, filled(w, h, glm::vec3(small)), flat.features(), no_floor),
+                        clean));
+
+  DenoiseOptions unlimited;
+  unlimited.spatial_variance_floor_limit = 1e30f;
+  Image half = estimate_variance_spatially(noisy, flat.albedo);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) half.at(x, y) *= 0.5f;
+  }
+  const Image half_floored =
+      denoise(noisy, filled(w, h, glm::vec3(1e-20f)), flat.features(), unlimited);
+  EXPECT_LT(largest_difference(half_floored, denoise(noisy, half, flat.features(), no_floor)),
+            1e-4f);
+  EXPECT_LT(rmse(half_floored, clean), 0.5 * noise);
+  std::printf(
+      "RMSE / noise: floored %.3f, limited %.3f, floor off %.3f\n",
+      rmse(half_floored, clean) / noise, rmse(floored, clean) / noise,
+      rmse(denoise(noisy, filled(w, h, glm::vec3(small)), flat.features(), no_floor), clean) /
+          noise);
+
+  const Image zero = filled(w, h, glm::vec3(0.0f));
+  EXPECT_LT(rmse(denoise(noisy, zero, flat.features()), noisy), 1e-7);
+  no_floor.spatial_variance_floor = -1.0f;
+  EXPECT_THROW((void)denoise(noisy, zero, flat.features(), no_floor), Error);
+}
+
+// Issue 24's cornell-area goal missed on some seeds at the light's edge: a pixel that the light
+// covers by a small fraction gets, at 16 spp, either no sample on the light or one (10 / 16 of
+// the light's radiance, many times its true value), and the half-buffer variance, smoothed
+// among its neighbours, called that exact. Here a light (radiance 10, albedo 0, exact) beside a
+// wall (mean 0.05, albedo 0.5, noisy), and between them a column of pixels 0.5% covered by the
+// light, each from 16 samples split into half buffers as the renderer splits them. Against the
+// known image: the light and the wall stay a step (no light leaks onto the wall beyond the edge
+// column, the light keeps its radiance), the edge column's relative error (the bench's measure)
+// falls to below 0.6 of the noisy one's, and the mean stays the noisy image's. Measured 0.35,
+// and 0.34 with spatial_variance_floor 0: where a whole column of edge pixels is alike the
+// filter averages along it either way; the floor's gain is at an isolated edge pixel among
+// unlike neighbours (docs/DENOISING.md), which the test above checks the mechanism for.
+TEST(Denoiser, EdgeOfABrightLightStaysAStepAndItsCoverageNoiseFalls) {
+  const int w = 48, h = 48, spp = 16, edge = 20;
+  const float coverage = 0.005f, radiance = 10.0f, wall = 0.05f;
+  const double truth = coverage * radiance + (1.0f - coverage) * wall;
+  double noisy_error = 0.0, error = 0.0;
+  for (uint64_t seed = 1; seed <= 2; ++seed) {
+    Gaussian rng(seed);
+    Image a(w, h), b(w, h), albedo(w, h);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        glm::vec3 sum_a(0.0f), sum_b(0.0f), sum_albedo(0.0f);
+        for (int s = 0; s < spp; ++s) {
+          const bool light = x < edge || (x == edge && rng.uniform() < coverage);
+          const float v = light ? radiance : wall * static_cast<float>(0.5 + rng.uniform());
+          (s % 2 == 0 ? sum_a : sum_b) += glm::vec3(v);
+          sum_albedo += glm::vec3(light ? 0.0f : 0.5f);
+        }
+        a.at(x, y) = sum_a / (spp / 2.0f);
+        b.at(x, y) = sum_b / (spp / 2.0f);
+        albedo.at(x, y) = sum_albedo / static_cast<float>(spp);
+      }
+    }
+    const Flat flat(w, h);
+    const Image noisy = average_halves(a, b);
+    const Image out = denoise_halves(a, b, {albedo, flat.normal, flat.depth});
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < edge; ++x) {
+        EXPECT_NEAR(out.at(x, y).x, radiance, 0.01f) << x << ", " << y;
+      }
+      for (int x = edge + 2; x < w; ++x) EXPECT_LT(out.at(x, y).x, 0.065f) << x << ", " << y;
+      const double scale = truth * truth + 0.01;
+      noisy_error += (noisy.at(edge, y).x - truth) * (noisy.at(edge, y).x - truth) / scale;
+      error += (out.at(edge, y).x - truth) * (out.at(edge, y).x - truth) / scale;
+    }
+    EXPECT_NEAR(column_mean(out, edge + 2, w) / column_mean(noisy, edge + 2, w), 1.0, 0.03);
+    EXPECT_NEAR(mean(out) / mean(noisy), 1.0, 0.005);
+  }
+  std::printf("edge column relative error / noisy: %.3f\n", std::sqrt(error / noisy_error));
+  EXPECT_LT(std::sqrt(error / noisy_error), 0.6);
 }
 
 }  // namespace

@@ -182,5 +182,36 @@ TEST(BdptJob, SceneFilesAskForItByName) {
   EXPECT_NE(setting_check("--integrator")("bidir").find("bdpt"), std::string::npos);
 }
 
+// Spot and directional lights and a lens go through the job as they go through the renderer;
+// an orthographic camera turns light tracing off, so the light-tracing refusals do not apply to
+// it, unless it has a lens.
+TEST(BdptJob, TakesSpotAndSunLensAndOrthographicCameras) {
+  JobSettings sun = small_bdpt(std::string());
+  sun.file = std::string(TRITRACE_SOURCE_DIR) + "/scenes/spot_and_sun.json";
+  sun.aperture = "0.05";
+  RenderJob job(sun, load_job_scene(sun));
+  job.prepare();
+  const RenderedImage rendered = job.render();
+  EXPECT_GT(rendered.image.at(12, 8).y, 0.0f);
+
+  JobSettings tiled = small_bdpt("cornell-area");
+  tiled.tile = "0/2";
+  LoadedScene ortho = load_job_scene(tiled);
+  ortho.scene.camera = ortho.scene.camera.orthographic(2.2f / 16.0f);
+  RenderJob job2(tiled, ortho.scene, ortho.integrator);
+  job2.prepare();
+  EXPECT_FALSE(job2.integrator().splats());
+  Film film = job2.make_film();
+  EXPECT_NO_THROW(job2.render_to_film(film));
+
+  JobSettings plain = small_bdpt("cornell-area");
+  LoadedScene lensed = load_job_scene(plain);
+  lensed.scene.camera = lensed.scene.camera.orthographic(0.1f).with_lens(0.05f, 3.0f);
+  EXPECT_NO_THROW(RenderJob(plain, lensed.scene, lensed.integrator));
+  plain.tile = "0/2";
+  EXPECT_EQ(error_of([&] { RenderJob(plain, lensed.scene, lensed.integrator); }).subject(),
+            "--tile");
+}
+
 }  // namespace
 }  // namespace tritrace

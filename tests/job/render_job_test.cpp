@@ -355,11 +355,9 @@ TEST(RenderJob, LensIsForThePathTracerAndReachesTheCamera) {
   EXPECT_EQ(job.scene().camera.position(), glm::vec3(0.0f, 0.0f, -3.0f));
   s.focus = "2.5";
   EXPECT_EQ(RenderJob(s, load_job_scene(s)).scene().camera.focus_distance(), 2.5f);
-  // bdpt's light tracing connects to a pinhole only: a lens is refused until it has the lens's.
+  // bdpt's light tracing connects to the lens too.
   s.integrator = "bdpt";
-  e = error_of([&] { RenderJob(s, load_job_scene(s)); });
-  EXPECT_EQ(e.subject(), "--aperture");
-  EXPECT_EQ(e.exit_code(), ExitCode::kUsage);
+  EXPECT_EQ(RenderJob(s, load_job_scene(s)).scene().camera.lens_radius(), 0.05f);
   // A lensed scene under the lab integrator.
   s.integrator = "lab";
   s.focus.clear();

@@ -6,6 +6,7 @@
 // transmittance in and out, integrated numerically here) says, where the path tracer is black.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -100,6 +101,34 @@ TEST(BdptLightTracing, EachUnweightedStrategyAloneConvergesToThePathTracersBand)
              luminance_mean(render(scene, accel, shorter, o));
     });
     std::printf("  (%d, 1) alone vs path's band of %d bounces:\n", s, s - 1);
+    expect_same_mean(light, path, 0.02);
+  }
+}
+
+// The same for (2, 1) through a thin lens and through an orthographic camera with a lens, where
+// light tracing joins a lens point of its own (the perspective lens: the camera subpath's; the
+// orthographic one: the vertex's foot plus the lens offset scaled by depth over focus distance).
+TEST(BdptLightTracing, UnweightedStrategyThroughLensesConvergesToThePathTracersBand) {
+  Scene perspective = make_cornell_area({.width = 16, .height = 16});
+  perspective.camera = perspective.camera.with_lens(0.2f, 2.5f);
+  Scene orthographic = make_cornell_area({.width = 16, .height = 16});
+  orthographic.camera = orthographic.camera.orthographic(2.2f / 16.0f).with_lens(0.2f, 2.5f);
+  for (const Scene* scene : {&perspective, &orthographic}) {
+    const BvhAccel accel(scene->mesh, kDefaultKernel);
+    const BdptIntegrator alone(*scene,
+                               {.max_depth = 1, .only_s = 2, .only_t = 1, .unweighted = true});
+    const MeanAndError light = mean_of(8, [&](int i) {
+      return luminance_mean(render(*scene, accel, alone, {.spp = 32, .seed = 80u + i}));
+    });
+    const PathIntegrator longer(*scene, {.max_depth = 1});
+    const PathIntegrator shorter(*scene, {.max_depth = 0});
+    const MeanAndError path = mean_of(8, [&](int i) {
+      const RenderOptions o{.spp = 64, .seed = 90u + i};
+      return luminance_mean(render(*scene, accel, longer, o)) -
+             luminance_mean(render(*scene, accel, shorter, o));
+    });
+    std::printf("  (2, 1) alone through %s lens vs path's direct light:\n",
+                scene->camera.is_orthographic() ? "an orthographic" : "a perspective");
     expect_same_mean(light, path, 0.02);
   }
 }
@@ -352,6 +381,143 @@ TEST(BdptLightTracing, PointLightCausticUnderGlassCarriesTheFresnelTransmittedFl
   EXPECT_LT(std::abs(got.mean - expected), 4.0 * got.error + 0.02 * expected);
   EXPECT_LT(got.error, 0.02 * expected);  // the test has power
 }
+
+// ---- Light tracing alone from a spot light or the sun onto a plane, through a pinhole or a lens
+// ----
+//
+// A diffuse plane y = 1 (albedo 0.5, half-width 2.6) and a camera at (0.3, -1.2, -0.2) looking
+// straight at it (forward +y, 90 degrees), lit by a spot light at (0, -1, 0) aiming at it (+y,
+// cones 20 and 40 degrees, pbrt's smoothstep falloff) or by the sun (irradiance (1, 2, 3) on a
+// surface facing it, 30 degrees from the normal). A point p of the plane reflects
+// L = albedo / pi * E: under the spot E = I falloff(cos a) cos a / r^2, a the angle of p from the
+// axis, which is also the plane's normal (r: p's distance from the light); under the sun E cos 30.
+// Strategy (2, 1) alone, unweighted, at --max-depth 1 (light tracing only: the light subpath's
+// first hit connected to the camera) estimates each pixel's mean of L over the points it sees:
+// integrated here by 16 x 16 pinhole rays per pixel. A lens of radius 0.3 focused on the plane
+// (distance 2.2) sees every point of it in the pixel the pinhole does, and a diffuse point looks
+// the same from every lens point, so the expected image is the pinhole's. The same for an
+// orthographic camera with that lens (parallel rays without it, which light tracing cannot reach):
+// the plane points under the pixel's square.
+constexpr float kPlaneY = 1.0f;
+constexpr float kPlaneAlbedo = 0.5f;
+const glm::vec3 kEye(0.3f, -1.2f, -0.2f);
+
+struct PlaneCase {
+  bool sun;
+  bool lens;
+  bool orthographic = false;  // showing 3 x 3 of the plane (the perspective view 4.4 x 4.4)
+};
+
+Scene plane_scene(const PlaneCase& c, int side) {
+  Scene scene;
+  scene.materials.push_back({.albedo = glm::vec3(kPlaneAlbedo)});
+  const float h = 2.6f;
+  scene.mesh.add({-h, kPlaneY, -h}, {h, kPlaneY, -h}, {h, kPlaneY, h}, 0);
+  scene.mesh.add({-h, kPlaneY, -h}, {h, kPlaneY, h}, {-h, kPlaneY, h}, 0);
+  if (c.sun) {
+    const float a = static_cast<float>(std::numbers::pi / 6.0);
+    scene.directional_lights.push_back(
+        {.direction = {std::sin(a), std::cos(a), 0.0f}, .irradiance = {1.0f, 2.0f, 3.0f}});
+  } else {
+    scene.spot_lights.push_back(
+        {.position = {0.0f, -1.0f, 0.0f},
+         .direction = {0.0f, 1.0f, 0.0f},
+         .intensity = {3.0f, 6.0f, 9.0f},
+         .cos_inner = static_cast<float>(std::cos(20.0 * std::numbers::pi / 180.0)),
+         .cos_outer = static_cast<float>(std::cos(40.0 * std::numbers::pi / 180.0)),
+         .falloff = SpotFalloff::kSmoothstep});
+  }
+  scene.camera =
+      Camera::look_at(side, side, kEye, kEye + glm::vec3(0.0f, 1.0f, 0.0f),
+                      glm::vec3(0.0f, 0.0f, 1.0f), Camera::focal_for_vertical_fov(side, 90.0));
+  if (c.orthographic) scene.camera = scene.camera.orthographic(3.0f / static_cast<float>(side));
+  if (c.lens) scene.camera = scene.camera.with_lens(0.3f, kPlaneY - kEye.y);
+  return scene;
+}
+
+// The mean luminance of L over the plane points pixel (x, y) sees, in double.
+double expected_pixel(const Scene& scene, const PlaneCase& c, int x, int y) {
+  const Camera& cam = scene.camera;
+  const glm::dvec3 eye(cam.position()), right(cam.right()), down(cam.down()),
+      forward(cam.forward());
+  const double f = cam.focal_px();
+  const double pi = std::numbers::pi;
+  double sum = 0.0;
+  constexpr int kSub = 16;
+  for (int j = 0; j < kSub; ++j) {
+    for (int i = 0; i < kSub; ++i) {
+      const double px = x + (i + 0.5) / kSub - cam.width() / 2;
+      const double py = y + (j + 0.5) / kSub - cam.height() / 2;
+      glm::dvec3 p;
+      if (c.orthographic) {
+        const double s = cam.ortho_scale();
+        p = eye + right * (px * s) + down * (py * s) + forward * (kPlaneY - eye.y);
+      } else {
+        const glm::dvec3 d = right * px + down * py + forward * f;
+        p = eye + d * ((kPlaneY - eye.y) / d.y);
+      }
+      double e;
+      if (c.sun) {
+        e = 2.0 * std::cos(pi / 6.0);  // the channels' mean irradiance, 2
+      } else {
+        const glm::dvec3 to_p = p - glm::dvec3(0.0, -1.0, 0.0);
+        const double r2 = glm::dot(to_p, to_p);
+        const double cos_a = to_p.y / std::sqrt(r2);
+        const double ci = std::cos(20.0 * pi / 180.0), co = std::cos(40.0 * pi / 180.0);
+        const double t = std::clamp((cos_a - co) / (ci - co), 0.0, 1.0);
+        e = 6.0 * t * t * (3.0 - 2.0 * t) * cos_a / r2;  // the mean intensity, 6
+      }
+      sum += kPlaneAlbedo / pi * e;
+    }
+  }
+  return sum / (kSub * kSub);
+}
+
+class LightTracingOntoAPlane : public ::testing::TestWithParam<PlaneCase> {};
+
+TEST_P(LightTracingOntoAPlane, GivesTheHandComputedRadiance) {
+  const PlaneCase c = GetParam();
+  const int side = 32, block = 8;
+  const Scene scene = plane_scene(c, side);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const BdptIntegrator alone(scene, {.max_depth = 1, .only_s = 2, .only_t = 1, .unweighted = true});
+  ASSERT_TRUE(alone.splats());
+  const Image image = render(scene, accel, alone, {.spp = 256, .seed = 3});
+  double got_sum = 0.0, want_sum = 0.0, worst = 0.0;
+  std::vector<double> got_blocks, want_blocks;
+  for (int by = 0; by < side / block; ++by) {
+    for (int bx = 0; bx < side / block; ++bx) {
+      double got = 0.0, want = 0.0;
+      for (int y = by * block; y < (by + 1) * block; ++y) {
+        for (int x = bx * block; x < (bx + 1) * block; ++x) {
+          const glm::vec3 l = image.at(x, y);
+          got += (l.x + l.y + l.z) / 3.0;
+          want += expected_pixel(scene, c, x, y);
+        }
+      }
+      got_blocks.push_back(got);
+      want_blocks.push_back(want);
+      got_sum += got;
+      want_sum += want;
+    }
+  }
+  for (size_t k = 0; k < got_blocks.size(); ++k) {
+    // Blocks at the cone's rim, which few light subpaths reach, and outside it (black) are compared
+    // against a fifth of the mean block.
+    const double scale =
+        std::max(want_blocks[k], 0.2 * want_sum / static_cast<double>(got_blocks.size()));
+    worst = std::max(worst, std::abs(got_blocks[k] - want_blocks[k]) / scale);
+  }
+  std::printf("  image mean %.6f, hand computed %.6f (ratio %.5f), worst 8 x 8 block %.4f\n",
+              got_sum / (side * side), want_sum / (side * side), got_sum / want_sum, worst);
+  EXPECT_NEAR(got_sum / want_sum, 1.0, 0.01);
+  EXPECT_LT(worst, 0.03);
+}
+
+INSTANTIATE_TEST_SUITE_P(SpotAndSun, LightTracingOntoAPlane,
+                         ::testing::Values(PlaneCase{false, false}, PlaneCase{false, true},
+                                           PlaneCase{true, true}, PlaneCase{false, true, true},
+                                           PlaneCase{true, true, true}));
 
 }  // namespace
 }  // namespace tritrace

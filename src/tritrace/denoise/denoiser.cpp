@@ -156,6 +156,39 @@ struct PassResult {
 
 Image box_mean(const Image& image, int radius);
 
+// Raises the demodulated variance to at least `floor` times the variance estimated from the
+// demodulated colour's neighbourhood, as estimate_variance_spatially() estimates it: (9/8) times
+// the mean over 5 x 5 pixels of the squared residual from the 3 x 3 mean, but to at most `limit`
+// times itself. The half-buffer variance of a pixel that a light's edge crosses is 0 (no sample
+// of either half hit the light) or smoothed away among its neighbours (one half's single light
+// sample among pixels whose variance is 0), so the filter took such a pixel's 16-sample coverage
+// of the light as exact; the residual sees it.
+void floor_variance(Planes& p, int w, int h, float floor, float limit) {
+  Image u(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      u.at(x, y) = glm::vec3(p.colour[0].at(x, y), p.colour[1].at(x, y), p.colour[2].at(x, y));
+    }
+  }
+  const Image mean = box_mean(u, 1);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const glm::vec3 d = u.at(x, y) - mean.at(x, y);
+      u.at(x, y) = d * d;
+    }
+  }
+  const Image spatial = box_mean(u, 2);
+  const float scale = floor * (9.0f / 8.0f);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      for (int k = 0; k < 3; ++k) {
+        float& v = p.variance[k].at(x, y);
+        v = std::max(v, std::min(scale * spatial.at(x, y)[k], limit * v));
+      }
+    }
+  }
+}
+
 Planes make_planes(const Image& colour, const Image& variance, const DenoiseFeatures& features,
                    const DenoiseOptions& options, int margin) {
   const int w = colour.width(), h = colour.height();
@@ -183,6 +216,9 @@ Planes make_planes(const Image& colour, const Image& variance, const DenoiseFeat
       }
     }
   });
+  if (options.spatial_variance_floor > 0.0f && options.spatial_variance_floor_limit > 1.0f) {
+    floor_variance(p, w, h, options.spatial_variance_floor, options.spatial_variance_floor_limit);
+  }
   // The gradient needs the whole inverse-depth plane, so it is a second pass.
   parallel::for_range(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
     const Plane& z = p.inverse_depth;
@@ -440,6 +476,12 @@ void check_options(const DenoiseOptions& options) {
   }
   if (options.sure_radius > 32) {
     throw Error("denoise", "SURE radius " + std::to_string(options.sure_radius) + " is above 32");
+  }
+  for (float v : {options.spatial_variance_floor, options.spatial_variance_floor_limit}) {
+    if (!(v >= 0.0f) || !std::isfinite(v)) {
+      throw Error("denoise", "spatial variance floor or its limit " + std::to_string(v) +
+                                 " is not a finite number >= 0");
+    }
   }
   for (float v : {options.colour_strength, options.guided_colour_strength, options.albedo_scale,
                   options.albedo_relative_scale, options.normal_scale, options.depth_scale}) {

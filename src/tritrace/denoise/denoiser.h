@@ -49,11 +49,22 @@ struct DenoiseOptions {
   // the new weights. The first result's errors are correlated between neighbours (they share
   // inputs), so its distances need a larger k than the noisy colour's (docs/DENOISING.md).
   bool guided_pass = true;
-  float guided_colour_strength = 4.0f;
+  float guided_colour_strength = 3.0f;
   // Blend the two passes per pixel, each weighted by the other's estimated error (Stein's
   // unbiased risk estimate, averaged over the (2 sure_radius + 1)^2 pixels around); negative:
   // the guided pass's result alone (docs/DENOISING.md).
   int sure_radius = 3;
+  // The variance the filter uses is at least this times the variance estimated from the image
+  // itself (estimate_variance_spatially, in the demodulated colour), but raised at most
+  // spatial_variance_floor_limit times: the renderer's half-buffer variance has one degree of
+  // freedom per pixel, and at a pixel that a very bright edge crosses (a light seen directly) it
+  // misses the coverage noise (16 samples happen to hit the light once or not at all), so the
+  // filter kept such a pixel as it was; the limit keeps the floor from smoothing detail that the
+  // spatial estimate mistakes for noise (curvature, glossy reflections) where the half buffers
+  // are right, and leaves a variance of 0 at 0 (an exact image is returned unchanged).
+  // docs/DENOISING.md measures both. A floor of 0 turns it off.
+  float spatial_variance_floor = 0.5f;
+  float spatial_variance_floor_limit = 16.0f;
   // Scale each channel of the result so that its sum is the input's (where both are positive):
   // the weighted means do not keep the total exactly around fireflies.
   bool keep_mean = true;

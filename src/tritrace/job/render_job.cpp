@@ -47,21 +47,9 @@ void check_bdpt(const Scene& scene, const IntegratorSpec& spec) {
 // Light tracing (bdpt's t = 1) splats onto any pixel, and estimates each pixel from all pixels'
 // samples together (Integrator::splats): refused where that cannot hold (docs/BDPT.md).
 void check_light_tracing(const JobSettings& settings, const Camera& camera) {
-  // Its connections to the camera project through the pinhole and weigh by the pinhole's density;
-  // a thin lens's (a point on the lens disk, then the plane in focus) and the orthographic
-  // camera's are not done yet (docs/BDPT.md).
-  if (camera.has_lens()) {
-    throw Error("--aperture",
-                "bdpt's light tracing connects to a pinhole camera; a lens (aperture radius > 0) "
-                "is not done yet: render depth of field with path",
-                ExitCode::kUsage);
-  }
-  if (camera.is_orthographic()) {
-    throw Error("--integrator",
-                "bdpt's light tracing connects to a perspective camera; this camera is "
-                "orthographic: render it with path",
-                ExitCode::kUsage);
-  }
+  // Its connections reach a pinhole or a lens; an orthographic camera without a lens has none
+  // (bdpt turns light tracing off for it, so the rules below do not apply; docs/BDPT.md).
+  if (!camera_light_tracing(camera)) return;
   if (!settings.tile.empty()) {
     throw Error("--tile",
                 "bdpt's light tracing lands on pixels of every tile, so a tile part cannot hold "

@@ -34,7 +34,8 @@ float mean(glm::vec3 c) {
 }
 
 // kEnvironment: the light at infinity, as a light subpath's first vertex or as the end of a camera
-// subpath that escaped; its `w_env` is the direction from the scene towards it.
+// subpath that escaped; its `w_env` is the direction from the scene towards it. A directional
+// light's vertex is one too (`directional`: its direction is a delta).
 enum class VertexType : uint8_t { kCamera, kLight, kSurface, kEnvironment };
 
 // One vertex of a subpath. Light vertices are a subpath's first (on a point light or an emissive
@@ -42,7 +43,8 @@ enum class VertexType : uint8_t { kCamera, kLight, kSurface, kEnvironment };
 struct Vertex {
   VertexType type = VertexType::kSurface;
   bool delta = false;        // scattered by a delta lobe here
-  bool point_light = false;  // a light vertex on a point light
+  bool point_light = false;  // a light vertex on a point or spot light (a delta position)
+  bool directional = false;  // a light vertex of a directional light (a delta direction)
   bool connectible = false;  // a surface with a non-delta lobe, or any light vertex
   bool smooth = false;       // shades with interpolated vertex normals
   bool two_sided = false;    // its material emits (or would emit) from both sides
@@ -75,10 +77,65 @@ struct Vertex {
   Frame frame{};
   Bsdf bsdf{Material{}};
   const Material* material = nullptr;
+  const SpotLight* spot = nullptr;  // a spot light's vertex: its cone (point_light is set too)
 };
 
 bool infinite(const Vertex& x) {
   return x.type == VertexType::kEnvironment;
+}
+
+// A light vertex that no camera subpath can hit (a point, spot or directional light): the
+// strategy s = 0 does not exist for paths that start on it.
+bool delta_light(const Vertex& x) {
+  return x.point_light || x.directional;
+}
+
+// A spot light's emission as a distribution of directions (its cone with the falloff): the
+// integral of spot_falloff over the sphere, spot_light_power / I, which normalises it.
+float spot_falloff_integral(const SpotLight& l) {
+  const float k = l.falloff == SpotFalloff::kGltf ? 1.0f / 3.0f : 0.5f;
+  return 2.0f * kPi * ((1.0f - l.cos_inner) + k * (l.cos_inner - l.cos_outer));
+}
+
+// The solid-angle density with which sample_spot_direction chooses w: proportional to the
+// intensity, spot_falloff(cos) / its integral.
+float spot_direction_pdf(const SpotLight& l, glm::vec3 w) {
+  return spot_falloff(l, glm::dot(l.direction, w)) / spot_falloff_integral(l);
+}
+
+// A direction from spot light l in proportion to its intensity (the light subpath's throughput
+// is then I / pdf = the integral, whatever the direction). Over the cosine c of the angle from
+// the axis the density is proportional to spot_falloff(c) (dw = dc dphi): u_region picks the inner
+// cone (constant, weight 1 - cos_inner) or the falloff ring (weight k (cos_inner - cos_outer)),
+// then u.x inverts the cosine's distribution there: uniform inside; in the ring, with t the ring's
+// parameter, the glTF falloff's density 3 t^2 (CDF t^3) and smoothstep's 6 t^2 - 4 t^3 (CDF
+// 2 t^3 - t^4, inverted by bisection: it is monotonic on [0, 1]).
+glm::vec3 sample_spot_direction(const SpotLight& l, float u_region, glm::vec2 u) {
+  const float inner = 1.0f - l.cos_inner;
+  const float k = l.falloff == SpotFalloff::kGltf ? 1.0f / 3.0f : 0.5f;
+  const float ring = k * (l.cos_inner - l.cos_outer);
+  float c;
+  if (u_region * (inner + ring) < inner) {
+    c = 1.0f - u.x * inner;
+  } else {
+    float t;
+    if (l.falloff == SpotFalloff::kGltf) {
+      t = std::cbrt(u.x);
+    } else {
+      float lo = 0.0f, hi = 1.0f;
+      for (int i = 0; i < 24; ++i) {
+        const float mid = 0.5f * (lo + hi);
+        (mid * mid * mid * (2.0f - mid) < u.x ? lo : hi) = mid;
+      }
+      t = 0.5f * (lo + hi);
+    }
+    c = l.cos_outer + t * (l.cos_inner - l.cos_outer);
+  }
+  c = std::clamp(c, -1.0f, 1.0f);
+  const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - c * c));
+  const float phi = 2.0f * kPi * u.y;
+  return Frame::from_normal(l.direction)
+      .to_world(glm::vec3(sin_theta * std::cos(phi), sin_theta * std::sin(phi), c));
 }
 
 // Whether direction w (world, leaving the vertex) lies on the same side of the shading and the
@@ -106,7 +163,8 @@ float surface_pdf(const Vertex& x, glm::vec3 w_given, glm::vec3 w_sampled) {
 
 // The solid-angle density with which light vertex (or emitting surface) x emits towards w.
 float emission_pdf(const Vertex& x, glm::vec3 w) {
-  if (x.point_light) return uniform_sphere_pdf();
+  if (x.point_light)
+    return x.spot != nullptr ? spot_direction_pdf(*x.spot, w) : uniform_sphere_pdf();
   const float c = glm::dot(x.ng, w);
   if (x.two_sided) return 0.5f * std::abs(c) * kInvPi;
   return c > 0.0f ? c * kInvPi : 0.0f;
@@ -114,6 +172,7 @@ float emission_pdf(const Vertex& x, glm::vec3 w) {
 
 // The radiance light vertex (or emitting surface) x sends along w.
 glm::vec3 emission(const Scene& scene, const Vertex& x, glm::vec3 w) {
+  if (x.spot != nullptr) return x.le * spot_falloff(*x.spot, glm::dot(x.spot->direction, w));
   if (x.point_light || infinite(x)) return x.le;
   glm::vec3 le = emitted_radiance(*x.material, x.ng, w);
   if (x.material->emission_texture.present() && max_component(le) > 0.0f) {
@@ -177,6 +236,11 @@ glm::vec3 ray_start(const Vertex& x, glm::vec3 w, const RayOffsetParams& offset)
 // image needs: a pixel's measurement has importance f^2 / cos^3(theta) over its own solid angle,
 // and the light image divides by W H spp light subpaths (Film's resolve divides by spp). Only the
 // cosine is tested (0 behind the camera): the callers know the direction lies inside the film.
+// A thin lens has the same density from its point on the lens (pbrt-v4's PerspectiveCamera::PDF_We
+// with the lens area's 1 / (pi R^2) left out, as both kinds of strategy sample the lens point
+// with it): a pixel's samples are uniform over its image of area (F / f)^2 on the plane in focus
+// at distance F along forward, where dA = F^2 / cos^3(theta) dw from any lens point, so the pixel's
+// density is again f^2 / cos^3(theta), and the importance (We cos / p(lens point)) is the same.
 float camera_pdf(const Camera& camera, glm::vec3 w) {
   const float c = glm::dot(w, camera.forward());
   if (!(c > 0.0f)) return 0.0f;
@@ -185,14 +249,56 @@ float camera_pdf(const Camera& camera, glm::vec3 w) {
          (static_cast<float>(camera.width()) * static_cast<float>(camera.height()) * c * c * c);
 }
 
-// Where direction w (unit, from the camera) meets the image, in pixels from its top-left corner
-// (Camera::ray_through inverted); false where it misses the film.
-bool project(const Camera& camera, glm::vec3 w, int& x, int& y) {
+// An orthographic camera with a lens (Camera::lens_ray): a ray leaves the film's point a, uniform
+// over its W H s^2 area in the plane through the camera (s: ortho_scale), moved by a lens offset l
+// uniform over the disk of radius R, towards a + F forward, its point in focus. Per area of the
+// lens point o and solid angle it has the density F^2 / (W H s^2 pi R^2 cos^3(theta)) (dA on the
+// plane in focus = F^2 / cos^3 dw). Light tracing joins a vertex q at depth z (along forward) to
+// the lens point o = q's foot on the camera's plane + l z / F for a uniform l (the ray from o
+// through q then passes a + F forward with a = o - l), density (F / z)^2 / (pi R^2) by area: the
+// two kinds of strategy sample o with different densities, and the weights need their ratio. Both
+// folded into one "camera density" of the direction from o towards a point at distance d,
+// z = d cos(theta), the joint density over light tracing's density of o is
+// d^2 / (W H s^2 cos(theta)) per solid angle, which is also the light image's importance, as the
+// pinhole's camera_pdf is (docs/BDPT.md).
+float ortho_lens_pdf(const Camera& camera, glm::vec3 w, float dist2) {
+  const float c = glm::dot(w, camera.forward());
+  if (!(c > 0.0f)) return 0.0f;
+  const float s = camera.ortho_scale();
+  return dist2 /
+         (static_cast<float>(camera.width()) * static_cast<float>(camera.height()) * s * s * c);
+}
+
+// The camera's density of direction w from its vertex, towards a point dist2 away (only an
+// orthographic camera's, which light tracing reaches only with a lens, depends on the distance).
+float camera_dir_pdf(const Camera& camera, glm::vec3 w, float dist2) {
+  return camera.is_orthographic() ? ortho_lens_pdf(camera, w, dist2) : camera_pdf(camera, w);
+}
+
+// Where direction w (unit, from the camera vertex `eye`) meets the image, in pixels from its
+// top-left corner (Camera::ray_through inverted; with a lens, Camera::lens_ray: from the lens point
+// along w to the plane in focus, then through the pinhole, or along forward to the film's plane
+// for an orthographic camera); false where it misses the film.
+bool project(const Camera& camera, glm::vec3 eye, glm::vec3 w, int& x, int& y) {
   const float c = glm::dot(w, camera.forward());
   if (!(c > 0.0f)) return false;
   const float f = camera.focal_px();
-  const float px = glm::dot(w, camera.right()) / c * f + static_cast<float>(camera.width() / 2);
-  const float py = glm::dot(w, camera.down()) / c * f + static_cast<float>(camera.height() / 2);
+  float px, py;
+  if (camera.is_orthographic()) {
+    const glm::vec3 v = eye + w * (camera.focus_distance() / c) - camera.position();
+    const float s = camera.ortho_scale();
+    px = glm::dot(v, camera.right()) / s + static_cast<float>(camera.width() / 2);
+    py = glm::dot(v, camera.down()) / s + static_cast<float>(camera.height() / 2);
+  } else if (camera.has_lens()) {
+    const glm::vec3 v = eye + w * (camera.focus_distance() / c) - camera.position();
+    const float cv = glm::dot(v, camera.forward());
+    if (!(cv > 0.0f)) return false;
+    px = glm::dot(v, camera.right()) / cv * f + static_cast<float>(camera.width() / 2);
+    py = glm::dot(v, camera.down()) / cv * f + static_cast<float>(camera.height() / 2);
+  } else {
+    px = glm::dot(w, camera.right()) / c * f + static_cast<float>(camera.width() / 2);
+    py = glm::dot(w, camera.down()) / c * f + static_cast<float>(camera.height() / 2);
+  }
   if (!(px >= 0.0f && py >= 0.0f && px < static_cast<float>(camera.width()) &&
         py < static_cast<float>(camera.height()))) {
     return false;
@@ -244,6 +350,10 @@ class BdptTracer {
            float pdf_dir, bool light, Sampler& sampler, const Hit* first_hit);
   // Light subpath: returns its vertex count (0 when the scene has no emitter).
   int light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler);
+  // The light subpath from directional light e (light_subpath's choice), its disk point from
+  // u_point.
+  int directional_light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler,
+                                const BdptIntegrator::Emitter& e, glm::vec2 u_point);
   // The shadow ray of the connection between camera-side vertex c and light-side vertex l; false
   // where nothing fits between its two ends (then nothing can block it).
   bool shadow_ray(const Vertex& c, const Vertex& l, Ray& r) const;
@@ -258,6 +368,23 @@ class BdptTracer {
   void flush();
   // Light tracing: the (s, 1) connections of the light subpath's vertices to the camera.
   void splat_light_subpath(int nl);
+  // The camera's density of sampling vertex q from camera vertex `eye`, by area at q.
+  float camera_area_pdf(const Vertex& eye, const Vertex& q) const {
+    const glm::vec3 d = q.p - eye.p;
+    return to_area(camera_dir_pdf(scene_.camera, direction(eye, q), glm::dot(d, d)), eye, q);
+  }
+  // Light tracing to an orthographic camera with a lens: the lens point through which it joins
+  // point q (ortho_lens_pdf), with this sample's lens offset.
+  glm::vec3 ortho_lens_point(glm::vec3 q) const {
+    const Camera& cam = scene_.camera;
+    const float z = glm::dot(q - cam.position(), cam.forward());
+    return q - cam.forward() * z +
+           (cam.right() * lens_offset_.x + cam.down() * lens_offset_.y) *
+               (z / cam.focus_distance());
+  }
+  // The weight of a queued connection: mis_weight, with the camera vertex moved to the lens point
+  // of light tracing's connection to an orthographic camera with a lens.
+  float connection_weight(int s, int t);
   // The MIS weights' partial sums (Vertex::mis_sum) along both subpaths, once per sample.
   void prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) const;
   // The weight of strategy (s, t): O(1) from the partial sums (with the settings' weight_check,
@@ -288,6 +415,7 @@ class BdptTracer {
   glm::vec3 total_{0.0f};
   SplatBuffer* splats_ = nullptr;
   float u_round_ = 0.0f;
+  glm::vec2 lens_offset_{0.0f};  // an orthographic camera's lens offset for light tracing
   // Connections waiting for their shadow rays.
   struct Pending {
     glm::vec3 contribution{0.0f};  // unweighted, if unblocked
@@ -332,7 +460,8 @@ void BdptTracer::surface_aovs(glm::vec3& albedo, glm::vec3& normal) const {
 
 bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
   x.type = VertexType::kSurface;
-  x.point_light = false;
+  x.point_light = x.directional = false;
+  x.spot = nullptr;
   x.start_known = 0;
   x.prim = hit.prim;
   x.u = hit.u;
@@ -388,7 +517,8 @@ int BdptTracer::walk(std::vector<Vertex>& path, int count, int max_vertices, Ray
       if (!light && it_.has_environment_) {
         Vertex& e = path[count];
         e.type = VertexType::kEnvironment;
-        e.delta = e.point_light = e.smooth = false;
+        e.delta = e.point_light = e.directional = e.smooth = false;
+        e.spot = nullptr;
         e.connectible = false;
         e.emits = true;
         e.w_env = glm::normalize(ray.dir);
@@ -466,9 +596,12 @@ int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampl
   x.connectible = true;
   x.wo = glm::vec3(0.0f);
   x.pdf_rev = 0.0f;
+  x.directional = false;
+  x.spot = nullptr;
   Ray ray;
   glm::vec3 beta;
   float pdf_dir;
+  if (e.directional) return directional_light_subpath(path, max_vertices, sampler, e, u_point);
   if (e.environment) {
     // A direction towards the environment (the map's importance sampling, or uniform for a
     // constant colour), then a point on the disk of the scene's bounding sphere across it, from
@@ -494,9 +627,9 @@ int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampl
     beta = x.le * (1.0f / (x.pdf_fwd * x.env_pdf_pos));
     return walk(path, 1, max_vertices, ray, beta, x.env_pdf_pos, true, sampler, nullptr);
   }
-  if (e.point) {
-    // Not delta in the MIS sense: a point light can be connected to (its position is a delta,
-    // which no camera subpath can hit: the weights test point_light for that).
+  if (e.point || e.spot) {
+    // Not delta in the MIS sense: a point (or spot) light can be connected to (its position is a
+    // delta, which no camera subpath can hit: the weights test delta_light for that).
     x.point_light = true;
     x.delta = false;
     x.smooth = false;
@@ -505,9 +638,19 @@ int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampl
     x.le = e.intensity;
     x.pdf_fwd = pick.pmf;
     x.beta = glm::vec3(1.0f / pick.pmf);
-    const glm::vec3 w = sample_uniform_sphere(u_dir);
-    pdf_dir = uniform_sphere_pdf();
-    beta = e.intensity * (1.0f / (pick.pmf * pdf_dir));
+    glm::vec3 w;
+    if (e.spot) {
+      // A direction in the cone in proportion to its intensity (the vertex's le is the axis's).
+      x.spot = &scene_.spot_lights[e.prim];
+      w = sample_spot_direction(*x.spot, u_point.x, u_dir);
+      pdf_dir = spot_direction_pdf(*x.spot, w);
+      if (!(pdf_dir > 0.0f)) return 1;
+      beta = emission(scene_, x, w) * (1.0f / (pick.pmf * pdf_dir));
+    } else {
+      w = sample_uniform_sphere(u_dir);
+      pdf_dir = uniform_sphere_pdf();
+      beta = e.intensity * (1.0f / (pick.pmf * pdf_dir));
+    }
     ray.origin = x.p;
     ray.dir = w;
   } else {
@@ -542,6 +685,39 @@ int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampl
   ray.tmin = 0.0f;
   ray.tmax = kRayTMax;
   return walk(path, 1, max_vertices, ray, beta, pdf_dir, true, sampler, nullptr);
+}
+
+int BdptTracer::directional_light_subpath(std::vector<Vertex>& path, int max_vertices,
+                                          Sampler& sampler, const BdptIntegrator::Emitter& e,
+                                          glm::vec2 u_point) {
+  // Parallel light from direction -l.direction: a ray along it from a point of the disk across it
+  // that covers the scene's bounding sphere (density 1 / (pi R^2) by area, pbrt-v4's
+  // DistantLight::SampleLe). The vertex is infinite, as the environment's, with the light's
+  // irradiance as its le: a connection to it (s = 1) adds E |cos| f / pmf, the path tracer's
+  // next-event estimate. Its direction is a delta (the pick's probability is its pdf_fwd), so no
+  // camera subpath reaches it (delta_light).
+  const DirectionalLight& l = scene_.directional_lights[e.prim];
+  Vertex& x = path[0];
+  x.type = VertexType::kEnvironment;
+  x.directional = true;
+  x.point_light = x.delta = x.smooth = false;
+  x.emits = true;
+  x.w_env = -l.direction;
+  x.le = l.irradiance;
+  x.env_pdf_pos = it_.environment_pdf_pos_;
+  x.pdf_fwd = e.pmf;
+  if (!(x.pdf_fwd > 0.0f) || !(max_component(x.le) > 0.0f)) return 1;
+  x.beta = glm::vec3(1.0f / x.pdf_fwd);
+  const Frame frame = Frame::from_normal(x.w_env);
+  const glm::vec2 d = sample_uniform_disk_concentric(u_point);
+  const float r = it_.environment_radius_;
+  Ray ray;
+  ray.origin = it_.environment_centre_ + r * (x.w_env + d.x * frame.x + d.y * frame.y);
+  ray.dir = -x.w_env;
+  ray.tmin = 0.0f;
+  ray.tmax = kRayTMax;
+  const glm::vec3 beta = x.le * (1.0f / (x.pdf_fwd * x.env_pdf_pos));
+  return walk(path, 1, max_vertices, ray, beta, x.env_pdf_pos, true, sampler, nullptr);
 }
 
 bool BdptTracer::shadow_ray(const Vertex& c, const Vertex& l, Ray& r) const {
@@ -617,7 +793,7 @@ void BdptTracer::flush() {
   for (int k = 0; k < pending_count_; ++k) {
     const Pending& p = pending_[static_cast<size_t>(k)];
     if (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)]) continue;
-    const float weight = unweighted ? 1.0f : mis_weight(light_, camera_, p.s, p.t);
+    const float weight = unweighted ? 1.0f : connection_weight(p.s, p.t);
     const glm::vec3 term = p.contribution * weight;
     // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
     // dropped rather than let a NaN or infinity into the pixel.
@@ -657,7 +833,7 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t) c
   if (t == 1) {
     // Light tracing: the camera's density of sampling qs (camera_pdf) is its pdf_rev. The
     // camera's own pdf_rev is never read (no strategy has t = 0).
-    qs->pdf_rev = to_area(camera_pdf(scene_.camera, direction(pt, *qs)), pt, *qs);
+    qs->pdf_rev = camera_area_pdf(pt, *qs);
     if (qs_minus != nullptr) qs_minus->pdf_rev = pdf_area(*qs, &pt, *qs_minus);
   } else if (s > 0) {
     pt.pdf_rev = pdf_area(*qs, qs_minus, pt);
@@ -687,7 +863,7 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t) c
   r = 1.0f;
   for (int i = s - 1; i >= 0; --i) {
     r *= remap(light[i].pdf_rev) / remap(light[i].pdf_fwd);
-    const bool delta_light_side = i > 0 ? light[i - 1].delta : light[0].point_light;
+    const bool delta_light_side = i > 0 ? light[i - 1].delta : delta_light(light[0]);
     if (!light[i].delta && !delta_light_side) sum += r;
   }
 
@@ -714,7 +890,8 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t) c
 // nearest vertices; pt counts as not delta),
 //   S = r'_{t-1} (c'_{t-1} + r'_{t-2} (c_{t-2} + A_{t-3})).
 // The light side is the same with B_k over i >= 0, where vertex 0's "predecessor" is delta for a
-// point light (no camera subpath hits one). prepare_weights stores A_k and B_k at vertex k.
+// point, spot or directional light (no camera subpath hits one). prepare_weights stores A_k and B_k
+// at vertex k.
 void BdptTracer::prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) const {
   const int m = first_camera_strategy();
   float a = 0.0f;
@@ -731,7 +908,7 @@ void BdptTracer::prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) 
   float b = 0.0f;
   for (int k = 0; k < nl; ++k) {
     Vertex& x = light[k];
-    const bool delta_before = k > 0 ? light[k - 1].delta : light[0].point_light;
+    const bool delta_before = k > 0 ? light[k - 1].delta : delta_light(light[0]);
     const float d = !x.delta && !delta_before ? 1.0f : 0.0f;
     b = b + d > 0.0f ? density_ratio(x.pdf_rev, x.pdf_fwd) * (b + d) : 0.0f;
     x.mis_sum = b;
@@ -747,7 +924,7 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
   // The four densities that depend on the connection, as the walk sets them.
   float pt_rev = 0.0f, pt_minus_rev = 0.0f, qs_rev = 0.0f, qs_minus_rev = 0.0f;
   if (t == 1) {
-    qs_rev = to_area(camera_pdf(scene_.camera, direction(pt, *qs)), pt, *qs);
+    qs_rev = camera_area_pdf(pt, *qs);
     if (qs_minus != nullptr) qs_minus_rev = pdf_area(*qs, &pt, *qs_minus);
   } else {
     const Vertex& pt_minus = camera[t - 2];
@@ -783,11 +960,11 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
     float inner = 0.0f;
     if (qs_minus != nullptr) {
       const float before = s >= 3 ? light[s - 3].mis_sum : 0.0f;
-      const bool delta_before = s >= 3 ? light[s - 3].delta : light[0].point_light;
+      const bool delta_before = s >= 3 ? light[s - 3].delta : delta_light(light[0]);
       const float d = !qs_minus->delta && !delta_before ? 1.0f : 0.0f;
       inner = scaled(density_ratio(qs_minus_rev, qs_minus->pdf_fwd), before + d);
     }
-    const bool delta_before = qs_minus != nullptr ? qs_minus->delta : light[0].point_light;
+    const bool delta_before = qs_minus != nullptr ? qs_minus->delta : delta_light(light[0]);
     sum += scaled(density_ratio(qs_rev, qs->pdf_fwd), inner + (delta_before ? 0.0f : 1.0f));
   }
   return 1.0f / (1.0f + sum);
@@ -807,29 +984,42 @@ float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t) const 
   return w;
 }
 
+float BdptTracer::connection_weight(int s, int t) {
+  if (t != 1 || !scene_.camera.is_orthographic()) return mis_weight(light_, camera_, s, t);
+  Vertex& eye = camera_[0];
+  const glm::vec3 saved = eye.p;
+  eye.p = ortho_lens_point(light_[s - 1].p);
+  const float w = mis_weight(light_, camera_, s, t);
+  eye.p = saved;
+  return w;
+}
+
 void BdptTracer::splat_light_subpath(int nl) {
   const BdptSettings& settings = it_.settings_;
   const bool only = settings.only_s >= 0 && settings.only_t >= 0;
   const Camera& cam = scene_.camera;
-  const Vertex& eye = camera_[0];
+  const bool ortho = cam.is_orthographic();
   const Vertex* light = light_;
   for (int s = 2; s <= nl && s + 1 <= settings.max_depth + 2; ++s) {
     if (only && s != settings.only_s) continue;
     const Vertex& qs = light[s - 1];
     if (!qs.connectible || infinite(qs)) continue;
-    const glm::vec3 d = eye.p - qs.p;
+    // The camera's point: the pinhole, the camera subpath's lens point, or an orthographic lens's
+    // point for qs.
+    const glm::vec3 eye = ortho ? ortho_lens_point(qs.p) : camera_[0].p;
+    const glm::vec3 d = eye - qs.p;
     const float dist2 = glm::dot(d, d);
     if (!(dist2 > 0.0f)) continue;
     const glm::vec3 w = d * (1.0f / std::sqrt(dist2));  // from qs towards the camera
     int px = 0, py = 0;
-    if (!project(cam, -w, px, py)) continue;
+    if (!project(cam, eye, -w, px, py)) continue;
     const glm::vec3 f_light = surface_f(qs, w, qs.wo);
     if (!(max_component(f_light) > 0.0f)) continue;
     const float g = std::abs(glm::dot(qs.ng, w)) / dist2;
-    const glm::vec3 contribution = qs.beta * f_light * (g * camera_pdf(cam, -w));
+    const glm::vec3 contribution = qs.beta * f_light * (g * camera_dir_pdf(cam, -w, dist2));
     if (!(max_component(contribution) > 0.0f)) continue;
     Ray ray;
-    const bool has_ray = camera_shadow_ray(qs, eye.p, ray);
+    const bool has_ray = camera_shadow_ray(qs, eye, ray);
     queue(s, 1, contribution, has_ray, ray, px, py);
   }
 }
@@ -848,7 +1038,8 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, const Hit& camera_hit, Sampl
   c0.type = VertexType::kCamera;
   c0.p = camera_ray.origin;
   c0.delta = false;
-  c0.point_light = false;
+  c0.point_light = c0.directional = false;
+  c0.spot = nullptr;
   c0.beta = glm::vec3(1.0f);
   c0.pdf_fwd = c0.pdf_rev = 0.0f;
   camera_escaped_ = false;
@@ -859,6 +1050,11 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, const Hit& camera_hit, Sampl
   const int nc = walk(sub.camera, 1, max_camera, camera_ray, glm::vec3(1.0f), camera_dir_pdf, false,
                       sampler, &camera_hit);
   camera_count_ = nc;
+  if (settings.light_tracing && scene_.camera.is_orthographic() && nc >= 2 &&
+      !infinite(sub.camera[1])) {
+    // An orthographic lens's density depends on the distance to the first hit (ortho_lens_pdf).
+    sub.camera[1].pdf_fwd = camera_area_pdf(sub.camera[0], sub.camera[1]);
+  }
   const int nl = light_subpath(sub.light, max_light, sampler);
   // The subpaths no longer grow: plain pointers from here.
   Vertex* camera = sub.camera.data();
@@ -911,18 +1107,25 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, const Hit& camera_hit, Sampl
     // One number per sample for the splats' stochastic rounding (SplatBuffer::add), drawn after
     // every dimension the subpaths use.
     u_round_ = sampler.get_1d();
+    if (scene_.camera.is_orthographic()) {
+      // Light tracing's lens offset for an orthographic camera (ortho_lens_point), one per sample.
+      lens_offset_ = scene_.camera.lens_radius() * sample_uniform_disk_concentric(sampler.get_2d());
+    }
     splat_light_subpath(nl);
   }
   flush();
   return total_;
 }
 
+bool camera_light_tracing(const Camera& camera) {
+  // An orthographic camera without a lens sees along forward only: a light vertex joins it with
+  // probability zero (its direction is a delta), so light tracing's strategies (s, 1) do not
+  // exist, and the weights of t >= 2, light tracing off, are exactly the weights over the
+  // strategies that do. With a lens its rays spread (ortho_lens_pdf).
+  return !camera.is_orthographic() || camera.has_lens();
+}
+
 std::string bdpt_unsupported(const Scene& scene) {
-  // Light subpaths start on the lights, and emission sampling exists for point lights only.
-  if (!scene.spot_lights.empty() || !scene.directional_lights.empty()) {
-    return "bdpt does not yet start light subpaths on spot or directional lights; render this "
-           "scene with --integrator path";
-  }
   uint64_t instanced = 0;
   for (const Instance& inst : scene.instances) {
     const TriangleMesh& proto = scene.prototypes[inst.prototype];
@@ -941,6 +1144,7 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
                                const RayOffsetParams& offset)
     : settings_(settings), offset_(offset) {
   if (const std::string why = bdpt_unsupported(scene); !why.empty()) throw Error("integrator", why);
+  settings_.light_tracing = settings_.light_tracing && camera_light_tracing(scene.camera);
   std::vector<float> power;
   for (uint32_t i = 0; i < scene.lights.size(); ++i) {
     const PointLight& l = scene.lights[i];
@@ -954,6 +1158,7 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
     emitters_.push_back(e);
     power.push_back(p);
   }
+  add_delta_lights(scene, power);
   // Emissive triangles in the scene's numbering, each chosen in proportion to its flux
   // (Le area pi per emitting side), as the path tracer's light sampler weighs them.
   std::vector<std::pair<uint32_t, uint32_t>> prims;  // (prim, emitter index)
@@ -999,6 +1204,8 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
     e.environment = true;
     emitters_.push_back(e);
     power.push_back(others > 0.0 ? static_cast<float>(others) : 1.0f);
+  }
+  if (has_environment_ || !scene.directional_lights.empty()) {
     // The bounding sphere, a little larger so that rays from its disk start outside everything.
     const Bounds3 b = scene_bounds(scene);
     environment_centre_ = 0.5f * (b.lo + b.hi);
@@ -1016,6 +1223,39 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
   for (const auto& [prim, index] : prims) {
     emissive_prims_.push_back(prim);
     emissive_index_.push_back(index);
+  }
+}
+
+void BdptIntegrator::add_delta_lights(const Scene& scene, std::vector<float>& power) {
+  // Spot and directional lights after the point lights, weighed by power as the path tracer's
+  // light sampler weighs them (spot_light_power; directional_light_power through the scene's
+  // bounding sphere, falling back to E for a scene of no extent), so that the environment's share
+  // (half, against the others' sum) is the same too.
+  for (uint32_t i = 0; i < scene.spot_lights.size(); ++i) {
+    const SpotLight& l = scene.spot_lights[i];
+    const float p = mean(spot_light_power(l));
+    if (!(p > 0.0f) || !std::isfinite(p)) continue;
+    Emitter e;
+    e.spot = true;
+    e.prim = i;
+    e.position = l.position;
+    e.intensity = l.intensity;
+    emitters_.push_back(e);
+    power.push_back(p);
+  }
+  if (scene.directional_lights.empty()) return;
+  const Bounds3 b = scene_bounds(scene);
+  const float radius = 0.5f * glm::length(b.hi - b.lo);
+  for (uint32_t i = 0; i < scene.directional_lights.size(); ++i) {
+    const DirectionalLight& l = scene.directional_lights[i];
+    float p = mean(directional_light_power(l, radius));
+    if (!(p > 0.0f) || !std::isfinite(p)) p = mean(l.irradiance);
+    if (!(p > 0.0f) || !std::isfinite(p)) continue;
+    Emitter e;
+    e.directional = true;
+    e.prim = i;
+    emitters_.push_back(e);
+    power.push_back(p);
   }
 }
 

@@ -1,8 +1,9 @@
 // BdptIntegrator: bidirectional path tracing (Veach 1997, chapter 10; Lafortune and Willems 1993):
 // per camera sample one camera subpath and one light subpath, every connection strategy (s, t)
 // with t >= 2, and light tracing to the camera (t = 1, s >= 2: a light subpath vertex connected to
-// the pinhole, added to the pixel it projects to through the film's SplatBuffer), combined by
-// multiple importance sampling (power heuristic). Point lights, emissive triangles and the
+// the pinhole or the lens, added to the pixel it projects to through the film's SplatBuffer; not
+// to an orthographic camera without a lens, which it cannot reach), combined by multiple importance
+// sampling (power heuristic). Point, spot and directional lights, emissive triangles and the
 // environment (a constant colour or a map). docs/BDPT.md has the design.
 #pragma once
 
@@ -51,6 +52,11 @@ struct BdptSettings {
 // Why bdpt cannot render `scene` correctly yet (empty when it can): the caller refuses it.
 std::string bdpt_unsupported(const Scene& scene);
 
+// Whether light tracing (t = 1) can reach `camera`: a pinhole, a thin lens and an orthographic
+// camera with a lens can; an orthographic camera without one cannot (its direction is a delta, so
+// those strategies do not exist: BdptIntegrator turns light tracing off for it).
+bool camera_light_tracing(const Camera& camera);
+
 class BdptIntegrator final : public Integrator {
  public:
   // Keeps the scene's emitters (built here): the scene must outlive it. Throws Error when
@@ -65,13 +71,18 @@ class BdptIntegrator final : public Integrator {
 
   const BdptSettings& settings() const { return settings_; }
 
-  // An emitter for light subpaths: a point light, an emissive triangle or the environment.
+  // An emitter for light subpaths: a point, spot or directional light, an emissive triangle or the
+  // environment.
   struct Emitter {
     bool point = false;
+    bool spot = false;
+    bool directional = false;
     bool environment = false;
-    uint32_t prim = 0;          // the triangle (scene numbering), or the index into scene.lights
-    glm::vec3 position{0.0f};   // a point light's
-    glm::vec3 intensity{0.0f};  // a point light's, P / (4 pi)
+    // The triangle (scene numbering), or the index into scene.lights, spot_lights or
+    // directional_lights.
+    uint32_t prim = 0;
+    glm::vec3 position{0.0f};   // a point or spot light's
+    glm::vec3 intensity{0.0f};  // a point light's, P / (4 pi); a spot light's on its axis
     float pmf = 0.0f;           // the probability of choosing it
     float area = 0.0f;          // a triangle's
   };
@@ -84,14 +95,18 @@ class BdptIntegrator final : public Integrator {
   std::vector<uint32_t> emissive_prims_;  // sorted, for the density of choosing a hit emitter
   std::vector<uint32_t> emissive_index_;  // parallel: the emitter's index in emitters_
 
+  // Appends the scene's spot and directional lights to emitters_ with their selection weights.
+  void add_delta_lights(const Scene& scene, std::vector<float>& power);
+
   // The area density with which a light subpath starts at point of triangle `prim` (pmf / area);
   // 0 for a triangle that is not an emitter.
   float origin_pdf(uint32_t prim) const;
 
   // The environment (a map, or a constant colour that is not black): its radiance from direction
   // w (pointing away from the scene), the solid-angle density with which light subpaths choose w,
-  // and that choice. Light subpaths from it start on the disk of radius environment_radius_ about
-  // environment_centre_ across w (the scene's bounding sphere), density environment_pdf_pos_.
+  // and that choice. Light subpaths from it (and from directional lights) start on the disk of
+  // radius environment_radius_ about environment_centre_ across w (the scene's bounding sphere),
+  // density environment_pdf_pos_.
   glm::vec3 environment_radiance(glm::vec3 w) const;
   float environment_dir_pdf(glm::vec3 w) const;
   glm::vec3 sample_environment(glm::vec2 u, float& pdf) const;

@@ -560,11 +560,9 @@ class Interpreter {
   }
 
   void integrator(const std::string& type, const PbrtParams& p, const PbrtToken& d) {
-    // volpath without media renders what path renders; bdpt is tritrace's bdpt unless the scene
-    // has what it refuses (finish).
+    // volpath without media renders what path renders; bdpt is tritrace's bdpt.
     out_.integrator.kind =
         type == "bdpt" ? IntegratorSpec::Kind::kBdpt : IntegratorSpec::Kind::kPath;
-    integrator_at_ = d.at;
     if (type != "path" && type != "volpath" && type != "bdpt") {
       warn(d.at, "Integrator \"" + type + "\" replaced by tritrace's path tracer");
     }
@@ -1453,30 +1451,10 @@ class Interpreter {
         fail(p.at, "ObjectInstance: " + e.reason());
       }
     }
-    bdpt_or_path();
     for (const Warning& w : warnings_) {
       out_.warnings.push_back(w.where + ": warning: " + w.what +
                               (w.count > 1 ? " (" + std::to_string(w.count) + " times)" : ""));
     }
-  }
-
-  // What tritrace's bdpt refuses to render (render/bdpt_integrator.cpp's bdpt_unsupported and the
-  // render job's light-tracing checks; README's --integrator row): such a file asking for bdpt
-  // gets the path tracer and a warning instead of a usage error.
-  void bdpt_or_path() {
-    if (out_.integrator.kind != IntegratorSpec::Kind::kBdpt) return;
-    std::string why;
-    if (!out_.scene.spot_lights.empty() || !out_.scene.directional_lights.empty()) {
-      why = "spot and distant lights";
-    } else if (lens_radius_ > 0.0) {
-      why = "a lens (lensradius > 0)";
-    } else if (orthographic_) {
-      why = "an orthographic camera";
-    }
-    if (why.empty()) return;
-    warn(integrator_at_,
-         "Integrator \"bdpt\" replaced by tritrace's path tracer: tritrace's bdpt refuses " + why);
-    out_.integrator.kind = IntegratorSpec::Kind::kPath;
   }
 
   struct Placed {
@@ -1501,7 +1479,6 @@ class Interpreter {
   bool in_world_ = false;
   dmat4 camera_from_world_{1.0};
   PbrtLocation camera_at_;
-  PbrtLocation integrator_at_;
   double fov_ = kPbrtFov;
   float shape_alpha_ = 1.0f;                                // the current shape's "float alpha"
   std::map<std::pair<uint32_t, float>, uint32_t> blended_;  // (material, alpha) -> its blend
