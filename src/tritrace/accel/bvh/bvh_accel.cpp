@@ -214,6 +214,9 @@ inline constexpr int kInFlight = 12;
 inline constexpr size_t kChunk = 256;
 // Trees at least this big (nodes and blocks) are traversed interleaved.
 inline constexpr size_t kInterleaveBytes = size_t{1} << 20;
+// Trees at most this big trace incoherent queries as packets too (see intersect_incoherent). Not
+// tuned: cornell-area's 6 KiB tree was measured, nothing between that and 1 MiB.
+inline constexpr size_t kIncoherentPacketBytes = size_t{64} << 10;
 
 // One slot of the interleaved closest-hit traversal: a ray's state between its steps.
 struct ClosestRay {
@@ -453,6 +456,8 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConf
                 (traversal == BvhTraversal::kSingleInterleaved ||
                  bvh_.node_bytes() + bvh_.block_bytes() >= kInterleaveBytes);
 #endif
+  incoherent_packets_ =
+      packets_ && bvh_.node_bytes() + bvh_.block_bytes() <= kIncoherentPacketBytes;
 }
 
 BvhAccel::BvhAccel(const TriangleMesh& mesh, bvh::WideBvh tree, Kernel kernel,
@@ -460,7 +465,9 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, bvh::WideBvh tree, Kernel kernel,
     : mesh_(mesh),
       bvh_(std::move(tree)),
       kernel_(kernel),
-      packets_(traversal == BvhTraversal::kAuto && bvh::has_packet_kernel(kernel)) {}
+      packets_(traversal == BvhTraversal::kAuto && bvh::has_packet_kernel(kernel)),
+      incoherent_packets_(packets_ &&
+                          bvh_.node_bytes() + bvh_.block_bytes() <= kIncoherentPacketBytes) {}
 
 void BvhAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
   if constexpr (bvh::kPacketSize > 0) {
@@ -487,6 +494,16 @@ void BvhAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) 
 }
 
 void BvhAccel::intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const {
+  // A tree this small stays in L1, and packets of even unrelated rays share its few nodes and
+  // leaves: on cornell-area the path tracer's bounce and shadow rays as packets took 5-8% less of
+  // a frame's CPU time (docs/PERFORMANCE.md, issue 27); either kind alone, 0-1%. Packets are
+  // incoherent_packets_ only when packets_ is set, so intersect does not come back here.
+  if constexpr (bvh::kPacketSize > 0) {
+    if (incoherent_packets_) {
+      intersect(rays, hits);
+      return;
+    }
+  }
 #if defined(__AVX2__)
   if (interleave_ && rays.size() > 1) {
     closest_hits_interleaved(bvh_, rays, hits);
@@ -500,6 +517,12 @@ void BvhAccel::intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hi
 }
 
 void BvhAccel::occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+  if constexpr (bvh::kPacketSize > 0) {
+    if (incoherent_packets_) {
+      BvhAccel::occluded(rays, occluded);
+      return;
+    }
+  }
 #if defined(__AVX2__)
   if (interleave_ && rays.size() > 1) {
     any_hits_interleaved(bvh_, rays, occluded);

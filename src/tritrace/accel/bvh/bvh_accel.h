@@ -34,7 +34,8 @@ class BvhAccel final : public Accel {
   using Accel::occluded;
   void intersect(std::span<const Ray> rays, std::span<Hit> hits) const override;
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
-  // Single-ray traversal whatever the traversal setting.
+  // Single-ray traversal whatever the traversal setting, except on a tree small enough to stay in
+  // L1 under kAuto, whose incoherent rays go as packets too (the same answers).
   void intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const override;
   void occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
 
@@ -46,6 +47,7 @@ class BvhAccel final : public Accel {
   bvh::WideBvh bvh_;
   Kernel kernel_;
   bool packets_;
+  bool incoherent_packets_ = false;  // intersect_incoherent as packets: packets_ on a tiny tree
   [[maybe_unused]] bool interleave_ = false;  // incoherent rays several at a time (AVX2 builds)
 };
 
