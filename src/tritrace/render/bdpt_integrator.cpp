@@ -1314,9 +1314,8 @@ void BdptIntegrator::add_delta_lights(const Scene& scene, std::vector<float>& po
   const float radius = 0.5f * glm::length(b.hi - b.lo);
   for (uint32_t i = 0; i < scene.directional_lights.size(); ++i) {
     const DirectionalLight& l = scene.directional_lights[i];
-    float p = mean(directional_light_power(l, radius));
-    if (!(p > 0.0f) || !std::isfinite(p)) p = mean(l.irradiance);
-    if (!(p > 0.0f) || !std::isfinite(p)) continue;
+    const float p = directional_light_weight(l, radius);
+    if (p == 0.0f) continue;
     Emitter e;
     e.directional = true;
     e.prim = i;

@@ -56,9 +56,8 @@ LightSampler::LightSampler(const Scene& scene) {
     const float radius = 0.5f * glm::length(b.hi - b.lo);
     for (uint32_t i = 0; i < scene.directional_lights.size(); ++i) {
       const DirectionalLight& l = scene.directional_lights[i];
-      float p = mean(directional_light_power(l, radius));
-      if (!(p > 0.0f) || !std::isfinite(p)) p = mean(l.irradiance);
-      if (!(p > 0.0f) || !std::isfinite(p)) continue;
+      const float p = directional_light_weight(l, radius);
+      if (p == 0.0f) continue;
       Light light{};
       light.index = i;
       light.directional = true;

@@ -183,6 +183,17 @@ inline glm::vec3 directional_light_power(const DirectionalLight& l, float radius
   return l.irradiance * (std::numbers::pi_v<float> * radius * radius);
 }
 
+// The weight the light samplers (the path tracer's, and bdpt's for light subpaths) give a
+// directional light: the mean over channels of its power through the scene's bounding sphere, or
+// of E where that is not a positive finite number (a scene of no extent, or one too large for a
+// float's r^2): any positive weight is unbiased. 0 for a light that emits nothing.
+inline float directional_light_weight(const DirectionalLight& l, float radius) {
+  const auto mean = [](glm::vec3 c) { return (c.x + c.y + c.z) / 3.0f; };
+  float p = mean(directional_light_power(l, radius));
+  if (!(p > 0.0f) || !std::isfinite(p)) p = mean(l.irradiance);
+  return p > 0.0f && std::isfinite(p) ? p : 0.0f;
+}
+
 // p -> linear * p + translation. Points and directions are moved with the same operations
 // everywhere (flattening, shading, rays into object space), so that they round alike.
 struct Affine {
