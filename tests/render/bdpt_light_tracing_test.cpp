@@ -25,17 +25,8 @@
 namespace tritrace {
 namespace {
 
-bool same_bits(const Image& a, const Image& b) {
-  return a.width() == b.width() && a.height() == b.height() &&
-         std::memcmp(a.pixels().data(), b.pixels().data(), a.pixels().size() * sizeof(glm::vec3)) ==
-             0;
-}
-
-double luminance_mean(const Image& image) {
-  double sum = 0.0;
-  for (const glm::vec3& p : image.pixels()) sum += (p.x + p.y + p.z) / 3.0;
-  return sum / static_cast<double>(image.pixels().size());
-}
+using testing_mc::luminance_mean;
+using testing_mc::same_bits;
 
 // Integer sums: any order of the same splats gives the same bits.
 TEST(SplatBuffer, SumsDoNotDependOnTheOrderOfSplats) {

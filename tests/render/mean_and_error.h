@@ -1,5 +1,6 @@
 // Test helpers for Monte Carlo agreement checks: the mean of K independent estimates with its
-// standard error from their spread, and a check that two such means agree.
+// standard error from their spread, a check that two such means agree, and the two image helpers
+// the bdpt tests share (an image's mean over channels, bit-for-bit equality).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -7,6 +8,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+
+#include "tritrace/image/image.h"
 
 namespace tritrace::testing_mc {
 
@@ -36,6 +40,20 @@ inline void expect_same_mean(MeanAndError a, MeanAndError b, double power) {
   EXPECT_GT(b.mean, 0.0);
   EXPECT_LT(std::abs(a.mean - b.mean), 4.0 * error);
   EXPECT_LT(error, power * b.mean);
+}
+
+// The mean over every pixel and channel of an image, in double.
+inline double luminance_mean(const Image& image) {
+  double sum = 0.0;
+  for (const glm::vec3& p : image.pixels()) sum += (p.x + p.y + p.z) / 3.0;
+  return sum / static_cast<double>(image.pixels().size());
+}
+
+// The same size and the same bits in every pixel.
+inline bool same_bits(const Image& a, const Image& b) {
+  return a.width() == b.width() && a.height() == b.height() &&
+         std::memcmp(a.pixels().data(), b.pixels().data(), a.pixels().size() * sizeof(glm::vec3)) ==
+             0;
 }
 
 }  // namespace tritrace::testing_mc
