@@ -567,6 +567,7 @@ Image denoise(const Image& colour, const Image& variance, const DenoiseFeatures&
                                result.colour[2][o] * m.z);
     }
   }
+  refine_bright_edges(colour, variance, out, options.bright_edges);
   if (options.keep_mean) restore_mean(colour, out);
   return out;
 }

@@ -1,0 +1,257 @@
+// The bright-edge model (bright_edges.h): per pixel near a strong contrast, a straight line fitted
+// to the coverages of a small window of pixels, the window's total kept.
+#include "tritrace/denoise/bright_edges.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "tritrace/parallel.h"
+
+namespace tritrace {
+
+double pixel_coverage(double nx, double ny, double s) {
+  double a = std::abs(nx), b = std::abs(ny);
+  if (a < b) std::swap(a, b);
+  // The density of a U + b V is a trapezoid on [-(a + b) / 2, (a + b) / 2]; t is s from its
+  // left end.
+  const double t = s + 0.5 * (a + b);
+  if (t <= 0.0) return 0.0;
+  if (t >= a + b) return 1.0;
+  if (b < 1e-9) return t / a;
+  if (t < b) return t * t / (2.0 * a * b);
+  if (t <= a) return (t - 0.5 * b) / a;
+  const double u = a + b - t;
+  return 1.0 - u * u / (2.0 * a * b);
+}
+
+namespace {
+
+constexpr int kMaxWindow = 9;  // 2 * radius + 1 for radius up to 4
+constexpr int kMaxPixels = kMaxWindow * kMaxWindow;
+
+// One window's pixels: positions relative to the window's centre, the noisy channel sums
+// brought to coverages, and the weight of each squared coverage residual.
+struct Window {
+  int count = 0;
+  std::array<double, kMaxPixels> x{}, y{}, measured{}, weight{};
+  std::array<int, kMaxPixels> px{}, py{};
+};
+
+struct LineFit {
+  double nx = 1.0, ny = 0.0, d = 0.0;
+  double chi2 = 0.0;
+};
+
+// The line n . x = d with n at angle theta whose coverages sum to the measured total (area
+// matching: the total is decreasing in d, found by bisection), and its weighted squared
+// residuals.
+LineFit fit_offset(const Window& w, double theta, double total) {
+  LineFit fit;
+  fit.nx = std::cos(theta);
+  fit.ny = std::sin(theta);
+  double lo = 1e30, hi = -1e30;
+  for (int i = 0; i < w.count; ++i) {
+    const double s = fit.nx * w.x[i] + fit.ny * w.y[i];
+    lo = std::min(lo, s);
+    hi = std::max(hi, s);
+  }
+  lo -= 1.0;
+  hi += 1.0;  // d = lo: every pixel fully on the bright side; d = hi: none
+  for (int iteration = 0; iteration < 40; ++iteration) {
+    const double mid = 0.5 * (lo + hi);
+    double sum = 0.0;
+    for (int i = 0; i < w.count; ++i) {
+      sum += pixel_coverage(fit.nx, fit.ny, fit.nx * w.x[i] + fit.ny * w.y[i] - mid);
+    }
+    (sum > total ? lo : hi) = mid;
+  }
+  fit.d = 0.5 * (lo + hi);
+  for (int i = 0; i < w.count; ++i) {
+    const double c = pixel_coverage(fit.nx, fit.ny, fit.nx * w.x[i] + fit.ny * w.y[i] - fit.d);
+    const double r = w.measured[i] - c;
+    fit.chi2 += r * r * w.weight[i];
+  }
+  return fit;
+}
+
+// The best line for a window: the normal's angle starts at the direction of the coverages' first
+// moment (for a half-plane it points to the bright side), is scanned over +-0.6 radians and
+// refined by golden-section search.
+LineFit fit_line(const Window& w, double total) {
+  double gx = 0.0, gy = 0.0;
+  for (int i = 0; i < w.count; ++i) {
+    gx += w.measured[i] * w.x[i];
+    gy += w.measured[i] * w.y[i];
+  }
+  const double theta0 = std::atan2(gy, gx);
+  constexpr double kStep = 0.15;
+  LineFit best = fit_offset(w, theta0, total);
+  double best_theta = theta0;
+  for (int j = -4; j <= 4; ++j) {
+    if (j == 0) continue;
+    const double theta = theta0 + j * kStep;
+    const LineFit fit = fit_offset(w, theta, total);
+    if (fit.chi2 < best.chi2) {
+      best = fit;
+      best_theta = theta;
+    }
+  }
+  constexpr double kGolden = 0.6180339887498949;
+  double a = best_theta - kStep, b = best_theta + kStep;
+  double c = b - kGolden * (b - a), e = a + kGolden * (b - a);
+  LineFit fc = fit_offset(w, c, total), fe = fit_offset(w, e, total);
+  for (int iteration = 0; iteration < 14; ++iteration) {
+    if (fc.chi2 < fe.chi2) {
+      b = e;
+      e = c;
+      fe = fc;
+      c = b - kGolden * (b - a);
+      fc = fit_offset(w, c, total);
+    } else {
+      a = c;
+      c = e;
+      fc = fe;
+      e = a + kGolden * (b - a);
+      fe = fit_offset(w, e, total);
+    }
+  }
+  for (const LineFit* f : {&fc, &fe}) {
+    if (f->chi2 < best.chi2) best = *f;
+  }
+  return best;
+}
+
+float channel_sum(const glm::vec3& v) { return v.x + v.y + v.z; }
+
+struct PixelModel {
+  bool ok = false;
+  double chi2_per_pixel = 0.0;
+  double coverage = 0.0;    // the pixel's, from the fitted line
+  double measured = 0.0;    // the pixel's own measured coverage
+  glm::vec3 bright{0.0f};   // noisy mean of the fully covered pixels
+  glm::vec3 dark{0.0f};     // denoised mean of the uncovered pixels
+};
+
+// Fits the window whose top-left pixel is (wx, wy) and returns the model at pixel (x, y).
+PixelModel model_in_window(const Image& noisy, const Image& variance, const Image& denoised,
+                           const BrightEdgeOptions& options, int wx, int wy, int x, int y) {
+  PixelModel model;
+  const int size = 2 * options.radius + 1;
+  float brightest = 0.0f;
+  for (int j = 0; j < size; ++j) {
+    for (int i = 0; i < size; ++i) brightest = std::max(brightest, channel_sum(noisy.at(wx + i, wy + j)));
+  }
+  if (!(brightest > 0.0f)) return model;
+  double dark_sum = 0.0;
+  int dark_count = 0;
+  for (int j = 0; j < size; ++j) {
+    for (int i = 0; i < size; ++i) {
+      const float s = channel_sum(noisy.at(wx + i, wy + j));
+      if (s < 0.05f * brightest) {
+        dark_sum += s;
+        ++dark_count;
+      }
+    }
+  }
+  if (dark_count == 0) return model;
+  const double dark = dark_sum / dark_count;
+  if (!(brightest >= options.contrast * dark)) return model;
+  const double span = brightest - dark;
+  const double tolerance = 0.01 * span;
+  Window w;
+  double total = 0.0;
+  const double centre = options.radius;
+  for (int j = 0; j < size; ++j) {
+    for (int i = 0; i < size; ++i) {
+      const int qx = wx + i, qy = wy + j;
+      const int n = w.count++;
+      w.px[n] = qx;
+      w.py[n] = qy;
+      w.x[n] = i - centre;
+      w.y[n] = j - centre;
+      w.measured[n] = std::clamp((channel_sum(noisy.at(qx, qy)) - dark) / span, 0.0, 1.0);
+      const double v = std::max(0.0f, channel_sum(variance.at(qx, qy)));
+      w.weight[n] = span * span / (v + tolerance * tolerance);
+      total += w.measured[n];
+    }
+  }
+  if (total < 0.5 || total > w.count - 0.5) return model;
+  const LineFit fit = fit_line(w, total);
+  model.chi2_per_pixel = fit.chi2 / w.count;
+  if (!(model.chi2_per_pixel <= options.max_chi2)) return model;
+  glm::dvec3 bright_sum(0.0), dark_colour(0.0);
+  int bright_count = 0, dark_pixels = 0;
+  for (int n = 0; n < w.count; ++n) {
+    const double c = pixel_coverage(fit.nx, fit.ny, fit.nx * w.x[n] + fit.ny * w.y[n] - fit.d);
+    if (c >= 0.999) {
+      bright_sum += glm::dvec3(noisy.at(w.px[n], w.py[n]));
+      ++bright_count;
+    } else if (c <= 0.001) {
+      dark_colour += glm::dvec3(denoised.at(w.px[n], w.py[n]));
+      ++dark_pixels;
+    }
+    if (w.px[n] == x && w.py[n] == y) {
+      model.coverage = c;
+      model.measured = w.measured[n];
+    }
+  }
+  // Two fully covered pixels at least: a lone bright pixel (a firefly) is no edge.
+  if (bright_count < 2 || dark_pixels == 0) return model;
+  model.bright = glm::vec3(bright_sum / static_cast<double>(bright_count));
+  // The bright side must be uniform (a light seen directly, whose samples all return its
+  // radiance): the model's bright value is then exact. A lit surface's edge is the features'.
+  const double bright_mean = channel_sum(model.bright);
+  for (int n = 0; n < w.count; ++n) {
+    const double c = pixel_coverage(fit.nx, fit.ny, fit.nx * w.x[n] + fit.ny * w.y[n] - fit.d);
+    if (c >= 0.999 && std::abs(channel_sum(noisy.at(w.px[n], w.py[n])) - bright_mean) >
+                          options.uniformity * bright_mean) {
+      return model;
+    }
+  }
+  model.dark = glm::vec3(dark_colour / static_cast<double>(dark_pixels));
+  model.ok = true;
+  return model;
+}
+
+}  // namespace
+
+void refine_bright_edges(const Image& noisy, const Image& variance, Image& denoised,
+                         const BrightEdgeOptions& options) {
+  const int w = noisy.width(), h = noisy.height();
+  const int r = options.radius;
+  const int size = 2 * r + 1;
+  if (!(options.contrast > 0.0f) || r < 1 || size > kMaxWindow || w < size || h < size) return;
+  // Candidates: pixels with a pixel at least `contrast` times brighter within one pixel.
+  Image result = denoised;
+  parallel::for_range(tbb::blocked_range<int>(0, h, 4), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      for (int x = 0; x < w; ++x) {
+        float lo = 1e30f, hi = 0.0f;
+        for (int j = std::max(0, y - 1); j <= std::min(h - 1, y + 1); ++j) {
+          for (int i = std::max(0, x - 1); i <= std::min(w - 1, x + 1); ++i) {
+            const float s = channel_sum(noisy.at(i, j));
+            lo = std::min(lo, s);
+            hi = std::max(hi, s);
+          }
+        }
+        if (!(hi > 0.0f) || hi < options.contrast * lo) continue;
+        PixelModel best;
+        const std::array<std::array<int, 2>, 5> shifts{{{0, 0}, {-r, 0}, {r, 0}, {0, -r}, {0, r}}};
+        for (const auto& shift : shifts) {
+          const int wx = std::clamp(x - r + shift[0], 0, w - size);
+          const int wy = std::clamp(y - r + shift[1], 0, h - size);
+          const PixelModel m = model_in_window(noisy, variance, denoised, options, wx, wy, x, y);
+          if (m.ok && (!best.ok || m.chi2_per_pixel < best.chi2_per_pixel)) best = m;
+        }
+        if (!best.ok || (best.coverage <= 0.0 && best.measured <= 0.0)) continue;
+        const float c = static_cast<float>(best.coverage);
+        result.at(x, y) = best.dark + c * (best.bright - best.dark);
+      }
+    }
+  });
+  denoised = std::move(result);
+}
+
+}  // namespace tritrace
