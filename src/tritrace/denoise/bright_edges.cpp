@@ -59,7 +59,7 @@ LineFit fit_offset(const Window& w, double theta, double total) {
   }
   lo -= 1.0;
   hi += 1.0;  // d = lo: every pixel fully on the bright side; d = hi: none
-  for (int iteration = 0; iteration < 40; ++iteration) {
+  for (int iteration = 0; iteration < 24; ++iteration) {
     const double mid = 0.5 * (lo + hi);
     double sum = 0.0;
     for (int i = 0; i < w.count; ++i) {
@@ -89,7 +89,7 @@ LineFit fit_line(const Window& w, double total) {
   constexpr double kStep = 0.15;
   LineFit best = fit_offset(w, theta0, total);
   double best_theta = theta0;
-  for (int j = -4; j <= 4; ++j) {
+  for (int j = -3; j <= 3; ++j) {
     if (j == 0) continue;
     const double theta = theta0 + j * kStep;
     const LineFit fit = fit_offset(w, theta, total);
@@ -102,7 +102,7 @@ LineFit fit_line(const Window& w, double total) {
   double a = best_theta - kStep, b = best_theta + kStep;
   double c = b - kGolden * (b - a), e = a + kGolden * (b - a);
   LineFit fc = fit_offset(w, c, total), fe = fit_offset(w, e, total);
-  for (int iteration = 0; iteration < 14; ++iteration) {
+  for (int iteration = 0; iteration < 10; ++iteration) {
     if (fc.chi2 < fe.chi2) {
       b = e;
       e = c;
@@ -123,15 +123,17 @@ LineFit fit_line(const Window& w, double total) {
   return best;
 }
 
-float channel_sum(const glm::vec3& v) { return v.x + v.y + v.z; }
+float channel_sum(const glm::vec3& v) {
+  return v.x + v.y + v.z;
+}
 
 struct PixelModel {
   bool ok = false;
   double chi2_per_pixel = 0.0;
-  double coverage = 0.0;    // the pixel's, from the fitted line
-  double measured = 0.0;    // the pixel's own measured coverage
-  glm::vec3 bright{0.0f};   // noisy mean of the fully covered pixels
-  glm::vec3 dark{0.0f};     // denoised mean of the uncovered pixels
+  double coverage = 0.0;   // the pixel's, from the fitted line
+  double measured = 0.0;   // the pixel's own measured coverage
+  glm::vec3 bright{0.0f};  // noisy mean of the fully covered pixels
+  glm::vec3 dark{0.0f};    // denoised mean of the uncovered pixels
 };
 
 // Fits the window whose top-left pixel is (wx, wy) and returns the model at pixel (x, y).
@@ -141,7 +143,8 @@ PixelModel model_in_window(const Image& noisy, const Image& variance, const Imag
   const int size = 2 * options.radius + 1;
   float brightest = 0.0f;
   for (int j = 0; j < size; ++j) {
-    for (int i = 0; i < size; ++i) brightest = std::max(brightest, channel_sum(noisy.at(wx + i, wy + j)));
+    for (int i = 0; i < size; ++i)
+      brightest = std::max(brightest, channel_sum(noisy.at(wx + i, wy + j)));
   }
   if (!(brightest > 0.0f)) return model;
   double dark_sum = 0.0;
@@ -156,6 +159,15 @@ PixelModel model_in_window(const Image& noisy, const Image& variance, const Imag
     }
   }
   if (dark_count == 0) return model;
+  // A uniform bright side shows as two pixels within `uniformity` of the brightest at least.
+  int near_brightest = 0;
+  for (int j = 0; j < size; ++j) {
+    for (int i = 0; i < size; ++i) {
+      near_brightest +=
+          channel_sum(noisy.at(wx + i, wy + j)) >= (1.0f - 2.0f * options.uniformity) * brightest;
+    }
+  }
+  if (near_brightest < 2) return model;
   const double dark = dark_sum / dark_count;
   if (!(brightest >= options.contrast * dark)) return model;
   const double span = brightest - dark;
@@ -231,23 +243,28 @@ void refine_bright_edges(const Image& noisy, const Image& variance, Image& denoi
         float lo = 1e30f, hi = 0.0f;
         for (int j = std::max(0, y - 1); j <= std::min(h - 1, y + 1); ++j) {
           for (int i = std::max(0, x - 1); i <= std::min(w - 1, x + 1); ++i) {
-            const float s = channel_sum(noisy.at(i, j));
-            lo = std::min(lo, s);
-            hi = std::max(hi, s);
+            lo = std::min(lo, channel_sum(denoised.at(i, j)));
+            hi = std::max(hi, channel_sum(noisy.at(i, j)));
           }
         }
         if (!(hi > 0.0f) || hi < options.contrast * lo) continue;
-        PixelModel best;
+        std::array<PixelModel, 5> models;
         const std::array<std::array<int, 2>, 5> shifts{{{0, 0}, {-r, 0}, {r, 0}, {0, -r}, {0, r}}};
-        for (const auto& shift : shifts) {
-          const int wx = std::clamp(x - r + shift[0], 0, w - size);
-          const int wy = std::clamp(y - r + shift[1], 0, h - size);
-          const PixelModel m = model_in_window(noisy, variance, denoised, options, wx, wy, x, y);
-          if (m.ok && (!best.ok || m.chi2_per_pixel < best.chi2_per_pixel)) best = m;
+        int best = -1;
+        for (int k = 0; k < 5; ++k) {
+          const int wx = std::clamp(x - r + shifts[k][0], 0, w - size);
+          const int wy = std::clamp(y - r + shifts[k][1], 0, h - size);
+          models[k] = model_in_window(noisy, variance, denoised, options, wx, wy, x, y);
+          if (models[k].ok &&
+              (best < 0 || models[k].chi2_per_pixel < models[best].chi2_per_pixel)) {
+            best = k;
+          }
         }
-        if (!best.ok || (best.coverage <= 0.0 && best.measured <= 0.0)) continue;
-        const float c = static_cast<float>(best.coverage);
-        result.at(x, y) = best.dark + c * (best.bright - best.dark);
+        if (best < 0) continue;
+        const PixelModel& model = models[best];
+        if (model.coverage <= 0.0 && model.measured <= 0.0) continue;
+        const float c = static_cast<float>(model.coverage);
+        result.at(x, y) = model.dark + c * (model.bright - model.dark);
       }
     }
   });

@@ -26,10 +26,10 @@ struct BrightEdgeOptions {
   // The windows are (2 radius + 1)^2 pixels; each pixel is fitted in the five windows that
   // contain it (centred, and shifted by `radius` pixels left, right, up, down: a window beside a
   // corner of the bright region then holds one of its edges only).
-  int radius = 2;
+  int radius = 4;
   // A fit is kept when its squared residuals, each in units of the pixel's variance plus
   // (1% of the edge's contrast)^2, average below this.
-  float max_chi2 = 4.0f;
+  float max_chi2 = 1.0f;
   // The fully covered pixels must agree with their mean to this fraction.
   float uniformity = 0.02f;
 };
