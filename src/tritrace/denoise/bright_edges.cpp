@@ -262,7 +262,12 @@ void refine_bright_edges(const Image& noisy, const Image& variance, Image& denoi
         }
         if (best < 0) continue;
         const PixelModel& model = models[best];
+        // Left as the filter made them: pixels that saw no light where the line says none
+        // reaches, and pixels whose every sample saw the light where the line says nearly all of
+        // it is covered (a fully covered pixel is exact; the line's own error would only darken
+        // it).
         if (model.coverage <= 0.0 && model.measured <= 0.0) continue;
+        if (model.coverage >= 0.95 && model.measured >= 1.0 - options.uniformity) continue;
         const float c = static_cast<float>(model.coverage);
         result.at(x, y) = model.dark + c * (model.bright - model.dark);
       }
