@@ -681,6 +681,24 @@ TEST(Denoiser, RejectsASureRadiusAbove32) {
   EXPECT_EQ(denoise(c, c, flat.features(), options).pixels().size(), 64u);
 }
 
+TEST(Denoiser, RejectsBadBrightEdgeSettings) {
+  const Image c = filled(8, 8, glm::vec3(0.5f));
+  const Flat flat(8, 8);
+  for (const int radius : {0, 5}) {
+    DenoiseOptions options;
+    options.bright_edges.radius = radius;
+    EXPECT_THROW((void)denoise(c, c, flat.features(), options), Error) << radius;
+  }
+  for (const float v : {-1.0f, std::nanf("")}) {
+    DenoiseOptions options;
+    options.bright_edges.max_chi2 = v;
+    EXPECT_THROW((void)denoise(c, c, flat.features(), options), Error) << v;
+  }
+  DenoiseOptions off;
+  off.bright_edges.contrast = 0.0f;  // off, not an error
+  EXPECT_EQ(denoise(c, c, flat.features(), off).pixels().size(), 64u);
+}
+
 // The variance the filter uses is at least spatial_variance_floor (0.5) times the image's own
 // estimate (estimate_variance_spatially), but at most spatial_variance_floor_limit (16) times the
 // given variance. A noisy image (sigma 0.1) given a variance 200 times too small: with the

@@ -23,9 +23,9 @@ struct BrightEdgeOptions {
   // many times the mean of its dark pixels (those below 5% of the brightest). 0 turns the model
   // off.
   float contrast = 20.0f;
-  // The windows are (2 radius + 1)^2 pixels; each pixel is fitted in the five windows that
-  // contain it (centred, and shifted by `radius` pixels left, right, up, down: a window beside a
-  // corner of the bright region then holds one of its edges only).
+  // The windows are (2 radius + 1)^2 pixels (radius 1 to 4); each pixel is fitted in the five
+  // windows that contain it (centred, and shifted by `radius` pixels left, right, up, down: a
+  // window beside a corner of the bright region then holds one of its edges only).
   int radius = 4;
   // A fit is kept when its squared residuals, each in units of the pixel's variance plus
   // (1% of the edge's contrast)^2, average below this.
