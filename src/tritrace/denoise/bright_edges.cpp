@@ -28,18 +28,18 @@ double pixel_coverage(double nx, double ny, double s) {
 
 namespace {
 
-constexpr int kMaxWindow = 9;  // 2 * radius + 1 for radius up to 4
-constexpr int kMaxPixels = kMaxWindow * kMaxWindow;
+constexpr int kMaxEdgeWindow = 9;  // 2 * radius + 1 for radius up to 4
+constexpr int kMaxEdgeWindowPixels = kMaxEdgeWindow * kMaxEdgeWindow;
 
 // One window's pixels: positions relative to the window's centre, the noisy channel sums
 // brought to coverages, and the weight of each squared coverage residual.
-struct Window {
+struct EdgeWindow {
   int count = 0;
-  std::array<double, kMaxPixels> x{}, y{}, measured{}, weight{};
-  std::array<int, kMaxPixels> px{}, py{};
+  std::array<double, kMaxEdgeWindowPixels> x{}, y{}, measured{}, weight{};
+  std::array<int, kMaxEdgeWindowPixels> px{}, py{};
 };
 
-struct LineFit {
+struct EdgeLineFit {
   double nx = 1.0, ny = 0.0, d = 0.0;
   double chi2 = 0.0;
 };
@@ -47,8 +47,8 @@ struct LineFit {
 // The line n . x = d with n at angle theta whose coverages sum to the measured total (area
 // matching: the total is decreasing in d, found by bisection), and its weighted squared
 // residuals.
-LineFit fit_offset(const Window& w, double theta, double total) {
-  LineFit fit;
+EdgeLineFit fit_offset(const EdgeWindow& w, double theta, double total) {
+  EdgeLineFit fit;
   fit.nx = std::cos(theta);
   fit.ny = std::sin(theta);
   double lo = 1e30, hi = -1e30;
@@ -79,7 +79,7 @@ LineFit fit_offset(const Window& w, double theta, double total) {
 // The best line for a window: the normal's angle starts at the direction of the coverages' first
 // moment (for a half-plane it points to the bright side), is scanned over +-0.6 radians and
 // refined by golden-section search.
-LineFit fit_line(const Window& w, double total) {
+EdgeLineFit fit_line(const EdgeWindow& w, double total) {
   double gx = 0.0, gy = 0.0;
   for (int i = 0; i < w.count; ++i) {
     gx += w.measured[i] * w.x[i];
@@ -87,12 +87,12 @@ LineFit fit_line(const Window& w, double total) {
   }
   const double theta0 = std::atan2(gy, gx);
   constexpr double kStep = 0.15;
-  LineFit best = fit_offset(w, theta0, total);
+  EdgeLineFit best = fit_offset(w, theta0, total);
   double best_theta = theta0;
   for (int j = -3; j <= 3; ++j) {
     if (j == 0) continue;
     const double theta = theta0 + j * kStep;
-    const LineFit fit = fit_offset(w, theta, total);
+    const EdgeLineFit fit = fit_offset(w, theta, total);
     if (fit.chi2 < best.chi2) {
       best = fit;
       best_theta = theta;
@@ -101,7 +101,7 @@ LineFit fit_line(const Window& w, double total) {
   constexpr double kGolden = 0.6180339887498949;
   double a = best_theta - kStep, b = best_theta + kStep;
   double c = b - kGolden * (b - a), e = a + kGolden * (b - a);
-  LineFit fc = fit_offset(w, c, total), fe = fit_offset(w, e, total);
+  EdgeLineFit fc = fit_offset(w, c, total), fe = fit_offset(w, e, total);
   for (int iteration = 0; iteration < 10; ++iteration) {
     if (fc.chi2 < fe.chi2) {
       b = e;
@@ -117,17 +117,17 @@ LineFit fit_line(const Window& w, double total) {
       fe = fit_offset(w, e, total);
     }
   }
-  for (const LineFit* f : {&fc, &fe}) {
+  for (const EdgeLineFit* f : {&fc, &fe}) {
     if (f->chi2 < best.chi2) best = *f;
   }
   return best;
 }
 
-float channel_sum(const glm::vec3& v) {
+float sum_of_channels(const glm::vec3& v) {
   return v.x + v.y + v.z;
 }
 
-struct PixelModel {
+struct EdgePixelModel {
   bool ok = false;
   double chi2_per_pixel = 0.0;
   double coverage = 0.0;   // the pixel's, from the fitted line
@@ -137,21 +137,21 @@ struct PixelModel {
 };
 
 // Fits the window whose top-left pixel is (wx, wy) and returns the model at pixel (x, y).
-PixelModel model_in_window(const Image& noisy, const Image& variance, const Image& denoised,
-                           const BrightEdgeOptions& options, int wx, int wy, int x, int y) {
-  PixelModel model;
+EdgePixelModel model_in_window(const Image& noisy, const Image& variance, const Image& denoised,
+                               const BrightEdgeOptions& options, int wx, int wy, int x, int y) {
+  EdgePixelModel model;
   const int size = 2 * options.radius + 1;
   float brightest = 0.0f;
   for (int j = 0; j < size; ++j) {
     for (int i = 0; i < size; ++i)
-      brightest = std::max(brightest, channel_sum(noisy.at(wx + i, wy + j)));
+      brightest = std::max(brightest, sum_of_channels(noisy.at(wx + i, wy + j)));
   }
   if (!(brightest > 0.0f)) return model;
   double dark_sum = 0.0;
   int dark_count = 0;
   for (int j = 0; j < size; ++j) {
     for (int i = 0; i < size; ++i) {
-      const float s = channel_sum(noisy.at(wx + i, wy + j));
+      const float s = sum_of_channels(noisy.at(wx + i, wy + j));
       if (s < 0.05f * brightest) {
         dark_sum += s;
         ++dark_count;
@@ -163,8 +163,8 @@ PixelModel model_in_window(const Image& noisy, const Image& variance, const Imag
   int near_brightest = 0;
   for (int j = 0; j < size; ++j) {
     for (int i = 0; i < size; ++i) {
-      near_brightest +=
-          channel_sum(noisy.at(wx + i, wy + j)) >= (1.0f - 2.0f * options.uniformity) * brightest;
+      near_brightest += sum_of_channels(noisy.at(wx + i, wy + j)) >=
+                        (1.0f - 2.0f * options.uniformity) * brightest;
     }
   }
   if (near_brightest < 2) return model;
@@ -172,7 +172,7 @@ PixelModel model_in_window(const Image& noisy, const Image& variance, const Imag
   if (!(brightest >= options.contrast * dark)) return model;
   const double span = brightest - dark;
   const double tolerance = 0.01 * span;
-  Window w;
+  EdgeWindow w;
   double total = 0.0;
   const double centre = options.radius;
   for (int j = 0; j < size; ++j) {
@@ -183,14 +183,14 @@ PixelModel model_in_window(const Image& noisy, const Image& variance, const Imag
       w.py[n] = qy;
       w.x[n] = i - centre;
       w.y[n] = j - centre;
-      w.measured[n] = std::clamp((channel_sum(noisy.at(qx, qy)) - dark) / span, 0.0, 1.0);
-      const double v = std::max(0.0f, channel_sum(variance.at(qx, qy)));
+      w.measured[n] = std::clamp((sum_of_channels(noisy.at(qx, qy)) - dark) / span, 0.0, 1.0);
+      const double v = std::max(0.0f, sum_of_channels(variance.at(qx, qy)));
       w.weight[n] = span * span / (v + tolerance * tolerance);
       total += w.measured[n];
     }
   }
   if (total < 0.5 || total > w.count - 0.5) return model;
-  const LineFit fit = fit_line(w, total);
+  const EdgeLineFit fit = fit_line(w, total);
   model.chi2_per_pixel = fit.chi2 / w.count;
   if (!(model.chi2_per_pixel <= options.max_chi2)) return model;
   glm::dvec3 bright_sum(0.0), dark_colour(0.0);
@@ -214,10 +214,10 @@ PixelModel model_in_window(const Image& noisy, const Image& variance, const Imag
   model.bright = glm::vec3(bright_sum / static_cast<double>(bright_count));
   // The bright side must be uniform (a light seen directly, whose samples all return its
   // radiance): the model's bright value is then exact. A lit surface's edge is the features'.
-  const double bright_mean = channel_sum(model.bright);
+  const double bright_mean = sum_of_channels(model.bright);
   for (int n = 0; n < w.count; ++n) {
     const double c = pixel_coverage(fit.nx, fit.ny, fit.nx * w.x[n] + fit.ny * w.y[n] - fit.d);
-    if (c >= 0.999 && std::abs(channel_sum(noisy.at(w.px[n], w.py[n])) - bright_mean) >
+    if (c >= 0.999 && std::abs(sum_of_channels(noisy.at(w.px[n], w.py[n])) - bright_mean) >
                           options.uniformity * bright_mean) {
       return model;
     }
@@ -234,7 +234,7 @@ void refine_bright_edges(const Image& noisy, const Image& variance, Image& denoi
   const int w = noisy.width(), h = noisy.height();
   const int r = options.radius;
   const int size = 2 * r + 1;
-  if (!(options.contrast > 0.0f) || r < 1 || size > kMaxWindow || w < size || h < size) return;
+  if (!(options.contrast > 0.0f) || r < 1 || size > kMaxEdgeWindow || w < size || h < size) return;
   // Candidates: pixels with a pixel at least `contrast` times brighter within one pixel.
   Image result = denoised;
   parallel::for_range(tbb::blocked_range<int>(0, h, 4), [&](const tbb::blocked_range<int>& rows) {
@@ -243,12 +243,12 @@ void refine_bright_edges(const Image& noisy, const Image& variance, Image& denoi
         float lo = 1e30f, hi = 0.0f;
         for (int j = std::max(0, y - 1); j <= std::min(h - 1, y + 1); ++j) {
           for (int i = std::max(0, x - 1); i <= std::min(w - 1, x + 1); ++i) {
-            lo = std::min(lo, channel_sum(denoised.at(i, j)));
-            hi = std::max(hi, channel_sum(noisy.at(i, j)));
+            lo = std::min(lo, sum_of_channels(denoised.at(i, j)));
+            hi = std::max(hi, sum_of_channels(noisy.at(i, j)));
           }
         }
         if (!(hi > 0.0f) || hi < options.contrast * lo) continue;
-        std::array<PixelModel, 5> models;
+        std::array<EdgePixelModel, 5> models;
         const std::array<std::array<int, 2>, 5> shifts{{{0, 0}, {-r, 0}, {r, 0}, {0, -r}, {0, r}}};
         int best = -1;
         for (int k = 0; k < 5; ++k) {
@@ -261,7 +261,7 @@ void refine_bright_edges(const Image& noisy, const Image& variance, Image& denoi
           }
         }
         if (best < 0) continue;
-        const PixelModel& model = models[best];
+        const EdgePixelModel& model = models[best];
         // Left as the filter made them: pixels that saw no light where the line says none
         // reaches, and pixels whose every sample saw the light where the line says nearly all of
         // it is covered (a fully covered pixel is exact; the line's own error would only darken
