@@ -2,6 +2,8 @@
 // cut-out is skipped by tracing the ray again over the rest of its interval.
 #include "tritrace/accel/alpha_tested_accel.h"
 
+#include "tritrace/math/random.h"
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -12,14 +14,6 @@ namespace {
 
 // Rays traced again at a time: arrays on the stack, so that tracing allocates nothing.
 constexpr size_t kChunk = 64;
-
-// The finaliser of SplitMix64 (Steele, Lea and Flood, "Fast splittable pseudorandom number
-// generators", OOPSLA 2014): every input bit changes about half of the output bits.
-uint64_t mix64(uint64_t z) {
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
 
 float next_above(float t) {
   return std::nextafter(t, std::numeric_limits<float>::infinity());

@@ -25,10 +25,6 @@
 namespace tritrace {
 namespace {
 
-float max_component(glm::vec3 c) {
-  return std::max({c.x, c.y, c.z});
-}
-
 float mean(glm::vec3 c) {
   return (c.x + c.y + c.z) / 3.0f;
 }

@@ -37,10 +37,6 @@ Scratch& thread_scratch() {
   return scratch;
 }
 
-float max_component(glm::vec3 c) {
-  return std::max({c.x, c.y, c.z});
-}
-
 // A light sample's contribution at a vertex if nothing blocks its shadow ray: `throughput_f` is
 // the path's throughput times the BSDF value towards wi, `cos_theta` the cosine there, and
 // `bsdf_pdf()` the BSDF's density of wi (asked for only where MIS weighs the sample).

@@ -13,6 +13,7 @@
 #include <immintrin.h>
 #endif
 
+#include "tritrace/accel/bvh/ray_box.h"
 #include "tritrace/accel/bvh/traversal_stack.h"
 #include "tritrace/geometry/point_triangle_distance.h"
 #include "tritrace/parallel.h"
@@ -134,14 +135,6 @@ inline uint32_t occupied_slots(const WideNode& node) {
   for (int i = 0; i < kWidth; ++i) mask |= node.child[i] != kEmptyChild ? 1u << i : 0u;
   return mask;
 #endif
-}
-
-// Asks for every cache line of a node or a triangle block, without waiting for them.
-inline void prefetch(const WideBvh& tree, uint32_t ref) {
-  const char* p = ref & kLeafBit ? reinterpret_cast<const char*>(&tree.blocks[ref & ~kLeafBit])
-                                 : reinterpret_cast<const char*>(&tree.nodes[ref]);
-  const size_t bytes = ref & kLeafBit ? sizeof(TriangleBlock) : sizeof(WideNode);
-  for (size_t line = 0; line < bytes; line += 64) __builtin_prefetch(p + line);
 }
 
 ClosestPoint result(const Best& best) {

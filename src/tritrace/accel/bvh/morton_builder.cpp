@@ -129,11 +129,11 @@ void radix_sort(HugePageVector<uint64_t>& keys) {
   }
 }
 
-class Builder {
+class MortonTreeBuilder {
  public:
   // Builds into `out`.
-  Builder(const HugePageVector<uint64_t>& keys, const BoxSource& boxes, uint32_t max_leaf_size,
-          BinaryBvh& out)
+  MortonTreeBuilder(const HugePageVector<uint64_t>& keys, const BoxSource& boxes,
+                    uint32_t max_leaf_size, BinaryBvh& out)
       : keys_(keys), boxes_(boxes), max_leaf_size_(max_leaf_size), out_(out) {}
 
   // Every range starts at a multiple of the leaf size, so a subtree over n primitives has exactly
@@ -265,7 +265,7 @@ BinaryBvh build_morton(size_t count, const BoxSource& boxes, const BuildConfig& 
   });
   radix_sort(keys);
   BinaryBvh out;
-  Builder(keys, boxes, config.max_leaf_size, out).build();
+  MortonTreeBuilder(keys, boxes, config.max_leaf_size, out).build();
   return out;
 }
 

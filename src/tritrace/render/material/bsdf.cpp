@@ -12,10 +12,6 @@ namespace {
 
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
-float max_component(glm::vec3 c) {
-  return std::max({c.x, c.y, c.z});
-}
-
 glm::vec3 reflect_about(glm::vec3 wo, glm::vec3 m) {
   return 2.0f * glm::dot(wo, m) * m - wo;
 }

@@ -3,6 +3,7 @@
 // sample consistent with each other. Plain data with a switch per lobe: no virtual call per ray.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <glm/vec2.hpp>
@@ -93,5 +94,10 @@ class Bsdf {
 glm::vec3 lobe_eval(const Lobe& lobe, glm::vec3 wo, glm::vec3 wi);
 float lobe_pdf(const Lobe& lobe, glm::vec3 wo, glm::vec3 wi);
 BsdfSample lobe_sample(const Lobe& lobe, glm::vec3 wo, float u_lobe, glm::vec2 u);
+
+// The largest of a colour's three channels (Russian roulette's and lobe choice's measure).
+inline float max_component(glm::vec3 c) {
+  return std::max({c.x, c.y, c.z});
+}
 
 }  // namespace tritrace

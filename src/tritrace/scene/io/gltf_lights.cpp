@@ -35,9 +35,9 @@ struct LightDef {
   double inner = 0.0, outer = std::numbers::pi / 4.0;
 };
 
-class Reader {
+class LightReader {
  public:
-  explicit Reader(const std::string& subject) : subject_(subject) {}
+  explicit LightReader(const std::string& subject) : subject_(subject) {}
 
   PunctualLights run(const Json& doc) {
     if (!doc.is_object()) fail("", "a glTF document must be a JSON object");
@@ -284,7 +284,7 @@ PunctualLights parse_gltf_lights(std::string_view json, const std::string& subje
   } catch (const Json::exception&) {
     throw Error(subject, "invalid glTF JSON (reading its lights)");
   }
-  return Reader(subject).run(doc);
+  return LightReader(subject).run(doc);
 }
 
 PunctualLights read_gltf_lights(const std::string& path) {

@@ -16,9 +16,9 @@ namespace {
 
 using Json = nlohmann::json;
 
-class Reader {
+class MaterialReader {
  public:
-  explicit Reader(const std::string& subject) : subject_(subject) {}
+  explicit MaterialReader(const std::string& subject) : subject_(subject) {}
 
   GltfMaterialTable run(const Json& doc) {
     if (!doc.is_object()) fail("", "a glTF document must be a JSON object");
@@ -407,7 +407,7 @@ GltfMaterialTable parse_gltf_materials(std::string_view json, const std::string&
   } catch (const Json::exception&) {
     throw Error(subject, "invalid glTF JSON (reading its materials)");
   }
-  return Reader(subject).run(doc);
+  return MaterialReader(subject).run(doc);
 }
 
 }  // namespace tritrace

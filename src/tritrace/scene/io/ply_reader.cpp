@@ -93,7 +93,7 @@ void split_words(std::string_view line, std::vector<std::string_view>& out) {
     if (i > start) out.push_back(line.substr(start, i - start));
   }
 }
-std::vector<std::string_view> words(std::string_view line) {
+std::vector<std::string_view> line_words(std::string_view line) {
   std::vector<std::string_view> out;
   split_words(line, out);
   return out;
@@ -115,7 +115,7 @@ std::optional<Layout> parse_header(std::span<const char> bytes) {
   for (;;) {
     const size_t end = all.find('\n', pos);
     if (end == std::string_view::npos) return std::nullopt;
-    const std::vector<std::string_view> w = words(all.substr(pos, end - pos));
+    const std::vector<std::string_view> w = line_words(all.substr(pos, end - pos));
     pos = end + 1;
     if (line_number++ == 0) {
       if (w.size() != 1 || w[0] != "ply") return std::nullopt;
