@@ -483,6 +483,17 @@ void check_options(const DenoiseOptions& options) {
                                  " is not a finite number >= 0");
     }
   }
+  if (options.bright_edges.radius < 1 || options.bright_edges.radius > 4) {
+    throw Error("denoise", "bright-edge window radius " +
+                               std::to_string(options.bright_edges.radius) + " is outside 1..4");
+  }
+  for (float v : {options.bright_edges.contrast, options.bright_edges.max_chi2,
+                  options.bright_edges.uniformity}) {
+    if (!(v >= 0.0f) || !std::isfinite(v)) {
+      throw Error("denoise",
+                  "a bright-edge setting (" + std::to_string(v) + ") is not a finite number >= 0");
+    }
+  }
   for (float v : {options.colour_strength, options.guided_colour_strength, options.albedo_scale,
                   options.albedo_relative_scale, options.normal_scale, options.depth_scale}) {
     if (!std::isfinite(v)) throw Error("denoise", "a strength or scale is not finite");
@@ -567,6 +578,7 @@ Image denoise(const Image& colour, const Image& variance, const DenoiseFeatures&
                                result.colour[2][o] * m.z);
     }
   }
+  refine_bright_edges(colour, variance, out, options.bright_edges);
   if (options.keep_mean) restore_mean(colour, out);
   return out;
 }

@@ -12,6 +12,7 @@
 // blurred (as in Bako et al., "Kernel-Predicting Convolutional Networks", SIGGRAPH 2017).
 #pragma once
 
+#include "tritrace/denoise/bright_edges.h"
 #include "tritrace/image/image.h"
 #include "tritrace/math/random.h"
 
@@ -68,6 +69,8 @@ struct DenoiseOptions {
   // Scale each channel of the result so that its sum is the input's (where both are positive):
   // the weighted means do not keep the total exactly around fireflies.
   bool keep_mean = true;
+  // The straight-edge model at very bright edges (bright_edges.h; contrast 0 turns it off).
+  BrightEdgeOptions bright_edges;
 };
 
 // The amount added to the albedo when dividing colour by it, so that black and missing albedo (0
