@@ -322,17 +322,35 @@ float light_tracing_camera_pdf(float pdf, float count_ratio) {
   return pdf / count_ratio;
 }
 
-// Per thread: the two subpaths. They grow (doubling) as long subpaths need, up to the depth limit,
-// rather than to it at once: --max-depth 65536 would otherwise take tens of megabytes per thread.
+// Samples whose subpaths are walked side by side: each bounce's rays of all of them are traced in
+// one query (packets on small trees, interleaved traversal on large ones), as the path tracer
+// traces its batch's bounces, instead of one ray per query.
+inline constexpr size_t kWavefront = 64;
+
+// Per thread and per sample of a wavefront: the two subpaths. They grow (doubling) as long
+// subpaths need, up to the depth limit, rather than to it at once: --max-depth 65536 would
+// otherwise take tens of megabytes per thread.
 inline constexpr size_t kInitialSubpathVertices = 16;
 struct Subpaths {
   std::vector<Vertex> camera, light;
 };
 
-Subpaths& thread_subpaths() {
-  thread_local Subpaths subpaths;
+std::array<Subpaths, kWavefront>& thread_subpaths() {
+  thread_local std::array<Subpaths, kWavefront> subpaths;
   return subpaths;
 }
+
+// One subpath's walk between its bounces: the ray to trace next and what the next vertex receives.
+struct WalkState {
+  int count = 0;            // vertices so far
+  int max_vertices = 0;     // the subpath's limit
+  Ray ray{};                // the next ray (while active)
+  glm::vec3 beta{0.0f};     // the throughput the next vertex receives
+  glm::vec3 rr_beta{1.0f};  // the throughput since the subpath's start, for Russian roulette
+  float pdf_dir = 0.0f;     // the next ray's direction density at the last vertex
+  bool light = false;       // the adjoint (importance) transport
+  bool active = false;      // a ray to trace
+};
 
 }  // namespace
 
@@ -342,35 +360,53 @@ class BdptTracer {
   BdptTracer(const BdptIntegrator& integrator, const Scene& scene, const Accel& accel)
       : it_(integrator), scene_(scene), accel_(accel) {}
 
-  // The sample's own pixel's radiance; with light tracing, the (s, 1) connections are added to
-  // `splats` (not null then).
-  // `camera_hit` is the camera ray's first hit (the batch's camera rays are traced together).
-  glm::vec3 sample(const Ray& camera_ray, const Hit& camera_hit, Sampler& sampler,
-                   SplatBuffer* splats);
-  // Adaptive sampling's pass (SplatPass; null: every pixel takes every sample) and the pixel of
-  // the next sample, set before sample().
-  void set_pass(const SplatPass* pass, uint32_t pixel);
+  // Samples [first, first + count) of the batch (count <= kWavefront): their subpaths walked
+  // side by side, then each sample's connections in order. Radiance and AOVs go to `out` at the
+  // batch's indices; with light tracing the (s, 1) connections are added to out.splats (not null
+  // then). `first_hits` are the batch's camera rays' first hits (traced together).
+  void wavefront(const SampleBatch& batch, const SampleOutput& out, const Hit* first_hits,
+                 size_t first, size_t count);
   uint64_t traced() const { return traced_; }
-  // The albedo and normal AOVs of the last sample's camera subpath, as the path tracer writes them
+
+ private:
+  // The albedo and normal AOVs of sample k's camera subpath, as the path tracer writes them
   // (path_integrator.cpp): those of the first surface that is not specular, seen through perfect
   // mirrors and smooth glass with their tint; a specular surface's own where the subpath ends
   // there; zero where it escapes.
-  void surface_aovs(glm::vec3& albedo, glm::vec3& normal) const;
-
- private:
+  void surface_aovs(size_t k, glm::vec3& albedo, glm::vec3& normal) const;
+  // Adaptive sampling's pass (SplatPass; null: every pixel takes every sample) and the pixel of
+  // wavefront sample k: its count ratio.
+  void set_pass(size_t k, const SplatPass* pass, uint32_t pixel);
+  // Makes wavefront sample k the one whose subpaths, pixel and sums the connections and weights
+  // below read and write.
+  void select(size_t k);
   // Fills vertex x from a hit of ray `ray`.
   bool make_surface(Vertex& x, const Ray& ray, const Hit& hit) const;
-  // Extends `path` (count vertices, the last the walk starts from) with vertices sampled from
-  // `ray`, whose direction has density pdf_dir at the last vertex; beta is the throughput the
-  // next vertex receives. `light` selects the adjoint (importance) transport. Returns the count.
-  int walk(std::vector<Vertex>& path, int count, int max_vertices, Ray ray, glm::vec3 beta,
-           float pdf_dir, bool light, Sampler& sampler, const Hit* first_hit);
-  // Light subpath: returns its vertex count (0 when the scene has no emitter).
-  int light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler);
+  // A walk from the last of `path`'s w.count vertices: inactive if the subpath is full, else
+  // with room for the next vertex.
+  static void walk_begin(std::vector<Vertex>& path, WalkState& w);
+  // One bounce of a walk: the vertex at `hit` of w.ray (a miss ends it, with an environment vertex
+  // for a camera subpath, setting `escaped`), its scattering and the next ray (w.active) or the
+  // walk's end. Extends `path` with vertices sampled from w.ray, whose direction has density
+  // w.pdf_dir at the last vertex; w.beta is the throughput the next vertex receives.
+  void walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& hit, Sampler& sampler,
+                 bool& escaped) const;
+  // Walks the wavefront's active walks (walks[k] on paths[k]) to their ends, each bounce's rays
+  // traced in one query.
+  void walk_all(std::vector<Vertex>* const* paths, WalkState* walks, Sampler* samplers,
+                bool* escaped, size_t count);
+  // Light subpath: its first vertex, and the walk from it in `w` (w.count 0 when the scene has no
+  // emitter).
+  void light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler,
+                     WalkState& w) const;
   // The light subpath from directional light e (light_subpath's choice), its disk point from
   // u_point.
-  int directional_light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler,
-                                const BdptIntegrator::Emitter& e, glm::vec2 u_point);
+  void directional_light_subpath(std::vector<Vertex>& path, int max_vertices,
+                                 const BdptIntegrator::Emitter& e, glm::vec2 u_point,
+                                 WalkState& w) const;
+  // Sample k's connections (s, t), t >= 2, queued; then its light tracing (sampler: the splats'
+  // rounding number and an orthographic lens's offset, drawn after the subpaths').
+  void connect(size_t k, Sampler& sampler);
   // The shadow ray of the connection between camera-side vertex c and light-side vertex l; false
   // where nothing fits between its two ends (then nothing can block it).
   bool shadow_ray(const Vertex& c, const Vertex& l, Ray& r) const;
@@ -434,26 +470,41 @@ class BdptTracer {
   const Scene& scene_;
   const Accel& accel_;
   uint64_t traced_ = 0;
-  // The current sample's subpaths, its radiance so far, its light image and the splats' rounding.
+  // Per wavefront sample: its vertex counts, whether its camera subpath escaped, its radiance so
+  // far, the splats' rounding number, an orthographic camera's lens offset for light tracing
+  // (ortho_lens_point), its pixel and its count ratio for the weights.
+  struct SampleState {
+    int nc = 0, nl = 0;
+    bool camera_escaped = false;
+    glm::vec3 total{0.0f};
+    float u_round = 0.0f;
+    glm::vec2 lens_offset{0.0f};
+    uint32_t pixel = 0;
+    float pixel_ratio = 1.0f;
+  };
+  std::array<SampleState, kWavefront> state_{};
+  // The selected sample's (select): its subpaths and its state.
   Vertex* light_ = nullptr;
   Vertex* camera_ = nullptr;
-  glm::vec3 total_{0.0f};
-  SplatBuffer* splats_ = nullptr;
-  float u_round_ = 0.0f;
-  glm::vec2 lens_offset_{0.0f};  // an orthographic camera's lens offset for light tracing
-  // Adaptive sampling's pass, the sample's pixel and its count ratio for the weights.
-  const SplatPass* pass_ = nullptr;
+  SampleState* current_ = nullptr;
+  size_t selected_ = kWavefront;
+  glm::vec2 lens_offset_{0.0f};
   uint32_t pixel_ = 0;
   float pixel_ratio_ = 1.0f;
-  // Connections waiting for their shadow rays.
+  // The wavefront's light image and adaptive sampling's pass.
+  SplatBuffer* splats_ = nullptr;
+  const SplatPass* pass_ = nullptr;
+  // Connections waiting for their shadow rays, of any of the wavefront's samples (each sample's
+  // in the order it made them).
   struct Pending {
     glm::vec3 contribution{0.0f};  // unweighted, if unblocked
     int s = 0, t = 0;
     int ray = -1;  // into rays_; -1: no shadow ray
     int px = 0, py = 0;
     float count_ratio = 1.0f;  // t = 1: the splat's pixel's (SplatPass::count_ratio)
+    uint32_t sample = 0;       // the wavefront sample's index
   };
-  static constexpr int kMaxPending = 64;
+  static constexpr int kMaxPending = 256;
   std::array<Pending, kMaxPending> pending_{};
   std::array<Ray, kMaxPending> rays_{};
   std::array<uint8_t, kMaxPending> blocked_{};
@@ -464,15 +515,13 @@ class BdptTracer {
   }
   int pending_count_ = 0;
   int ray_count_ = 0;
-  int camera_count_ = 0;
-  bool camera_escaped_ = false;
 };
 
-void BdptTracer::surface_aovs(glm::vec3& albedo, glm::vec3& normal) const {
+void BdptTracer::surface_aovs(size_t k, glm::vec3& albedo, glm::vec3& normal) const {
   albedo = normal = glm::vec3(0.0f);
-  const Vertex* camera = thread_subpaths().camera.data();
+  const Vertex* camera = thread_subpaths()[k].camera.data();
   glm::vec3 tint(1.0f);
-  for (int i = 1; i < camera_count_; ++i) {
+  for (int i = 1; i < state_[k].nc; ++i) {
     const Vertex& x = camera[i];
     if (infinite(x)) break;
     // The path tracer's AOV normal: the face on the side the subpath arrived from, or the shading
@@ -490,7 +539,7 @@ void BdptTracer::surface_aovs(glm::vec3& albedo, glm::vec3& normal) const {
   }
   // Every surface met was specular: the provisional values stay where the subpath ended at one,
   // and are zero where it escaped.
-  if (camera_escaped_) albedo = normal = glm::vec3(0.0f);
+  if (state_[k].camera_escaped) albedo = normal = glm::vec3(0.0f);
 }
 
 bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
@@ -526,103 +575,125 @@ bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
   return true;
 }
 
-int BdptTracer::walk(std::vector<Vertex>& path, int count, int max_vertices, Ray ray,
-                     glm::vec3 beta, float pdf_dir, bool light, Sampler& sampler,
-                     const Hit* first_hit) {
-  const int roulette_depth = it_.settings_.roulette_depth;
-  glm::vec3 rr_beta(1.0f);  // the throughput since the subpath's start, for Russian roulette
-  while (count < max_vertices) {
-    // Room for vertex `count` (references into `path` are taken after this only).
-    if (static_cast<size_t>(count) >= path.size()) {
-      path.resize(std::min(2 * path.size(), static_cast<size_t>(max_vertices)));
-    }
-    // The camera ray's hit is given (traced with the batch's); after it one ray at a time: the
-    // accel's incoherent query (a packet of one would cost a third more).
-    Hit hit;
-    if (first_hit != nullptr) {
-      hit = *first_hit;
-      first_hit = nullptr;
-    } else {
-      accel_.intersect_incoherent(std::span<const Ray>(&ray, 1), std::span<Hit>(&hit, 1));
-      ++traced_;
-    }
-    if (!hit.found()) {
-      if (!light) camera_escaped_ = true;
-      // A camera subpath that escapes meets the environment (strategy s = 0).
-      if (!light && it_.has_environment_) {
-        Vertex& e = path[count];
-        e.type = VertexType::kEnvironment;
-        e.delta = e.point_light = e.directional = e.smooth = false;
-        e.spot = nullptr;
-        e.connectible = false;
-        e.emits = true;
-        e.w_env = glm::normalize(ray.dir);
-        e.le = it_.environment_radiance(e.w_env);
-        e.env_pdf_pos = it_.environment_pdf_pos_;
-        e.beta = beta;
-        e.pdf_fwd = pdf_dir;  // solid angle
-        e.pdf_rev = 0.0f;
-        ++count;
-      }
-      break;
-    }
-    Vertex& prev = path[count - 1];
-    Vertex& x = path[count];
-    make_surface(x, ray, hit);
-    x.beta = beta;
-    x.pdf_fwd = to_area(pdf_dir, prev, x);
-    x.pdf_rev = 0.0f;
-    ++count;
-    if (count >= max_vertices) break;
-
-    const auto [u_choice, u_dir] = sampler.get_2d_groups<2>();
-    const glm::vec3 w_prev = x.wo;
-    if (!agrees(x, w_prev)) break;
-    const glm::vec3 wo_local = x.frame.to_local(w_prev);
-    const BsdfSample bs = x.bsdf.sample(wo_local, u_choice.x, u_dir);
-    if (!bs.valid()) break;
-    const glm::vec3 w_next = x.frame.to_world(bs.wi);
-    if (!agrees(x, w_next)) break;
-    glm::vec3 factor = bs.weight;
-    if (light) {
-      // The adjoint: f_s(w_next, w_prev) |n_g . w_next| / pdf (Veach 1997, sections 5.2-5.3).
-      const float cos_g_prev = std::abs(glm::dot(x.ng, w_prev));
-      const float cos_s_next = std::abs(bs.wi.z);
-      if (!(cos_g_prev > 0.0f && cos_s_next > 0.0f)) break;
-      const float shading =
-          std::abs(wo_local.z) * std::abs(glm::dot(x.ng, w_next)) / (cos_g_prev * cos_s_next);
-      if (bs.delta) {
-        // A delta refraction's weight carries radiance's 1 / eta^2; importance does not.
-        factor = bs.weight * (shading / bs.radiance_scale);
-      } else {
-        factor = x.bsdf.eval(bs.wi, wo_local) * (cos_s_next * shading / bs.pdf);
-      }
-    }
-    x.delta = bs.delta;
-    x.aov_tint = bs.weight * (1.0f / bs.radiance_scale);
-    const float pdf_rev_dir = bs.delta ? 0.0f : x.bsdf.pdf(bs.wi, wo_local);
-    prev.pdf_rev = to_area(pdf_rev_dir, x, prev);
-    beta *= factor;
-    rr_beta *= factor;
-    if (count - 1 >= roulette_depth) {
-      const float survive = std::min(1.0f, std::sqrt(max_component(rr_beta)));
-      if (!(u_choice.y < survive)) break;
-      beta *= 1.0f / survive;
-      rr_beta *= 1.0f / survive;
-    }
-    if (!(max_component(beta) > 0.0f) || !std::isfinite(max_component(beta))) break;
-    pdf_dir = bs.delta ? 0.0f : bs.pdf;
-    ray.origin = ray_start(x, w_next, it_.offset_);
-    ray.dir = w_next;
-    ray.tmin = 0.0f;
-    ray.tmax = kRayTMax;
+void BdptTracer::walk_begin(std::vector<Vertex>& path, WalkState& w) {
+  w.active = w.count < w.max_vertices;
+  // Room for vertex `count` (references into `path` are taken after this only).
+  if (w.active && static_cast<size_t>(w.count) >= path.size()) {
+    path.resize(std::min(2 * path.size(), static_cast<size_t>(w.max_vertices)));
   }
-  return count;
 }
 
-int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler) {
+void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& hit,
+                           Sampler& sampler, bool& escaped) const {
+  w.active = false;
+  const bool light = w.light;
+  if (!hit.found()) {
+    if (!light) escaped = true;
+    // A camera subpath that escapes meets the environment (strategy s = 0).
+    if (!light && it_.has_environment_) {
+      Vertex& e = path[static_cast<size_t>(w.count)];
+      e.type = VertexType::kEnvironment;
+      e.delta = e.point_light = e.directional = e.smooth = false;
+      e.spot = nullptr;
+      e.connectible = false;
+      e.emits = true;
+      e.w_env = glm::normalize(w.ray.dir);
+      e.le = it_.environment_radiance(e.w_env);
+      e.env_pdf_pos = it_.environment_pdf_pos_;
+      e.beta = w.beta;
+      e.pdf_fwd = w.pdf_dir;  // solid angle
+      e.pdf_rev = 0.0f;
+      ++w.count;
+    }
+    return;
+  }
+  Vertex& prev = path[static_cast<size_t>(w.count - 1)];
+  Vertex& x = path[static_cast<size_t>(w.count)];
+  make_surface(x, w.ray, hit);
+  x.beta = w.beta;
+  x.pdf_fwd = to_area(w.pdf_dir, prev, x);
+  x.pdf_rev = 0.0f;
+  const int count = ++w.count;
+  if (count >= w.max_vertices) return;
+
+  const auto [u_choice, u_dir] = sampler.get_2d_groups<2>();
+  const glm::vec3 w_prev = x.wo;
+  if (!agrees(x, w_prev)) return;
+  const glm::vec3 wo_local = x.frame.to_local(w_prev);
+  const BsdfSample bs = x.bsdf.sample(wo_local, u_choice.x, u_dir);
+  if (!bs.valid()) return;
+  const glm::vec3 w_next = x.frame.to_world(bs.wi);
+  if (!agrees(x, w_next)) return;
+  glm::vec3 factor = bs.weight;
+  if (light) {
+    // The adjoint: f_s(w_next, w_prev) |n_g . w_next| / pdf (Veach 1997, sections 5.2-5.3).
+    const float cos_g_prev = std::abs(glm::dot(x.ng, w_prev));
+    const float cos_s_next = std::abs(bs.wi.z);
+    if (!(cos_g_prev > 0.0f && cos_s_next > 0.0f)) return;
+    const float shading =
+        std::abs(wo_local.z) * std::abs(glm::dot(x.ng, w_next)) / (cos_g_prev * cos_s_next);
+    if (bs.delta) {
+      // A delta refraction's weight carries radiance's 1 / eta^2; importance does not.
+      factor = bs.weight * (shading / bs.radiance_scale);
+    } else {
+      factor = x.bsdf.eval(bs.wi, wo_local) * (cos_s_next * shading / bs.pdf);
+    }
+  }
+  x.delta = bs.delta;
+  x.aov_tint = bs.weight * (1.0f / bs.radiance_scale);
+  const float pdf_rev_dir = bs.delta ? 0.0f : x.bsdf.pdf(bs.wi, wo_local);
+  prev.pdf_rev = to_area(pdf_rev_dir, x, prev);
+  w.beta *= factor;
+  w.rr_beta *= factor;
+  if (count - 1 >= it_.settings_.roulette_depth) {
+    const float survive = std::min(1.0f, std::sqrt(max_component(w.rr_beta)));
+    if (!(u_choice.y < survive)) return;
+    w.beta *= 1.0f / survive;
+    w.rr_beta *= 1.0f / survive;
+  }
+  if (!(max_component(w.beta) > 0.0f) || !std::isfinite(max_component(w.beta))) return;
+  w.pdf_dir = bs.delta ? 0.0f : bs.pdf;
+  w.ray.origin = ray_start(x, w_next, it_.offset_);
+  w.ray.dir = w_next;
+  w.ray.tmin = 0.0f;
+  w.ray.tmax = kRayTMax;
+  walk_begin(path, w);
+}
+
+void BdptTracer::walk_all(std::vector<Vertex>* const* paths, WalkState* walks, Sampler* samplers,
+                          bool* escaped, size_t count) {
+  std::array<Ray, kWavefront> rays;
+  std::array<Hit, kWavefront> hits;
+  std::array<uint32_t, kWavefront> index;
+  for (;;) {
+    size_t n = 0;
+    for (size_t k = 0; k < count; ++k) {
+      if (!walks[k].active) continue;
+      index[n] = static_cast<uint32_t>(k);
+      rays[n++] = walks[k].ray;
+    }
+    if (n == 0) return;
+    // Incoherent rays, one query for the wavefront's bounce: on a small tree as packets, on a
+    // large one interleaved (BvhAccel::intersect_incoherent); the hits are those of one ray at a
+    // time, bit for bit.
+    accel_.intersect_incoherent(std::span<const Ray>(rays.data(), n),
+                                std::span<Hit>(hits.data(), n));
+    traced_ += n;
+    for (size_t j = 0; j < n; ++j) {
+      const size_t k = index[j];
+      walk_step(*paths[k], walks[k], hits[j], samplers[k], escaped[k]);
+    }
+  }
+}
+
+void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler,
+                               WalkState& w) const {
   const auto [u_choice, u_point, u_dir] = sampler.get_2d_groups<3>();
-  if (it_.table_.empty() || max_vertices < 1) return 0;
+  w = WalkState{};
+  w.light = true;
+  w.max_vertices = max_vertices;
+  if (it_.table_.empty() || max_vertices < 1) return;
+  w.count = 1;
   const AliasTable::Sample pick = it_.table_.sample(u_choice.x);
   const BdptIntegrator::Emitter& e = it_.emitters_[pick.index];
   Vertex& x = path[0];
@@ -633,10 +704,10 @@ int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampl
   x.pdf_rev = 0.0f;
   x.directional = false;
   x.spot = nullptr;
-  Ray ray;
-  glm::vec3 beta;
-  float pdf_dir;
-  if (e.directional) return directional_light_subpath(path, max_vertices, sampler, e, u_point);
+  Ray& ray = w.ray;
+  glm::vec3& beta = w.beta;
+  float& pdf_dir = w.pdf_dir;
+  if (e.directional) return directional_light_subpath(path, max_vertices, e, u_point, w);
   if (e.environment) {
     // A direction towards the environment (the map's importance sampling, or uniform for a
     // constant colour), then a point on the disk of the scene's bounding sphere across it, from
@@ -650,7 +721,7 @@ int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampl
     x.env_pdf_pos = it_.environment_pdf_pos_;
     // The origin density is the direction's (solid angle), as the escaped camera subpath's is.
     x.pdf_fwd = pick.pmf * dir_pdf;
-    if (!(x.pdf_fwd > 0.0f) || !(max_component(x.le) > 0.0f)) return 1;
+    if (!(x.pdf_fwd > 0.0f) || !(max_component(x.le) > 0.0f)) return;
     x.beta = glm::vec3(1.0f / x.pdf_fwd);
     const Frame frame = Frame::from_normal(x.w_env);
     const glm::vec2 d = sample_uniform_disk_concentric(u_point);
@@ -660,7 +731,8 @@ int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampl
     ray.tmin = 0.0f;
     ray.tmax = kRayTMax;
     beta = x.le * (1.0f / (x.pdf_fwd * x.env_pdf_pos));
-    return walk(path, 1, max_vertices, ray, beta, x.env_pdf_pos, true, sampler, nullptr);
+    pdf_dir = x.env_pdf_pos;
+    return walk_begin(path, w);
   }
   if (e.point || e.spot) {
     // Not delta in the MIS sense: a point (or spot) light can be connected to (its position is a
@@ -679,7 +751,7 @@ int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampl
       x.spot = &scene_.spot_lights[e.prim];
       w = sample_spot_direction(*x.spot, u_point.x, u_dir);
       pdf_dir = spot_direction_pdf(*x.spot, w);
-      if (!(pdf_dir > 0.0f)) return 1;
+      if (!(pdf_dir > 0.0f)) return;
       beta = emission(scene_, x, w) * (1.0f / (pick.pmf * pdf_dir));
     } else {
       w = sample_uniform_sphere(u_dir);
@@ -712,19 +784,19 @@ int BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampl
     pdf_dir = emission_pdf(x, w);
     const glm::vec3 le = emission(scene_, x, w);
     x.le = le;
-    if (!(pdf_dir > 0.0f) || !(max_component(le) > 0.0f)) return 1;
+    if (!(pdf_dir > 0.0f) || !(max_component(le) > 0.0f)) return;
     beta = le * (std::abs(glm::dot(x.ng, w)) / (x.pdf_fwd * pdf_dir));
     ray.origin = offset_ray_origin(x.p, n, triangle_extent(x.tri.e1, x.tri.e2), it_.offset_);
     ray.dir = w;
   }
   ray.tmin = 0.0f;
   ray.tmax = kRayTMax;
-  return walk(path, 1, max_vertices, ray, beta, pdf_dir, true, sampler, nullptr);
+  walk_begin(path, w);
 }
 
-int BdptTracer::directional_light_subpath(std::vector<Vertex>& path, int max_vertices,
-                                          Sampler& sampler, const BdptIntegrator::Emitter& e,
-                                          glm::vec2 u_point) {
+void BdptTracer::directional_light_subpath(std::vector<Vertex>& path, int max_vertices,
+                                           const BdptIntegrator::Emitter& e, glm::vec2 u_point,
+                                           WalkState& w) const {
   // Parallel light from direction -l.direction: a ray along it from a point of the disk across it
   // that covers the scene's bounding sphere (density 1 / (pi R^2) by area, pbrt-v4's
   // DistantLight::SampleLe). The vertex is infinite, as the environment's, with the light's
@@ -741,18 +813,20 @@ int BdptTracer::directional_light_subpath(std::vector<Vertex>& path, int max_ver
   x.le = l.irradiance;
   x.env_pdf_pos = it_.environment_pdf_pos_;
   x.pdf_fwd = e.pmf;
-  if (!(x.pdf_fwd > 0.0f) || !(max_component(x.le) > 0.0f)) return 1;
+  if (!(x.pdf_fwd > 0.0f) || !(max_component(x.le) > 0.0f)) return;
   x.beta = glm::vec3(1.0f / x.pdf_fwd);
   const Frame frame = Frame::from_normal(x.w_env);
   const glm::vec2 d = sample_uniform_disk_concentric(u_point);
   const float r = it_.environment_radius_;
-  Ray ray;
+  Ray& ray = w.ray;
   ray.origin = it_.environment_centre_ + r * (x.w_env + d.x * frame.x + d.y * frame.y);
   ray.dir = -x.w_env;
   ray.tmin = 0.0f;
   ray.tmax = kRayTMax;
-  const glm::vec3 beta = x.le * (1.0f / (x.pdf_fwd * x.env_pdf_pos));
-  return walk(path, 1, max_vertices, ray, beta, x.env_pdf_pos, true, sampler, nullptr);
+  w.beta = x.le * (1.0f / (x.pdf_fwd * x.env_pdf_pos));
+  w.pdf_dir = x.env_pdf_pos;
+  (void)max_vertices;
+  walk_begin(path, w);
 }
 
 bool BdptTracer::shadow_ray(const Vertex& c, const Vertex& l, Ray& r) const {
@@ -803,7 +877,12 @@ bool BdptTracer::camera_shadow_ray(const Vertex& l, glm::vec3 eye, Ray& r) const
 
 void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray, int px,
                        int py, float count_ratio) {
-  if (pending_count_ == kMaxPending) flush();
+  if (pending_count_ == kMaxPending) {
+    // flush selects the samples it weighs: the caller's is selected again after it.
+    const size_t caller = selected_;
+    flush();
+    select(caller);
+  }
   Pending& p = pending_[static_cast<size_t>(pending_count_++)];
   p.contribution = contribution;
   p.s = s;
@@ -811,6 +890,7 @@ void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const
   p.px = px;
   p.py = py;
   p.count_ratio = count_ratio;
+  p.sample = static_cast<uint32_t>(current_ - state_.data());
   p.ray = -1;
   if (has_ray) {
     p.ray = ray_count_;
@@ -829,18 +909,20 @@ void BdptTracer::flush() {
   for (int k = 0; k < pending_count_; ++k) {
     const Pending& p = pending_[static_cast<size_t>(k)];
     if (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)]) continue;
+    select(p.sample);
     const float weight = unweighted ? 1.0f : weight_of(p);
     const glm::vec3 term = p.contribution * weight;
     // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
     // dropped rather than let a NaN or infinity into the pixel.
     if (!std::isfinite(term.x + term.y + term.z)) continue;
     if (p.t == 1) {
-      splats_->add(p.px, p.py, splat_value(term, p.count_ratio), u_round_);
+      float& u_round = current_->u_round;
+      splats_->add(p.px, p.py, splat_value(term, p.count_ratio), u_round);
       // Each further splat shifts the rounding's number by the golden ratio: each stays uniform.
-      u_round_ += 0.618034f;
-      if (u_round_ >= 1.0f) u_round_ -= 1.0f;
+      u_round += 0.618034f;
+      if (u_round >= 1.0f) u_round -= 1.0f;
     } else {
-      total_ += term;
+      current_->total += term;
     }
   }
   pending_count_ = ray_count_ = 0;
@@ -1032,11 +1114,25 @@ float BdptTracer::mis_count_ratio(int x, int y) const {
   return (pass_ ? pass_->count_ratio(x, y) : 1.0f) * it_.settings_.mis_count_scale;
 }
 
-void BdptTracer::set_pass(const SplatPass* pass, uint32_t pixel) {
+void BdptTracer::set_pass(size_t k, const SplatPass* pass, uint32_t pixel) {
   pass_ = pass;
-  pixel_ = pixel;
+  SampleState& st = state_[k];
+  st.pixel = pixel;
   const uint32_t width = pass ? static_cast<uint32_t>(pass->width) : 1;
-  pixel_ratio_ = mis_count_ratio(static_cast<int>(pixel % width), static_cast<int>(pixel / width));
+  st.pixel_ratio =
+      mis_count_ratio(static_cast<int>(pixel % width), static_cast<int>(pixel / width));
+}
+
+void BdptTracer::select(size_t k) {
+  if (k == selected_) return;
+  selected_ = k;
+  Subpaths& sub = thread_subpaths()[k];
+  camera_ = sub.camera.data();
+  light_ = sub.light.data();
+  current_ = &state_[k];
+  lens_offset_ = current_->lens_offset;
+  pixel_ = current_->pixel;
+  pixel_ratio_ = current_->pixel_ratio;
 }
 
 float BdptTracer::connection_weight(int s, int t, float ratio) {
@@ -1082,50 +1178,97 @@ void BdptTracer::splat_light_subpath(int nl) {
   }
 }
 
-glm::vec3 BdptTracer::sample(const Ray& camera_ray, const Hit& camera_hit, Sampler& sampler,
-                             SplatBuffer* splats) {
+void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, const Hit* first_hits,
+                           size_t first, size_t count) {
   const BdptSettings& settings = it_.settings_;
   const int max_camera = settings.max_depth + 2;
   const int max_light = settings.max_depth + 1;
-  Subpaths& sub = thread_subpaths();
-  if (sub.camera.empty()) {
-    sub.camera.resize(kInitialSubpathVertices);
-    sub.light.resize(kInitialSubpathVertices);
+  std::array<Subpaths, kWavefront>& subs = thread_subpaths();
+  std::array<WalkState, kWavefront> walks;
+  std::array<std::vector<Vertex>*, kWavefront> paths{};
+  std::array<bool, kWavefront> escaped{};
+  Sampler* samplers = batch.samplers.data() + first;
+  selected_ = kWavefront;
+  splats_ = out.splats;
+  // The camera subpaths: their first vertices at the given hits, then bounce by bounce.
+  for (size_t k = 0; k < count; ++k) {
+    Subpaths& sub = subs[k];
+    if (sub.camera.empty()) {
+      sub.camera.resize(kInitialSubpathVertices);
+      sub.light.resize(kInitialSubpathVertices);
+    }
+    set_pass(k, out.pass, out.pass ? batch.pixels[first + k] : 0);
+    SampleState& st = state_[k];
+    st.camera_escaped = false;
+    st.total = glm::vec3(0.0f);
+    const Ray& camera_ray = batch.rays[first + k];
+    Vertex& c0 = sub.camera[0];
+    c0.type = VertexType::kCamera;
+    c0.p = camera_ray.origin;
+    c0.delta = false;
+    c0.point_light = c0.directional = false;
+    c0.spot = nullptr;
+    c0.beta = glm::vec3(1.0f);
+    c0.pdf_fwd = c0.pdf_rev = 0.0f;
+    // The camera's density of the ray: the first camera vertex's pdf_fwd, read by the weights of
+    // light tracing (1 stands for it without).
+    WalkState& w = walks[k];
+    w = WalkState{};
+    w.count = 1;
+    w.max_vertices = max_camera;
+    w.ray = camera_ray;
+    w.beta = glm::vec3(1.0f);
+    w.pdf_dir = settings.light_tracing
+                    ? light_tracing_camera_pdf(
+                          camera_pdf(scene_.camera, glm::normalize(camera_ray.dir)), st.pixel_ratio)
+                    : 1.0f;
+    paths[k] = &sub.camera;
+    escaped[k] = false;
+    walk_begin(sub.camera, w);
+    if (w.active) walk_step(sub.camera, w, first_hits[first + k], samplers[k], escaped[k]);
   }
-  Vertex& c0 = sub.camera[0];
-  c0.type = VertexType::kCamera;
-  c0.p = camera_ray.origin;
-  c0.delta = false;
-  c0.point_light = c0.directional = false;
-  c0.spot = nullptr;
-  c0.beta = glm::vec3(1.0f);
-  c0.pdf_fwd = c0.pdf_rev = 0.0f;
-  camera_escaped_ = false;
-  // The camera's density of the ray: the first camera vertex's pdf_fwd, read by the weights of
-  // light tracing (1 stands for it without).
-  const float camera_dir_pdf =
-      settings.light_tracing
-          ? light_tracing_camera_pdf(camera_pdf(scene_.camera, glm::normalize(camera_ray.dir)),
-                                     pixel_ratio_)
-          : 1.0f;
-  const int nc = walk(sub.camera, 1, max_camera, camera_ray, glm::vec3(1.0f), camera_dir_pdf, false,
-                      sampler, &camera_hit);
-  camera_count_ = nc;
-  if (settings.light_tracing && scene_.camera.is_orthographic() && nc >= 2 &&
-      !infinite(sub.camera[1])) {
-    // An orthographic lens's density depends on the distance to the first hit (ortho_lens_pdf).
-    sub.camera[1].pdf_fwd =
-        light_tracing_camera_pdf(camera_area_pdf(sub.camera[0], sub.camera[1]), pixel_ratio_);
+  walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
+  // The light subpaths.
+  for (size_t k = 0; k < count; ++k) {
+    Subpaths& sub = subs[k];
+    SampleState& st = state_[k];
+    st.nc = walks[k].count;
+    st.camera_escaped = escaped[k];
+    if (settings.light_tracing && scene_.camera.is_orthographic() && st.nc >= 2 &&
+        !infinite(sub.camera[1])) {
+      // An orthographic lens's density depends on the distance to the first hit (ortho_lens_pdf).
+      sub.camera[1].pdf_fwd =
+          light_tracing_camera_pdf(camera_area_pdf(sub.camera[0], sub.camera[1]), st.pixel_ratio);
+    }
+    light_subpath(sub.light, max_light, samplers[k], walks[k]);
+    paths[k] = &sub.light;
   }
-  const int nl = light_subpath(sub.light, max_light, sampler);
-  // The subpaths no longer grow: plain pointers from here.
-  Vertex* camera = sub.camera.data();
-  Vertex* light = sub.light.data();
-  if (!settings.unweighted) prepare_weights(light, nl, camera, nc);
-  camera_ = camera;
-  light_ = light;
-  total_ = glm::vec3(0.0f);
+  walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
+  // The connections, sample by sample; their shadow rays queued across samples.
   pending_count_ = ray_count_ = 0;
+  for (size_t k = 0; k < count; ++k) {
+    state_[k].nl = walks[k].count;
+    connect(k, samplers[k]);
+  }
+  flush();
+  for (size_t k = 0; k < count; ++k) {
+    out.radiance[first + k] = state_[k].total;
+    if (!out.albedo.empty() || !out.normal.empty()) {
+      glm::vec3 albedo, normal;
+      surface_aovs(k, albedo, normal);
+      if (!out.albedo.empty()) out.albedo[first + k] = albedo;
+      if (!out.normal.empty()) out.normal[first + k] = normal;
+    }
+  }
+}
+
+void BdptTracer::connect(size_t k, Sampler& sampler) {
+  const BdptSettings& settings = it_.settings_;
+  select(k);
+  const int nc = current_->nc, nl = current_->nl;
+  Vertex* camera = camera_;
+  Vertex* light = light_;
+  if (!settings.unweighted) prepare_weights(light, nl, camera, nc);
 
   const bool only = settings.only_s >= 0 && settings.only_t >= 0;
   for (int t = 2; t <= nc; ++t) {
@@ -1163,20 +1306,19 @@ glm::vec3 BdptTracer::sample(const Ray& camera_ray, const Hit& camera_hit, Sampl
   }
   // The renderer always gives an integrator that splats its film's light image
   // (SampleOutput::splats); without one the light image is missing, never written out of bounds.
-  assert(!settings.light_tracing || splats != nullptr);
-  if (settings.light_tracing && splats != nullptr && !(only && settings.only_t != 1)) {
-    splats_ = splats;
+  assert(!settings.light_tracing || splats_ != nullptr);
+  if (settings.light_tracing && splats_ != nullptr && !(only && settings.only_t != 1)) {
     // One number per sample for the splats' stochastic rounding (SplatBuffer::add), drawn after
     // every dimension the subpaths use.
-    u_round_ = sampler.get_1d();
+    current_->u_round = sampler.get_1d();
     if (scene_.camera.is_orthographic()) {
       // Light tracing's lens offset for an orthographic camera (ortho_lens_point), one per sample.
-      lens_offset_ = scene_.camera.lens_radius() * sample_uniform_disk_concentric(sampler.get_2d());
+      current_->lens_offset =
+          scene_.camera.lens_radius() * sample_uniform_disk_concentric(sampler.get_2d());
+      lens_offset_ = current_->lens_offset;
     }
     splat_light_subpath(nl);
   }
-  flush();
-  return total_;
 }
 
 bool camera_light_tracing(const Camera& camera) {
@@ -1354,15 +1496,8 @@ uint64_t BdptIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
   // the same hits as one at a time, bit for bit).
   std::array<Hit, kMaxBatch> first_hits;
   accel.intersect(batch.rays, std::span<Hit>(first_hits.data(), n));
-  for (size_t i = 0; i < n; ++i) {
-    tracer.set_pass(out.pass, out.pass ? batch.pixels[i] : 0);
-    out.radiance[i] = tracer.sample(batch.rays[i], first_hits[i], batch.samplers[i], out.splats);
-    if (!out.albedo.empty() || !out.normal.empty()) {
-      glm::vec3 albedo, normal;
-      tracer.surface_aovs(albedo, normal);
-      if (!out.albedo.empty()) out.albedo[i] = albedo;
-      if (!out.normal.empty()) out.normal[i] = normal;
-    }
+  for (size_t first = 0; first < n; first += kWavefront) {
+    tracer.wavefront(batch, out, first_hits.data(), first, std::min(kWavefront, n - first));
   }
   // Depth is the first hit's, whatever it is.
   write_first_hit_aovs(scene, batch.rays, std::span<const Hit>(first_hits.data(), n),
