@@ -352,6 +352,19 @@ struct WalkState {
   bool active = false;      // a ray to trace
 };
 
+// The next N 2-D groups of each of `count` samplers (count <= kWavefront): exactly what
+// get_2d_groups<N> draws for each, with eight samplers sharing each SIMD operation
+// (Sampler::get_2d_groups_batch), as the path tracer draws its batch's vertices.
+template <size_t N>
+void draw_groups(Sampler* const* samplers, size_t count,
+                 std::array<std::array<glm::vec2, N>, kWavefront>& out) {
+  alignas(32) float rows[2 * N][kWavefront];
+  Sampler::get_2d_groups_batch<N>(samplers, count, &rows[0][0], kWavefront);
+  for (size_t j = 0; j < count; ++j) {
+    for (size_t g = 0; g < N; ++g) out[j][g] = {rows[2 * g][j], rows[2 * g + 1][j]};
+  }
+}
+
 }  // namespace
 
 // The per-sample work, with the integrator's data at hand.
@@ -389,15 +402,22 @@ class BdptTracer {
   // for a camera subpath, setting `escaped`), its scattering and the next ray (w.active) or the
   // walk's end. Extends `path` with vertices sampled from w.ray, whose direction has density
   // w.pdf_dir at the last vertex; w.beta is the throughput the next vertex receives.
-  void walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& hit, Sampler& sampler,
-                 bool& escaped) const;
+  // `u` holds the bounce's two sampler groups (the lobe choice and roulette, the direction), drawn
+  // by the caller where the walk continues past the hit (will_draw).
+  void walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& hit,
+                 const std::array<glm::vec2, 2>& u, bool& escaped) const;
+  // Whether walk_step uses its sampler numbers at `hit`.
+  static bool will_draw(const WalkState& w, const Hit& hit) {
+    return hit.found() && w.count + 1 < w.max_vertices;
+  }
   // Walks the wavefront's active walks (walks[k] on paths[k]) to their ends, each bounce's rays
   // traced in one query.
   void walk_all(std::vector<Vertex>* const* paths, WalkState* walks, Sampler* samplers,
                 bool* escaped, size_t count);
   // Light subpath: its first vertex, and the walk from it in `w` (w.count 0 when the scene has no
   // emitter).
-  void light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler,
+  // `u`: its first three sampler groups (the emitter and side, the point, the direction).
+  void light_subpath(std::vector<Vertex>& path, int max_vertices, const std::array<glm::vec2, 3>& u,
                      WalkState& w) const;
   // The light subpath from directional light e (light_subpath's choice), its disk point from
   // u_point.
@@ -584,7 +604,7 @@ void BdptTracer::walk_begin(std::vector<Vertex>& path, WalkState& w) {
 }
 
 void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& hit,
-                           Sampler& sampler, bool& escaped) const {
+                           const std::array<glm::vec2, 2>& u, bool& escaped) const {
   w.active = false;
   const bool light = w.light;
   if (!hit.found()) {
@@ -616,7 +636,7 @@ void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& h
   const int count = ++w.count;
   if (count >= w.max_vertices) return;
 
-  const auto [u_choice, u_dir] = sampler.get_2d_groups<2>();
+  const glm::vec2 u_choice = u[0], u_dir = u[1];
   const glm::vec3 w_prev = x.wo;
   if (!agrees(x, w_prev)) return;
   const glm::vec3 wo_local = x.frame.to_local(w_prev);
@@ -665,6 +685,8 @@ void BdptTracer::walk_all(std::vector<Vertex>* const* paths, WalkState* walks, S
   std::array<Ray, kWavefront> rays;
   std::array<Hit, kWavefront> hits;
   std::array<uint32_t, kWavefront> index;
+  std::array<Sampler*, kWavefront> drawing{};
+  std::array<std::array<glm::vec2, 2>, kWavefront> u{};
   for (;;) {
     size_t n = 0;
     for (size_t k = 0; k < count; ++k) {
@@ -679,16 +701,23 @@ void BdptTracer::walk_all(std::vector<Vertex>* const* paths, WalkState* walks, S
     accel_.intersect_incoherent(std::span<const Ray>(rays.data(), n),
                                 std::span<Hit>(hits.data(), n));
     traced_ += n;
+    size_t m = 0;
+    for (size_t j = 0; j < n; ++j) {
+      if (will_draw(walks[index[j]], hits[j])) drawing[m++] = &samplers[index[j]];
+    }
+    draw_groups<2>(drawing.data(), m, u);
+    m = 0;
     for (size_t j = 0; j < n; ++j) {
       const size_t k = index[j];
-      walk_step(*paths[k], walks[k], hits[j], samplers[k], escaped[k]);
+      const bool draws = will_draw(walks[k], hits[j]);
+      walk_step(*paths[k], walks[k], hits[j], u[draws ? m++ : 0], escaped[k]);
     }
   }
 }
 
-void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices, Sampler& sampler,
-                               WalkState& w) const {
-  const auto [u_choice, u_point, u_dir] = sampler.get_2d_groups<3>();
+void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
+                               const std::array<glm::vec2, 3>& u, WalkState& w) const {
+  const glm::vec2 u_choice = u[0], u_point = u[1], u_dir = u[2];
   w = WalkState{};
   w.light = true;
   w.max_vertices = max_vertices;
@@ -1225,10 +1254,30 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
     paths[k] = &sub.camera;
     escaped[k] = false;
     walk_begin(sub.camera, w);
-    if (w.active) walk_step(sub.camera, w, first_hits[first + k], samplers[k], escaped[k]);
+  }
+  {
+    std::array<Sampler*, kWavefront> drawing{};
+    std::array<std::array<glm::vec2, 2>, kWavefront> u{};
+    size_t m = 0;
+    for (size_t k = 0; k < count; ++k) {
+      if (walks[k].active && will_draw(walks[k], first_hits[first + k])) {
+        drawing[m++] = &samplers[k];
+      }
+    }
+    draw_groups<2>(drawing.data(), m, u);
+    m = 0;
+    for (size_t k = 0; k < count; ++k) {
+      if (!walks[k].active) continue;
+      const bool draws = will_draw(walks[k], first_hits[first + k]);
+      walk_step(subs[k].camera, walks[k], first_hits[first + k], u[draws ? m++ : 0], escaped[k]);
+    }
   }
   walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
   // The light subpaths.
+  std::array<Sampler*, kWavefront> all{};
+  for (size_t k = 0; k < count; ++k) all[k] = &samplers[k];
+  std::array<std::array<glm::vec2, 3>, kWavefront> u_light;
+  draw_groups<3>(all.data(), count, u_light);
   for (size_t k = 0; k < count; ++k) {
     Subpaths& sub = subs[k];
     SampleState& st = state_[k];
@@ -1240,7 +1289,7 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
       sub.camera[1].pdf_fwd =
           light_tracing_camera_pdf(camera_area_pdf(sub.camera[0], sub.camera[1]), st.pixel_ratio);
     }
-    light_subpath(sub.light, max_light, samplers[k], walks[k]);
+    light_subpath(sub.light, max_light, u_light[k], walks[k]);
     paths[k] = &sub.light;
   }
   walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
