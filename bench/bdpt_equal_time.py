@@ -108,8 +108,25 @@ class Scene:
 
 
 class Runner:
-    def __init__(self, exe, size, tmp):
-        self.exe, self.size, self.tmp = exe, size, tmp
+    def __init__(self, exe, size, tmp, cache=None):
+        self.exe, self.size, self.tmp, self.cache = exe, size, tmp, cache
+
+    def cached(self, key, scene_args, integrator, spp, seed, threads=1, extra=()):
+        """The image of a render that does not depend on the build under test (the reference and
+        the region masks, all path): loaded from --ref-cache when it holds it, else rendered and
+        stored there. The key names the scene file's contents, so an edited scene renders anew."""
+        if self.cache is None:
+            return self.render(scene_args, integrator, spp, seed, threads, extra)[0]
+        text = open(scene_args[0]).read() if scene_args[0].endswith(".json") else scene_args[1]
+        digest = "%08x" % zlib.crc32(("%s %s %d %d %d %s" % (text, integrator, spp, seed, self.size,
+                                                            " ".join(extra))).encode())
+        path = os.path.join(self.cache, "%s_%s.npy" % (key, digest))
+        if os.path.exists(path):
+            return np.load(path)
+        img = self.render(scene_args, integrator, spp, seed, threads, extra)[0]
+        os.makedirs(self.cache, exist_ok=True)
+        np.save(path, img)
+        return img
 
     def render(self, scene_args, integrator, spp, seed, threads=1, extra=()):
         out = os.path.join(self.tmp, "r.pfm")
@@ -137,8 +154,8 @@ def lum(img):
 
 def regions(runner, scene, ref, ref_seed):
     """Boolean masks (h, w) by region name, in a fixed order."""
-    direct, _, _ = runner.render(scene.args(), "path", 256, ref_seed + 2, threads=2,
-                                 extra=["--max-depth", "0"])
+    direct = runner.cached(scene.name + "_direct", scene.args(), "path", 256, ref_seed + 2,
+                           threads=2, extra=["--max-depth", "0"])
     emitter = direct.max(axis=2) > 0
     out = {"emitter": emitter}
     rest = ~emitter
@@ -149,12 +166,12 @@ def regions(runner, scene, ref, ref_seed):
                 name = m["name"]
                 m.clear()
                 m.update(name=name, albedo=[0, 0, 0], emission=[0, 0, 1], two_sided=True)
-        lit, _, _ = runner.render(scene.args(doc), "path", 256, ref_seed + 2, threads=2,
-                                  extra=["--max-depth", "0"])
+        lit = runner.cached(scene.name + "_glass_lit", scene.args(doc), "path", 256,
+                            ref_seed + 2, threads=2, extra=["--max-depth", "0"])
         glass = (lit[..., 2] - lit[..., 0] > 1e-6) & rest  # the emitter is white, the glass blue
         rest &= ~glass
-        bare, _, _ = runner.render(scene.args(scene.without_glass()), "path", 4096,
-                                   ref_seed + 3, threads=2)
+        bare = runner.cached(scene.name + "_bare", scene.args(scene.without_glass()), "path",
+                             4096, ref_seed + 3, threads=2)
         caustic = rest & (lum(ref) > 1.25 * lum(bare))
         rest &= ~caustic
         out.update(glass=glass, caustic=caustic)
@@ -184,11 +201,15 @@ def main():
     ap.add_argument("--ref-threads", type=int, default=2)
     ap.add_argument("--glass", nargs="*", default=None, help="material names (default: dielectrics)")
     ap.add_argument("--out", default="bdpt_equal_time_out")
+    ap.add_argument("--ref-cache", default=None,
+                    help="folder keeping the reference and region renders between runs")
+    ap.add_argument("--ref-only", action="store_true",
+                    help="only render the reference and regions into --ref-cache")
     a = ap.parse_args()
     if set(a.seeds) & {a.ref_seed, a.ref_seed + 1, a.ref_seed + 2, a.ref_seed + 3}:
         sys.exit("--seeds must differ from the reference's seeds")
     os.makedirs(a.out, exist_ok=True)
-    runner = Runner(a.tritrace, a.size, a.out)
+    runner = Runner(a.tritrace, a.size, a.out, a.ref_cache)
     results = {}
     for spec in a.scenes:
         scene = Scene(spec, a.glass, a.out)
@@ -196,15 +217,16 @@ def main():
         # 1. reference
         halves = []
         for k in range(2):
-            img, cpu, _ = runner.render(scene.args(), "path", a.ref_spp // 2, a.ref_seed + k,
-                                        threads=a.ref_threads)
-            halves.append(img)
+            halves.append(runner.cached(scene.name + "_ref", scene.args(), "path", a.ref_spp // 2,
+                                        a.ref_seed + k, threads=a.ref_threads))
         ref = (halves[0] + halves[1]) / 2
         ref_noise = rms(halves[0] - halves[1]) / 2
         # per pixel, summed over channels: an unbiased estimate of the reference's own squared
         # error, which every RMSE against it contains (independent seeds); subtracted below
         ref_sq = ((halves[0] - halves[1]) ** 2).sum(2) / 4
         masks = regions(runner, scene, ref, a.ref_seed)
+        if a.ref_only:
+            continue
         # 2. calibration
         bmax = max(a.bdpt_spp)
         _, tb, _ = runner.render(scene.args(), "bdpt", bmax, a.seeds[0])

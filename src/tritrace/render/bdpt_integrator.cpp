@@ -220,6 +220,16 @@ float pdf_area(const Vertex& x, const Vertex* prev, const Vertex& next) {
   return to_area(surface_pdf(x, direction(x, *prev), w_next), x, next);
 }
 
+// pdf_area with the directions given: w_prev = direction(x, prev) (read only at a surface vertex)
+// and w_next = direction(x, next). A connection's weight needs four densities over three
+// directions, each otherwise normalised two or three times (direction(b, a) is exactly
+// -direction(a, b): the difference and the normalisation are symmetric in sign).
+float pdf_area_given(const Vertex& x, glm::vec3 w_prev, glm::vec3 w_next, const Vertex& next) {
+  if (infinite(x)) return to_area(x.env_pdf_pos, x, next);
+  if (x.type == VertexType::kLight) return to_area(emission_pdf(x, w_next), x, next);
+  return to_area(surface_pdf(x, w_prev, w_next), x, next);
+}
+
 // Where a ray from vertex x towards w starts (on the side w leaves to). A vertex takes part in
 // many connections: each side's point is computed once and kept.
 glm::vec3 ray_start(const Vertex& x, glm::vec3 w, const RayOffsetParams& offset) {
@@ -1097,10 +1107,15 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
   } else {
     const Vertex& pt_minus = camera[t - 2];
     if (s > 0) {
-      pt_rev = pdf_area(*qs, qs_minus, pt);
-      pt_minus_rev = pdf_area(pt, qs, pt_minus);
-      qs_rev = pdf_area(pt, &pt_minus, *qs);
-      if (qs_minus != nullptr) qs_minus_rev = pdf_area(*qs, &pt, *qs_minus);
+      // pt is a surface vertex (connectible); qs a surface, light or environment vertex.
+      const glm::vec3 w = direction(pt, *qs);
+      const glm::vec3 w_pt_minus = direction(pt, pt_minus);
+      const glm::vec3 w_qs_minus =
+          qs_minus != nullptr ? direction(*qs, *qs_minus) : glm::vec3(0.0f);
+      pt_rev = pdf_area_given(*qs, w_qs_minus, -w, pt);
+      pt_minus_rev = pdf_area_given(pt, w, w_pt_minus, pt_minus);
+      qs_rev = pdf_area_given(pt, w_pt_minus, w, *qs);
+      if (qs_minus != nullptr) qs_minus_rev = pdf_area_given(*qs, -w, w_qs_minus, *qs_minus);
     } else if (infinite(pt)) {
       pt_rev = it_.environment_pmf_ * it_.environment_dir_pdf(pt.w_env);
       pt_minus_rev = pdf_area(pt, nullptr, pt_minus);
