@@ -2,6 +2,8 @@
 """bdpt against path at equal CPU time, with the error split by image region (issue 25).
 
 For each scene:
+  Also the split of the equal-time ratio: MSE ratio = c (cost) x m (bdpt's MSE per sample over
+  path's, equal spp) x g (path's error falling faster than 1 / spp: the Sobol sampler).
   1. A converged reference: path at --ref-spp, rendered as two halves with seeds distinct from the
      test seeds (--ref-seed and --ref-seed + 1). The reference is their mean; its own noise (RMS
      over pixels and channels) is RMS(half1 - half2) / 2, and the script prints it beside the
@@ -22,6 +24,10 @@ For each scene:
      reference than in a path render of the scene without its glass objects: diffuse surfaces
      seen directly that get light focused by the glass) and "rest". Each region's share of each
      integrator's squared error, and its RMSE ratio, in the equal-time pair.
+
+--ref-cache DIR keeps the reference and region renders (path only, keyed by the scene file's
+contents) between runs, and --ref-only fills it and stops, so that the timed runs of another build
+need not render them again.
 
 Usage:
   bench/bdpt_equal_time.py build/tritrace --size 48 --seeds 1 2 3 --bdpt-spp 64 256 1024 \
@@ -270,6 +276,24 @@ def main():
             print("| %d | %d | %.2f / %.2f | %.2f | %.2f | %.2f | %.2f |" % (
                 b, pe, tb, tp, row["ratio_pair"], row["ratio_pair_denoised_ref"],
                 row["ratio_scaled"], row["ratio_equal_spp"]))
+        # The equal-time ratio split (issue 25): with MSE the mean over seeds of each render's
+        # squared error, the reference's own noise subtracted, and c = path spp / bdpt spp of the
+        # pair, ratio^2 = MSE_bdpt(B) / MSE_path(cB) = c * m * g, where m = MSE_bdpt(B) /
+        # MSE_path(B) is bdpt's error per sample against path's (equal spp) and g = MSE_path(B) /
+        # (c MSE_path(cB)) is how much faster than 1 / spp path's error falls from B to cB (1 for
+        # plain Monte Carlo; below 1 where the Sobol sampler's stratification pays).
+        mse = {k: statistics.fmean(r[0] ** 2 for r in v) - ref_noise ** 2 for k, v in runs.items()}
+        print("\n| bdpt spp | c (path / bdpt spp) | m: MSE bdpt / path at equal spp | g: path's "
+              "convergence beyond 1/spp | c m g = equal-time MSE ratio | its square root |")
+        print("|---|---|---|---|---|---|")
+        for b, row in zip(a.bdpt_spp, rows):
+            pe = max(1, round(b * cost))
+            c = pe / b
+            m = mse[("bdpt", b)] / mse[("path", b)]
+            g = mse[("path", b)] / (c * mse[("path", pe)])
+            row.update(split_c=c, split_m=m, split_g=g)
+            print("| %d | %.2f | %.3f | %.3f | %.2f | %.2f |" % (b, c, m, g, c * m * g,
+                                                             (c * m * g) ** 0.5))
         # 5. regions, in the equal-time pair at the largest B (squared error summed over seeds)
         pe = max(1, round(bmax * cost))
         sq = {i: sum(r[3] for r in runs[k]) / len(runs[k])
