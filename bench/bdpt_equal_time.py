@@ -207,6 +207,8 @@ def main():
     ap.add_argument("--ref-threads", type=int, default=2)
     ap.add_argument("--glass", nargs="*", default=None, help="material names (default: dielectrics)")
     ap.add_argument("--out", default="bdpt_equal_time_out")
+    ap.add_argument("--sampler", default="sobol", choices=["sobol", "independent"],
+                    help="the timed renders' sampler (the reference's is always sobol)")
     ap.add_argument("--ref-cache", default=None,
                     help="folder keeping the reference and region renders between runs")
     ap.add_argument("--ref-only", action="store_true",
@@ -235,8 +237,9 @@ def main():
             continue
         # 2. calibration
         bmax = max(a.bdpt_spp)
-        _, tb, _ = runner.render(scene.args(), "bdpt", bmax, a.seeds[0])
-        _, tp, _ = runner.render(scene.args(), "path", bmax, a.seeds[0])
+        sampler = ["--sampler", a.sampler]
+        _, tb, _ = runner.render(scene.args(), "bdpt", bmax, a.seeds[0], extra=sampler)
+        _, tp, _ = runner.render(scene.args(), "path", bmax, a.seeds[0], extra=sampler)
         cost = tb / tp
         print("reference: path %d spp, seeds %d+%d, own noise RMS %.5f; bdpt sample = %.2f path "
               "samples of CPU" % (a.ref_spp, a.ref_seed, a.ref_seed + 1, ref_noise, cost),
@@ -249,7 +252,8 @@ def main():
         configs = list(dict.fromkeys(configs))
         for seed in a.seeds:
             for integ, spp in configs:
-                img, cpu, rays = runner.render(scene.args(), integ, spp, seed)
+                img, cpu, rays = runner.render(scene.args(), integ, spp, seed,
+                                               extra=["--sampler", a.sampler])
                 err = img - ref
                 runs.setdefault((integ, spp), []).append((rms(err), cpu, rays, (err ** 2).sum(2), img))
         med = {k: (statistics.median(r[0] for r in v), statistics.median(r[1] for r in v),
