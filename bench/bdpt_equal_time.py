@@ -27,7 +27,8 @@ For each scene:
 
 --ref-cache DIR keeps the reference and region renders (path only, keyed by the scene file's
 contents) between runs, and --ref-only fills it and stops, so that the timed runs of another build
-need not render them again.
+need not render them again. --sampler independent makes the timed renders plain Monte Carlo (the
+split's m without the Sobol sampler's stratification; the reference stays sobol).
 
 Usage:
   bench/bdpt_equal_time.py build/tritrace --size 48 --seeds 1 2 3 --bdpt-spp 64 256 1024 \
