@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <glm/vec2.hpp>
 
 #include "tritrace/math/random.h"
@@ -112,6 +113,39 @@ class Sampler {
         // Per lane: the mirrored sample index, and per group its index seed, its dimension 0 seed
         // and its dimension 1 seed (as in get_2d_groups).
         alignas(32) uint32_t index[8], seeds[N][3][8];
+#if defined(__AVX512DQ__) && defined(__AVX512VL__)
+        // The keys in 64-bit lanes (vpmullq): eight samplers' hash_combine and third_seed at once,
+        // the same integer operations as the scalar loop below.
+        alignas(64) uint64_t key[8] = {}, dimension[8] = {};
+        if (lanes < 8) std::fill_n(index, 8, 0u);
+        for (size_t l = 0; l < lanes; ++l) {
+          Sampler& sampler = *samplers[j0 + l];
+          index[l] = sampler.mirrored_index_;
+          key[l] = sampler.pixel_hash_;
+          dimension[l] = sampler.dimension_;
+          sampler.dimension_ += static_cast<uint32_t>(2 * N);
+        }
+        // GCC's vector extensions rather than intrinsics: GCC 12's AVX-512 shift and narrowing
+        // intrinsics trip -Wmaybe-uninitialized on their undefined pass-through operand.
+        using U64x8 = uint64_t __attribute__((vector_size(64)));
+        using U32x8 = uint32_t __attribute__((vector_size(32)));
+        U64x8 base, dims;
+        std::memcpy(&base, key, sizeof base);
+        std::memcpy(&dims, dimension, sizeof dims);
+        base = base + 0x9e3779b97f4a7c15ull + dims;
+        for (size_t g = 0; g < N; ++g) {
+          U64x8 h = base + static_cast<uint64_t>(2 * g);
+          h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+          h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+          h = h ^ (h >> 31);
+          const U32x8 low = __builtin_convertvector(h, U32x8);
+          const U32x8 high = __builtin_convertvector(h >> 32, U32x8);
+          const U32x8 third = __builtin_convertvector((h * 0x9e3779b97f4a7c15ull) >> 32, U32x8);
+          std::memcpy(seeds[g][0], &low, sizeof low);
+          std::memcpy(seeds[g][1], &high, sizeof high);
+          std::memcpy(seeds[g][2], &third, sizeof third);
+        }
+#else
         if (lanes < 8) {
           std::fill_n(index, 8, 0u);
           std::fill_n(&seeds[0][0][0], N * 3 * 8, 0u);
@@ -127,6 +161,7 @@ class Sampler {
           }
           sampler.dimension_ += static_cast<uint32_t>(2 * N);
         }
+#endif
         const auto load = [](const uint32_t* p) {
           return _mm256_load_si256(reinterpret_cast<const __m256i*>(p));
         };
