@@ -1,8 +1,10 @@
 #!/bin/sh
 # tritrace against Blender Cycles on cornell-area, side by side in one session: for each of REPS
 # rounds, tritrace (its own BVH), tritrace with Embree (--accel embree) and Cycles at each spp,
-# interleaved so that a change in the machine's load falls on all three. Wall times by /usr/bin/time; the load average before every run; the render time
-# each renderer reports. Writes OUTDIR/log.txt and the images (PFM; Cycles also EXR).
+# interleaved so that a change in the machine's load falls on all three. Wall and CPU (user +
+# system) seconds by /usr/bin/time, the load average before every run, the render time each
+# renderer reports; at the end the medians of wall and CPU time per renderer and spp, and Cycles'
+# medians over tritrace's (both builds). Writes OUTDIR/log.txt and the images (PFM; Cycles also EXR).
 #
 #   bench/blender/side_by_side.sh OUTDIR [REPS] [SPP...]     (defaults: 3 rounds, 256 and 1024 spp)
 #
@@ -57,4 +59,23 @@ for r in $(seq "$reps"); do
     note "cycles spp $spp rep $r load $l $(cat "$f.time") | $(grep Finished "$f.out" | tail -1 | \
       sed 's/.*| Time:\([0-9:.]*\) |.*/reported Time:\1/') | $(grep '^cycles:' "$f.out")"
   done
+done
+# Medians over the rounds (lower median for an even count) and the ratios Cycles / tritrace.
+note "# medians over $reps rounds: wall s, CPU s (user + system); Cycles / tritrace wall, CPU"
+for spp in $spps; do
+  grep -E "^(tritrace|tritrace-embree|cycles) spp $spp rep" "$log" | awk -v spp="$spp" '
+    { split($13, t, "+"); name = $1; n[name]++; wall[name, n[name]] = $11; cpu[name, n[name]] = t[1] + t[2] }
+    function median(a, name, k,   i, j, s, v) {
+      for (i = 1; i <= k; i++) v[i] = a[name, i]
+      for (i = 2; i <= k; i++) for (j = i; j > 1 && v[j - 1] > v[j]; j--) { s = v[j]; v[j] = v[j - 1]; v[j - 1] = s }
+      return v[int((k + 1) / 2)]
+    }
+    END {
+      cw = median(wall, "cycles", n["cycles"]); cc = median(cpu, "cycles", n["cycles"])
+      for (r = 1; r <= 2; r++) {
+        name = r == 1 ? "tritrace" : "tritrace-embree"
+        w = median(wall, name, n[name]); c = median(cpu, name, n[name])
+        printf "median spp %s %s wall %.2f cpu %.2f | cycles wall %.2f cpu %.2f | ratio wall %.2fx cpu %.2fx\n", spp, name, w, c, cw, cc, cw / w, cc / c
+      }
+    }' | tee -a "$log"
 done

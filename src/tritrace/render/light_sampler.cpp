@@ -137,6 +137,10 @@ LightSampler::LightSampler(const Scene& scene) {
     light.pmf_over_area = table_.pmf(static_cast<uint32_t>(k)) / triangle_area(light.e1, light.e2);
     emissive_pmf_over_area_.push_back(light.pmf_over_area);
   }
+  untextured_triangles_only_ =
+      !table_.empty() && std::all_of(lights_.begin(), lights_.end(), [](const Light& l) {
+        return !l.point && !l.spot && !l.directional && !l.environment && !l.textured;
+      });
 }
 
 LightSample LightSampler::sample(const Scene& scene, glm::vec3 x, float u_select,

@@ -62,7 +62,6 @@ class LightSampler {
     return has_environment_ ? environment_pmf_ * environment_.pdf(dir) : 0.0f;
   }
 
- private:
   // What sampling a light reads, in one place (no trips through the scene's arrays): for a point
   // light its position and intensity; for a triangle its vertex, edges, normal and radiance. A spot
   // or directional light is read from the scene's list.
@@ -79,6 +78,15 @@ class LightSampler {
     float pmf_over_area;  // the probability of choosing it, per unit area (triangles)
     float extent;         // the triangle's largest edge component, for ray offsets
   };
+
+  // Whether every light is an emissive triangle without an emission texture: then sample() is
+  // pick(u_select) followed by the triangle branch of sample() on light(pick.index), which the
+  // path tracer runs for eight vertices at a time.
+  bool untextured_triangles_only() const { return untextured_triangles_only_; }
+  AliasTable::Sample pick(float u_select) const { return table_.sample(u_select); }
+  const Light& light(uint32_t index) const { return lights_[index]; }
+
+ private:
   std::vector<Light> lights_;
   std::vector<uint32_t> emissive_prims_;       // sorted, for pdf_triangle
   std::vector<float> emissive_pmf_over_area_;  // parallel to emissive_prims_
@@ -86,6 +94,7 @@ class LightSampler {
   EnvironmentLight environment_;
   bool has_environment_ = false;  // a map that is not black
   float environment_pmf_ = 0.0f;
+  bool untextured_triangles_only_ = false;
 };
 
 // The radiance an emissive material sends from a triangle with lab normal `n` along `w` (pointing

@@ -6,7 +6,9 @@
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <glm/geometric.hpp>
+#include <limits>
 
 #include "tritrace/math/sampling.h"
 #include "tritrace/render/material/bsdf.h"
@@ -111,6 +113,161 @@ LightSample uniform_environment_sample(glm::vec3 radiance, const Frame& frame, g
   return ls;
 }
 
+#if defined(__AVX2__)
+// Eight path vertices at a time (GCC's vector extensions, one lane per path): the diffuse vertex
+// of trace<true> below, operation for operation. The build does not contract multiply-adds
+// (-ffp-contract=off) and every operation here is the scalar code's, in its order, so each lane
+// is bit for bit what the scalar code computes for its path; only the branches become masks.
+namespace lanes {
+
+inline constexpr size_t kWidth = 8;
+using F = float __attribute__((vector_size(32)));
+using I = int32_t __attribute__((vector_size(32)));
+using U = uint32_t __attribute__((vector_size(32)));
+
+struct V3 {
+  F x, y, z;
+};
+
+inline F splat(float v) {
+  return F{} + v;
+}
+inline F sqrt(F v) {
+  return reinterpret_cast<F>(_mm256_sqrt_ps(reinterpret_cast<__m256>(v)));
+}
+inline F select(I mask, F a, F b) {
+  return mask ? a : b;
+}
+inline V3 select(I mask, const V3& a, const V3& b) {
+  return {mask ? a.x : b.x, mask ? a.y : b.y, mask ? a.z : b.z};
+}
+inline V3 operator+(const V3& a, const V3& b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+inline V3 operator-(const V3& a, const V3& b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+inline V3 operator-(const V3& a) {
+  return {-a.x, -a.y, -a.z};
+}
+inline V3 operator*(const V3& a, const V3& b) {
+  return {a.x * b.x, a.y * b.y, a.z * b.z};
+}
+inline V3 operator*(const V3& a, F s) {
+  return {a.x * s, a.y * s, a.z * s};
+}
+inline V3 operator*(F s, const V3& a) {
+  return {s * a.x, s * a.y, s * a.z};
+}
+// glm::dot's order: (x + y) + z.
+inline F dot(const V3& a, const V3& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+// std::max({x, y, z}) (std::max_element: a later value wins only when strictly greater).
+inline F max_component(const V3& c) {
+  F m = c.x;
+  m = m < c.y ? c.y : m;
+  return m < c.z ? c.z : m;
+}
+// std::max(a, b) and std::min(a, b): b only when strictly beyond a.
+inline F max(F a, F b) {
+  return a < b ? b : a;
+}
+inline F min(F a, F b) {
+  return b < a ? b : a;
+}
+inline F abs(F v) {
+  return reinterpret_cast<F>(reinterpret_cast<U>(v) & 0x7fffffffu);
+}
+
+// offset_ray_origin_scalar, per lane.
+inline V3 offset_ray_origin(const V3& p, const V3& n, F extent, const RayOffsetParams& k) {
+  const auto shift = [&](F pc, F nc) {
+    const I ulps = __builtin_convertvector(k.int_scale * nc, I);
+    const U bits = reinterpret_cast<U>(pc);
+    const F by_ulps = reinterpret_cast<F>(bits + reinterpret_cast<U>(pc < 0.0f ? -ulps : ulps));
+    const F by_extent = pc + k.float_scale * extent * nc;
+    return nc > 0.0f ? max(by_extent, by_ulps) : min(by_extent, by_ulps);
+  };
+  return {shift(p.x, n.x), shift(p.y, n.y), shift(p.z, n.z)};
+}
+
+// triangle_extent.
+inline F triangle_extent(const V3& e1, const V3& e2) {
+  const V3 a{max(abs(e1.x), abs(e2.x)), max(abs(e1.y), abs(e2.y)), max(abs(e1.z), abs(e2.z))};
+  return max_component(a);
+}
+
+// leave_surface (surface_offset.h) for a triangle with vertex v0 and edges e1, e2.
+inline V3 leave_surface(const V3& v0, const V3& e1, const V3& e2, F extent, const V3& x,
+                        const V3& n, const RayOffsetParams& offset) {
+  const V3 sum = e1 + e2;
+  const V3 inward = v0 + V3{sum.x / 3.0f, sum.y / 3.0f, sum.z / 3.0f} - x;
+  const F inward_length = sqrt(dot(inward, inward));
+  const I inside_exists = inward_length > 0.0f;
+  const auto keep = [](F d, F nc) { return d * nc < 0.0f ? F{} : d; };
+  const V3 step = select(inside_exists, inward * (1.0f / inward_length), V3{});
+  const V3 inside =
+      select(inside_exists,
+             offset_ray_origin(x, V3{keep(step.x, n.x), keep(step.y, n.y), keep(step.z, n.z)},
+                               extent, offset),
+             x);
+  return offset_ray_origin(inside, n, extent, offset);
+}
+
+// Eight paths' vertices: what the gather step reads for each lane, in lanes.
+struct Gathered {
+  alignas(32) float v0[3][kWidth], e1[3][kWidth], e2[3][kWidth], normal[3][kWidth];
+  alignas(32) float u[kWidth], v[kWidth], dir[3][kWidth], albedo[3][kWidth], throughput[3][kWidth];
+  // The light each lane's vertex picked: its vertex, edges, normal, radiance, pmf per unit area,
+  // extent and whether it is two-sided (all bits set) or not.
+  alignas(32) float l_p0[3][kWidth], l_e1[3][kWidth], l_e2[3][kWidth], l_normal[3][kWidth],
+      l_radiance[3][kWidth], l_pmf_over_area[kWidth], l_extent[kWidth];
+  alignas(32) int32_t l_two_sided[kWidth];
+};
+
+inline F load(const float* p) {
+  F v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline V3 load3(const float (&p)[3][kWidth]) {
+  return {load(p[0]), load(p[1]), load(p[2])};
+}
+inline I load_mask(const int32_t* p) {
+  I v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+// What the vertices give back, per lane.
+struct Shaded {
+  // Next-event estimation: whether the lane has a light sample to add, whether its shadow ray
+  // has length (else the contribution is added unoccluded), the contribution, the ray.
+  alignas(32) int32_t nee[kWidth], shadow_ray[kWidth];
+  alignas(32) float contribution[3][kWidth], from[3][kWidth], shadow_dir[3][kWidth],
+      shadow_length[kWidth];
+  // The bounce: whether the path goes on, its new throughput, density, start and direction.
+  alignas(32) int32_t bounce[kWidth];
+  alignas(32) float throughput[3][kWidth], pdf[kWidth], start[3][kWidth], wi[3][kWidth];
+  alignas(32) float x[3][kWidth];
+};
+
+inline void store(float* p, F v) {
+  std::memcpy(p, &v, sizeof v);
+}
+inline void store3(float (&p)[3][kWidth], const V3& v) {
+  store(p[0], v.x);
+  store(p[1], v.y);
+  store(p[2], v.z);
+}
+inline void store_mask(int32_t* p, I v) {
+  std::memcpy(p, &v, sizeof v);
+}
+
+}  // namespace lanes
+#endif
+
 }  // namespace
 
 PathIntegrator::PathIntegrator(const Scene& scene, const PathSettings& settings,
@@ -208,6 +365,221 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
   constexpr size_t kRows = 8, kStride = kMaxBatch + 8;
   std::array<float, kRows * kStride> vertex_u;
   std::array<Sampler*, kMaxBatch> drawing;
+  std::array<uint16_t, kMaxBatch> hit_slot;  // the slot of each column of vertex_u
+  // Diffuse scenes lit by untextured emissive triangles alone, under MIS, without the surface AOVs
+  // (the common case, cornell-area's): their vertices are shaded eight at a time.
+  [[maybe_unused]] const bool lane_vertices =
+      kPlainDiffuse && lights_.untextured_triangles_only() && !uniform_environment &&
+      !lights_.environment() && !surface_aovs && mis;
+
+#if defined(__AVX2__)
+  // The vertices of the paths in columns [0, drawn) of vertex_u, eight at a time: the diffuse
+  // branch of the loop below, lane by lane the same numbers (see lanes::). Queues the shadow rays
+  // and the bounce rays in the loop's order and returns the number of bounce rays.
+  const auto shade_lanes = [&](int depth, size_t drawn) -> size_t {
+    using lanes::F;
+    using lanes::I;
+    using lanes::V3;
+    constexpr size_t W = lanes::kWidth;
+    const bool last = depth == settings_.max_depth;
+    const bool roulette = depth + 1 >= settings_.roulette_depth;
+    size_t next = 0;
+    for (size_t j0 = 0; j0 < drawn; j0 += W) {
+      const size_t count = std::min(W, drawn - j0);
+      lanes::Gathered g;
+      if (count < W) std::memset(&g, 0, sizeof g);
+      for (size_t l = 0; l < count; ++l) {
+        const size_t k = hit_slot[j0 + l];
+        const Hit& hit = scratch.hits[k];
+        const uint16_t i = path[k];
+        const SurfaceTriangle tri = stored_triangle(mesh, hit.prim);
+        const Material& material = scene.materials[tri.material];
+        const glm::vec3 dir = scratch.rays[k].dir;
+        if (material.emits()) {
+          // As in the loop below (MIS, plain diffuse).
+          const glm::vec3 wo = -dir;
+          const glm::vec3 le = emitted_radiance(material, tri.normal, wo);
+          if (depth == 0 || std::isinf(bsdf_pdf[i])) {
+            sink(i, depth >= 2) += throughput[i] * le;
+          } else {
+            const glm::vec3 x = tri.v0 + hit.u * tri.e1 + hit.v * tri.e2;
+            const float weight = power_heuristic(
+                1.0f, bsdf_pdf[i], 1.0f, lights_.pdf_triangle(scene, hit.prim, origin_point[i], x));
+            sink(i, depth >= 2) += throughput[i] * le * weight;
+          }
+        }
+        if (last) continue;
+        const LightSampler::Light& light = lights_.light(lights_.pick(vertex_u[j0 + l]).index);
+        for (int c = 0; c < 3; ++c) {
+          g.v0[c][l] = tri.v0[c];
+          g.e1[c][l] = tri.e1[c];
+          g.e2[c][l] = tri.e2[c];
+          g.normal[c][l] = tri.normal[c];
+          g.dir[c][l] = dir[c];
+          g.albedo[c][l] = material.albedo[c];
+          g.throughput[c][l] = throughput[i][c];
+          g.l_p0[c][l] = light.p0[c];
+          g.l_e1[c][l] = light.e1[c];
+          g.l_e2[c][l] = light.e2[c];
+          g.l_normal[c][l] = light.normal[c];
+          g.l_radiance[c][l] = light.radiance[c];
+        }
+        g.u[l] = hit.u;
+        g.v[l] = hit.v;
+        g.l_pmf_over_area[l] = light.pmf_over_area;
+        g.l_extent[l] = light.extent;
+        g.l_two_sided[l] = light.two_sided ? -1 : 0;
+      }
+      if (last) continue;
+
+      lanes::Shaded sh;
+      {
+        const float* u = vertex_u.data() + j0;
+        const F u_roulette = lanes::load(u + kStride);
+        const F u_point_x = lanes::load(u + 2 * kStride), u_point_y = lanes::load(u + 3 * kStride);
+        const F u_bsdf_x = lanes::load(u + 4 * kStride), u_bsdf_y = lanes::load(u + 5 * kStride);
+        const V3 v0 = lanes::load3(g.v0), e1 = lanes::load3(g.e1), e2 = lanes::load3(g.e2);
+        const V3 n_lab = lanes::load3(g.normal);
+        const F hu = lanes::load(g.u), hv = lanes::load(g.v);
+        const V3 x = v0 + hu * e1 + hv * e2;
+        const V3 wo = -lanes::load3(g.dir);
+        const V3 albedo = lanes::load3(g.albedo);
+        const V3 throughput_in = lanes::load3(g.throughput);
+        const V3 n = lanes::select(lanes::dot(n_lab, wo) >= 0.0f, n_lab, -n_lab);
+        const V3 start =
+            lanes::leave_surface(v0, e1, e2, lanes::triangle_extent(e1, e2), x, n, offset_);
+        const V3 f = albedo * lanes::splat(kInvPi);
+
+        // Next-event estimation: LightSampler::sample's triangle branch, then the loop's test.
+        {
+          const F b0_if = 0.5f * u_point_x, b1_else = 0.5f * u_point_y;
+          const I upper = u_point_y > u_point_x;
+          const F b0 = upper ? b0_if : u_point_x - b1_else;
+          const F b1 = upper ? u_point_y - b0_if : b1_else;
+          const F b2 = lanes::max(F{}, 1.0f - b0 - b1);
+          const V3 l_normal = lanes::load3(g.l_normal);
+          const V3 point =
+              lanes::load3(g.l_p0) + b1 * lanes::load3(g.l_e1) + b2 * lanes::load3(g.l_e2);
+          const V3 to_x = x - point;
+          const F dist2_light = lanes::dot(to_x, to_x);
+          const F cos_out = lanes::dot(l_normal, to_x);
+          const F cos_light = lanes::abs(cos_out) / lanes::sqrt(dist2_light);
+          const I valid = (dist2_light > 0.0f) &
+                          (lanes::load_mask(g.l_two_sided) | (cos_out > 0.0f)) & (cos_light > 0.0f);
+          const F light_pdf =
+              valid ? lanes::load(g.l_pmf_over_area) * dist2_light / cos_light : F{};
+          const V3 radiance = lanes::select(valid, lanes::load3(g.l_radiance), V3{});
+          const V3 to_light = point - x;
+          const F dist2 = lanes::dot(to_light, to_light);
+          const F dist = lanes::sqrt(dist2);
+          const V3 wi = to_light * (1.0f / dist);
+          const F cos_theta = lanes::dot(n, wi);
+          const I nee = (light_pdf > 0.0f) & (dist > 0.0f) & (cos_theta > 0.0f) &
+                        (lanes::max_component(radiance) > 0.0f);
+          // power_heuristic(1, light_pdf, 1, cosine_hemisphere_pdf(cos_theta)) where nee holds.
+          const F bsdf_density = cos_theta * kInvPi;
+          const F r = bsdf_density / light_pdf;
+          const F weight = lanes::abs(light_pdf) == std::numeric_limits<float>::infinity()
+                               ? lanes::splat(1.0f)
+                               : 1.0f / (1.0f + r * r);
+          const V3 contribution = throughput_in * f * radiance * (cos_theta * weight / light_pdf);
+          // ShadowRays::add for a triangle light.
+          const V3 light_side = lanes::select(lanes::dot(l_normal, wi) < 0.0f, l_normal, -l_normal);
+          const V3 end0 =
+              lanes::offset_ray_origin(point, light_side, lanes::load(g.l_extent), offset_);
+          const V3 segment0 = end0 - start;
+          const V3 end =
+              end0 + light_side * (kRayEndScale * lanes::sqrt(lanes::dot(segment0, segment0)));
+          const V3 segment = end - start;
+          const F length = lanes::sqrt(lanes::dot(segment, segment));
+          const I ray = (length > 0.0f) & (lanes::dot(segment, wi) > 0.0f);
+          lanes::store_mask(sh.nee, nee);
+          lanes::store_mask(sh.shadow_ray, ray);
+          lanes::store3(sh.contribution, contribution);
+          lanes::store3(sh.shadow_dir, segment * (1.0f / length));
+          lanes::store(sh.shadow_length, length);
+        }
+
+        // The bounce: sample_cosine_hemisphere (its concentric disk with sincosf lane by lane)
+        // about the frame of n, then Russian roulette.
+        const F a = 2.0f * u_bsdf_x - 1.0f, b = 2.0f * u_bsdf_y - 1.0f;
+        const I centre = (a == 0.0f) & (b == 0.0f);
+        const I wide = lanes::abs(a) > lanes::abs(b);
+        const F radius = wide ? a : b;
+        const F phi = wide ? 0.25f * kPi * (b / a) : 0.5f * kPi - 0.25f * kPi * (a / b);
+        F cos_phi, sin_phi;
+        for (size_t l = 0; l < W; ++l) {
+          float s_l, c_l;
+          ::sincosf(phi[l], &s_l, &c_l);
+          sin_phi[l] = s_l;
+          cos_phi[l] = c_l;
+        }
+        const F dx = centre ? F{} : radius * cos_phi;
+        const F dy = centre ? F{} : radius * sin_phi;
+        const F z = lanes::sqrt(lanes::max(F{}, 1.0f - dx * dx - dy * dy));
+        const F pdf = z > 0.0f ? z * kInvPi : F{};
+        const F sign = reinterpret_cast<F>((reinterpret_cast<lanes::U>(n.z) & 0x80000000u) |
+                                           reinterpret_cast<lanes::U>(lanes::splat(1.0f)));
+        const F fa = -1.0f / (sign + n.z);
+        const F fb = n.x * n.y * fa;
+        const V3 frame_x{1.0f + sign * n.x * n.x * fa, sign * fb, -sign * n.x};
+        const V3 frame_y{fb, sign + n.y * n.y * fa, -n.y};
+        const V3 wi = frame_x * dx + frame_y * dy + n * z;
+        V3 t = throughput_in * albedo;
+        I alive = pdf > 0.0f;
+        if (roulette) {
+          const F survive = lanes::min(lanes::splat(1.0f), lanes::sqrt(lanes::max_component(t)));
+          alive &= u_roulette < survive;
+          t = t * (1.0f / survive);
+        }
+        alive &= lanes::max_component(t) > 0.0f;
+        lanes::store_mask(sh.bounce, alive);
+        lanes::store3(sh.throughput, t);
+        lanes::store(sh.pdf, pdf);
+        lanes::store3(sh.start, start);
+        lanes::store3(sh.wi, wi);
+        lanes::store3(sh.x, x);
+      }
+
+      for (size_t l = 0; l < count; ++l) {
+        const size_t k = hit_slot[j0 + l];
+        const uint16_t i = path[k];
+        const auto vec = [l](const float(&p)[3][W]) {
+          return glm::vec3(p[0][l], p[1][l], p[2][l]);
+        };
+        if (sh.nee[l]) {
+          const glm::vec3 contribution = vec(sh.contribution);
+          if (sh.shadow_ray[l]) {
+            const size_t q = shadows.count++;
+            Ray& r = shadows.rays[q];
+            r.origin = vec(sh.start);
+            r.dir = vec(sh.shadow_dir);
+            r.tmin = 0.0f;
+            r.tmax = sh.shadow_length[l];
+            shadows.owner[q] = i;
+            shadows.contribution[q] = contribution;
+          } else {
+            sink(i, depth >= 1) += contribution;
+          }
+        }
+        if (sh.bounce[l]) {
+          throughput[i] = vec(sh.throughput);
+          bsdf_pdf[i] = sh.pdf[l];
+          environment_pdf[i] = sh.pdf[l];
+          origin_point[i] = vec(sh.x);
+          Ray& r = scratch.rays[next];
+          r.origin = vec(sh.start);
+          r.dir = vec(sh.wi);
+          r.tmin = 0.0f;
+          r.tmax = kRayTMax;
+          path[next] = i;
+          ++next;
+        }
+      }
+    }
+    return next;
+  };
+#endif
 
   for (int depth = 0; active > 0; ++depth) {
     shadows.count = 0;
@@ -220,7 +592,10 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
     // each path's at its vertex, in a fraction of the time.
     size_t drawn = 0;
     for (size_t k = 0; k < active; ++k) {
-      if (scratch.hits[k].found()) drawing[drawn++] = &batch.samplers[path[k]];
+      if (scratch.hits[k].found()) {
+        hit_slot[drawn] = static_cast<uint16_t>(k);
+        drawing[drawn++] = &batch.samplers[path[k]];
+      }
     }
     Sampler::get_2d_groups_batch<3>(drawing.data(), drawn, vertex_u.data(), kStride);
     if (uniform_environment) {
@@ -231,7 +606,16 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       }
     }
     size_t vertex = 0;  // the next column of vertex_u
-    for (size_t k = 0; k < active; ++k) {
+    size_t scalar_end = active;
+#if defined(__AVX2__)
+    if constexpr (kPlainDiffuse) {
+      if (lane_vertices) {
+        scalar_end = 0;
+        next = shade_lanes(depth, drawn);
+      }
+    }
+#endif
+    for (size_t k = 0; k < scalar_end; ++k) {
       const Hit& hit = scratch.hits[k];
       const uint16_t i = path[k];
       if (!hit.found()) {

@@ -168,6 +168,12 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
     thread_local std::array<uint16_t, kMaxBatch> slot_xy;      // slot of tile pixel (x, y)
     thread_local std::array<uint16_t, kMaxBatch> slot_of;
     thread_local std::array<uint32_t, kMaxBatch> pixel_of;  // sample i's pixel, for splats
+    // The camera's numbers, drawn for the whole batch: row r holds dimension r of every sample
+    // (rows 2 and 3 only with a lens); get_2d_groups_batch writes up to 8 cells past the batch.
+    constexpr size_t kCameraStride = kMaxBatch + 8;
+    thread_local std::array<float, 4 * kCameraStride> camera_u;
+    thread_local std::array<Sampler*, kMaxBatch> drawing;
+    thread_local std::array<int, kMaxBatch> sample_x, sample_y;
     uint64_t traced = 0, taken = 0;
     bool rendered = false;
     for (int k = next_tile.fetch_add(1, std::memory_order_relaxed); k < tiles_total;
@@ -214,18 +220,32 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
                   sampler = Sampler(options.seed, options.sampler);
                 }
                 sampler.start_pixel_sample(x, y, s);
-                const glm::vec2 u = sampler.get_pixel_2d();
-                const PixelFilter::Sample f = filter.sample(u.x, u.y);
-                const float px = static_cast<float>(x) + f.x, py = static_cast<float>(y) + f.y;
-                batch[n] = lens ? camera.lens_ray(px, py, sampler.get_lens_2d())
-                                : camera.ray_through(px, py);
-                weight[n] = f.weight;
+                drawing[n] = &sampler;
+                sample_x[n] = x;
+                sample_y[n] = y;
                 pixel_of[n] = static_cast<uint32_t>(y) * static_cast<uint32_t>(width) +
                               static_cast<uint32_t>(x);
                 ++n;
               }
             }
           });
+          // The pixel position (get_pixel_2d) and, with a lens, the lens point (get_lens_2d) of
+          // every sample at once: the same numbers as drawing them sample by sample.
+          if (lens) {
+            Sampler::get_2d_groups_batch<2>(drawing.data(), n, camera_u.data(), kCameraStride);
+          } else {
+            Sampler::get_2d_groups_batch<1>(drawing.data(), n, camera_u.data(), kCameraStride);
+          }
+          for (size_t i = 0; i < n; ++i) {
+            const PixelFilter::Sample f = filter.sample(camera_u[i], camera_u[kCameraStride + i]);
+            const float px = static_cast<float>(sample_x[i]) + f.x;
+            const float py = static_cast<float>(sample_y[i]) + f.y;
+            batch[i] = lens ? camera.lens_ray(px, py,
+                                              glm::vec2(camera_u[2 * kCameraStride + i],
+                                                        camera_u[3 * kCameraStride + i]))
+                            : camera.ray_through(px, py);
+            weight[i] = f.weight;
+          }
         }
         const size_t count = n;
         taken += count;

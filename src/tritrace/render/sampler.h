@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <glm/vec2.hpp>
 
 #include "tritrace/math/random.h"
@@ -106,6 +107,12 @@ class Sampler {
 #if defined(__AVX2__)
     bool sobol = true;
     for (size_t j = 0; j < count; ++j) sobol = sobol && samplers[j]->kind_ == SamplerKind::kSobol;
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512DQ__) && defined(__GFNI__)
+    if (sobol) {
+      get_2d_groups_batch16<N>(samplers, count, out, stride);
+      return;
+    }
+#endif
     if (sobol) {
       for (size_t j0 = 0; j0 < count; j0 += 8) {
         const size_t lanes = count - j0 < 8 ? count - j0 : 8;
@@ -156,6 +163,81 @@ class Sampler {
       }
     }
   }
+
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512DQ__) && defined(__GFNI__)
+  // get_2d_groups_batch for Sobol samplers, sixteen to an AVX-512 operation: the keys' 64-bit
+  // hashes (vpmullq) and the permutations (vpmulld) in lanes, the bit reversals by a byte shuffle
+  // and a GF(2) affine transform of each byte (GFNI). Integer operations only, each lane the
+  // scalar result. Writes only the count samplers' cells.
+  template <size_t N>
+  static void get_2d_groups_batch16(Sampler* const* samplers, size_t count, float* out,
+                                    size_t stride) {
+    using U64x16 = uint64_t __attribute__((vector_size(128)));
+    using U32x16 = uint32_t __attribute__((vector_size(64)));
+    const auto reverse = [](U32x16 x) {
+      const __m512i bytes =
+          _mm512_shuffle_epi8(reinterpret_cast<__m512i>(x),
+                              _mm512_set4_epi32(0x0c0d0e0f, 0x08090a0b, 0x04050607, 0x00010203));
+      // Each byte's bits reversed: the matrix's row for output bit i selects input bit 7 - i.
+      return reinterpret_cast<U32x16>(
+          _mm512_gf2p8affine_epi64_epi8(bytes, _mm512_set1_epi64(0x8040201008040201ll), 0));
+    };
+    const auto permute = [](U32x16 x, U32x16 seed) {
+      x += seed;
+      x ^= x * 0x6c50b47cu;
+      x ^= x * 0xb82f1e52u;
+      x ^= x * 0xc7afe638u;
+      x ^= x * 0x8d22f6e6u;
+      return x;
+    };
+    const auto dimension1 = [](U32x16 z) {
+      z ^= (z >> 1) & 0x55555555u;
+      z ^= (z >> 2) & 0x33333333u;
+      z ^= (z >> 4) & 0x0f0f0f0fu;
+      z ^= (z >> 8) & 0x00ff00ffu;
+      z ^= (z >> 16) & 0x0000ffffu;
+      return z;
+    };
+    const auto store_unit = [](float* to, __mmask16 mask, U32x16 bits) {
+      using F32x16 = float __attribute__((vector_size(64)));
+      const F32x16 unit = __builtin_convertvector(bits >> 8, F32x16) * 0x1p-24f;
+      _mm512_mask_storeu_ps(to, mask, reinterpret_cast<__m512>(unit));
+    };
+    for (size_t j0 = 0; j0 < count; j0 += 16) {
+      const size_t lanes = count - j0 < 16 ? count - j0 : 16;
+      const auto mask = static_cast<__mmask16>((1u << lanes) - 1u);
+      alignas(64) uint32_t index[16] = {};
+      alignas(64) uint64_t key[16] = {}, dimension[16] = {};
+      for (size_t l = 0; l < lanes; ++l) {
+        Sampler& sampler = *samplers[j0 + l];
+        index[l] = sampler.mirrored_index_;
+        key[l] = sampler.pixel_hash_;
+        dimension[l] = sampler.dimension_;
+        sampler.dimension_ += static_cast<uint32_t>(2 * N);
+      }
+      U64x16 base, dims;
+      U32x16 mirrored;
+      std::memcpy(&base, key, sizeof base);
+      std::memcpy(&dims, dimension, sizeof dims);
+      std::memcpy(&mirrored, index, sizeof mirrored);
+      base = base + 0x9e3779b97f4a7c15ull + dims;
+      for (size_t g = 0; g < N; ++g) {
+        // hash_combine(pixel_hash_, dimension_ + 2 g), high_half and third_seed, as get_2d.
+        U64x16 h = base + static_cast<uint64_t>(2 * g);
+        h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+        h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+        h = h ^ (h >> 31);
+        const U32x16 index_seed = __builtin_convertvector(h, U32x16);
+        const U32x16 value_seed = __builtin_convertvector(h >> 32, U32x16);
+        const U32x16 third = __builtin_convertvector((h * 0x9e3779b97f4a7c15ull) >> 32, U32x16);
+        const U32x16 shuffled = reverse(permute(mirrored, index_seed));
+        store_unit(out + 2 * g * stride + j0, mask, reverse(permute(shuffled, value_seed)));
+        store_unit(out + (2 * g + 1) * stride + j0, mask,
+                   reverse(permute(dimension1(shuffled), third)));
+      }
+    }
+  }
+#endif
 
   // The position inside the pixel: by convention the first two dimensions of a sample (the
   // renderer calls it right after start_pixel_sample), one 2-D group.
