@@ -611,20 +611,7 @@ void for_each_packet(std::span<const Ray> rays, std::span<Out> out, Fn&& fn) {
 
 BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConfig& config,
                    BvhTraversal traversal)
-    : mesh_(mesh),
-      bvh_(bvh::build_wide_bvh(mesh, config)),
-      kernel_(kernel),
-      packets_(traversal == BvhTraversal::kAuto && bvh::has_packet_kernel(kernel)) {
-#if defined(__AVX2__)
-  // Interleaving pays where a ray waits on memory; a tree that stays in the caches is traversed
-  // faster one ray at a time (see docs/PERFORMANCE.md, issue 27).
-  interleave_ = kernel_ == Kernel::kWatertight && !bvh_.nodes.empty() &&
-                (traversal == BvhTraversal::kSingleInterleaved ||
-                 bvh_.node_bytes() + bvh_.block_bytes() >= kInterleaveBytes);
-#endif
-  incoherent_packets_ =
-      packets_ && bvh_.node_bytes() + bvh_.block_bytes() <= kIncoherentPacketBytes;
-}
+    : BvhAccel(mesh, bvh::build_wide_bvh(mesh, config), kernel, traversal) {}
 
 BvhAccel::BvhAccel(const TriangleMesh& mesh, bvh::WideBvh tree, Kernel kernel,
                    BvhTraversal traversal)
@@ -633,7 +620,16 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, bvh::WideBvh tree, Kernel kernel,
       kernel_(kernel),
       packets_(traversal == BvhTraversal::kAuto && bvh::has_packet_kernel(kernel)),
       incoherent_packets_(packets_ &&
-                          bvh_.node_bytes() + bvh_.block_bytes() <= kIncoherentPacketBytes) {}
+                          bvh_.node_bytes() + bvh_.block_bytes() <= kIncoherentPacketBytes) {
+#if defined(__AVX2__)
+  // Interleaving pays where a ray waits on memory; a tree that stays in the caches is traversed
+  // faster one ray at a time (see docs/PERFORMANCE.md, issue 27). Decided here for both
+  // constructors (GeometrySet's big meshes interleave too).
+  interleave_ = kernel_ == Kernel::kWatertight && !bvh_.nodes.empty() &&
+                (traversal == BvhTraversal::kSingleInterleaved ||
+                 bvh_.node_bytes() + bvh_.block_bytes() >= kInterleaveBytes);
+#endif
+}
 
 void BvhAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
   if constexpr (bvh::kPacketSize > 0) {
