@@ -230,29 +230,14 @@ struct WideBoxSetup {
   int near_off[3], far_off[3];
 };
 
-// bvh::box_setup's values, computed without its branches on the direction's signs (which GCC
-// makes branches: three coin tosses per random ray): the near plane's offset and the padded
-// origins follow from each inverse component's sign bit. o + copysign(pad, inv) is o + pad or
-// o - pad, and o - copysign(pad, inv) the other, bit for bit (IEEE subtraction adds the negation).
 inline void wide_box_setup(const Ray& ray, WideBoxSetup& w) {
-  const glm::vec3 mag = glm::abs(ray.origin);
-  const float pad = bvh::origin_padding(std::max({mag.x, mag.y, mag.z}));
-  const __m128 inv =
-      _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(ray.dir.x, ray.dir.y, ray.dir.z, 1.0f));
-  const __m128 o = _mm_setr_ps(ray.origin.x, ray.origin.y, ray.origin.z, 0.0f);
-  const __m128 signed_pad = _mm_or_ps(_mm_set1_ps(pad), _mm_and_ps(inv, _mm_set1_ps(-0.0f)));
-  alignas(16) float on[4], of[4], iv[4];
-  _mm_store_ps(on, _mm_add_ps(o, signed_pad));
-  _mm_store_ps(of, _mm_sub_ps(o, signed_pad));
-  _mm_store_ps(iv, inv);
-  const uint32_t negative = static_cast<uint32_t>(_mm_movemask_ps(inv));
+  const RayBoxSetup s = box_setup(ray);
   for (int a = 0; a < 3; ++a) {
-    const int flip = static_cast<int>((negative >> a) & 1u) * 8;
-    w.origin_near[a] = _mm256_set1_ps(on[a]);
-    w.origin_far[a] = _mm256_set1_ps(of[a]);
-    w.inv_dir[a] = _mm256_set1_ps(iv[a]);
-    w.near_off[a] = 16 * a + flip;
-    w.far_off[a] = 16 * a + 8 - flip;
+    w.origin_near[a] = _mm256_set1_ps(s.origin_near[a]);
+    w.origin_far[a] = _mm256_set1_ps(s.origin_far[a]);
+    w.inv_dir[a] = _mm256_set1_ps(s.inv_dir[a]);
+    w.near_off[a] = s.near_off[a];
+    w.far_off[a] = s.far_off[a];
   }
   w.tmin = _mm256_set1_ps(ray.tmin);
   w.tmax = _mm256_set1_ps(ray.tmax);
