@@ -71,7 +71,8 @@ inline bool block_scalar(const TriangleBlock& b, const TriangleArrays& tris,
 // closest_hit), so that the block test inlines into the traversal loop with no switch per leaf.
 template <Kernel K, int Kz = -1>
 [[gnu::always_inline]] inline bool intersect_block(const TriangleBlock& b,
-                                                   const TriangleArrays& tris, const Ray& ray,
+                                                   const TriangleArrays& tris,
+                                                   [[maybe_unused]] const Ray& ray,
                                                    const PreparedRay<K>& prepared, Hit* best) {
 #if defined(__AVX2__)
   if constexpr (K == Kernel::kMollerTrumbore) return block_moller_trumbore(b, ray, best);
@@ -202,6 +203,10 @@ bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray) {
   }
 }
 
+// Trees at most this big trace incoherent queries as packets too (see intersect_incoherent). Not
+// tuned: cornell-area's 6 KiB tree was measured, nothing between that and 1 MiB.
+inline constexpr size_t kIncoherentPacketBytes = size_t{64} << 10;
+
 #if defined(__AVX2__)
 // Interleaved traversal of a batch of incoherent rays with the watertight kernel. On a big mesh a
 // single ray spends most of its time waiting for the next node or leaf block to arrive from
@@ -217,9 +222,6 @@ inline constexpr int kInFlight = 12;
 inline constexpr size_t kChunk = 256;
 // Trees at least this big (nodes and blocks) are traversed interleaved.
 inline constexpr size_t kInterleaveBytes = size_t{1} << 20;
-// Trees at most this big trace incoherent queries as packets too (see intersect_incoherent). Not
-// tuned: cornell-area's 6 KiB tree was measured, nothing between that and 1 MiB.
-inline constexpr size_t kIncoherentPacketBytes = size_t{64} << 10;
 
 // The box test's per-ray constants (RayBoxSetup) as eight-lane vectors, kept in a ray's slot:
 // the interleaved steps read them as memory operands rather than broadcasting nine scalars again
