@@ -79,8 +79,9 @@ bool same_hit(const Hit& a, const Hit& b) {
          std::memcmp(&a.u, &b.u, sizeof(float)) == 0 && std::memcmp(&a.v, &b.v, sizeof(float)) == 0;
 }
 
-// Every block of the mesh's BVH against every ray: the SIMD kernel's best hit and any-hit answer
-// equal a scalar loop over the block's triangles.
+// Every block of the mesh's BVH against every ray: the SIMD kernel's best hit and any-hit answers
+// (block_watertight with nullptr, block_watertight_occluded) equal a scalar loop over the block's
+// triangles.
 template <Kernel K>
 void expect_blocks_match_scalar(const TriangleMesh& mesh, const std::vector<Ray>& rays,
                                 int* hits_seen) {
@@ -101,6 +102,15 @@ void expect_blocks_match_scalar(const TriangleMesh& mesh, const std::vector<Ray>
       if constexpr (K == Kernel::kWatertight) {
         bvh::block_watertight(b, prepared.watertight(), &got);
         any = bvh::block_watertight(b, prepared.watertight(), nullptr);
+        // The any-hit form of the interleaved shadow-ray traversal, for the ray's dominant axis.
+        const WatertightRay& wt = prepared.watertight();
+        const bool occluded = wt.kz == 0   ? bvh::block_watertight_occluded<0>(b, wt)
+                              : wt.kz == 1 ? bvh::block_watertight_occluded<1>(b, wt)
+                                           : bvh::block_watertight_occluded<2>(b, wt);
+        if (occluded != want.found() && ++mismatches <= 5) {
+          ADD_FAILURE() << "block_watertight_occluded: " << occluded << ", scalar prim "
+                        << want.prim;
+        }
       } else {
         bvh::block_moller_trumbore(b, ray, &got);
         any = bvh::block_moller_trumbore(b, ray, nullptr);

@@ -180,6 +180,45 @@ inline bool block_watertight_axis(const TriangleBlock& b, const WatertightRay& r
   return true;
 }
 
+// block_watertight_axis with best == nullptr (any hit, for occlusion): the same arithmetic, so
+// the same answer, without what a closest hit needs (u and v, the per-lane offers). Kept out of
+// line: inlined into the interleaved any-hit step it made that step 20% slower
+// (docs/PERFORMANCE.md, issue 27).
+template <int Kz>
+[[gnu::noinline]] bool block_watertight_occluded(const TriangleBlock& b, const WatertightRay& r) {
+  const BlockEdges e = block_edge_functions<Kz>(b, r);
+  const __m256 zero = _mm256_setzero_ps();
+  const __m256 nonneg = _mm256_and_ps(
+      _mm256_and_ps(_mm256_cmp_ps(e.u, zero, _CMP_GE_OQ), _mm256_cmp_ps(e.v, zero, _CMP_GE_OQ)),
+      _mm256_cmp_ps(e.w, zero, _CMP_GE_OQ));
+  const __m256 nonpos = _mm256_and_ps(
+      _mm256_and_ps(_mm256_cmp_ps(e.u, zero, _CMP_LE_OQ), _mm256_cmp_ps(e.v, zero, _CMP_LE_OQ)),
+      _mm256_cmp_ps(e.w, zero, _CMP_LE_OQ));
+  const __m256 inside = _mm256_or_ps(nonneg, nonpos);
+  if (_mm256_movemask_ps(_mm256_or_ps(inside, e.on_edge)) == 0) return false;
+  const __m256 det = _mm256_add_ps(_mm256_add_ps(e.u, e.v), e.w);
+  const __m256 inv_det = _mm256_div_ps(_mm256_set1_ps(1.0f), det);
+  const __m256 t = _mm256_mul_ps(
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(e.u, e.z[0]), _mm256_mul_ps(e.v, e.z[1])),
+                    _mm256_mul_ps(e.w, e.z[2])),
+      _mm256_mul_ps(_mm256_set1_ps(r.sz), inv_det));
+  __m256 ok = _mm256_andnot_ps(e.on_edge, inside);
+  ok = _mm256_and_ps(ok, _mm256_cmp_ps(det, zero, _CMP_NEQ_UQ));
+  ok = _mm256_and_ps(ok, _mm256_cmp_ps(t, _mm256_set1_ps(r.tmin), _CMP_GE_OQ));
+  ok = _mm256_and_ps(ok, _mm256_cmp_ps(t, _mm256_set1_ps(r.tmax), _CMP_LE_OQ));
+  if (_mm256_movemask_ps(ok) != 0) return true;
+  for (uint32_t exact = static_cast<uint32_t>(_mm256_movemask_ps(e.on_edge)); exact;
+       exact &= exact - 1) {
+    const int l = std::countr_zero(exact);
+    const glm::vec3 p0(b.vertex[0][0][l], b.vertex[0][1][l], b.vertex[0][2][l]);
+    const glm::vec3 p1(b.vertex[1][0][l], b.vertex[1][1][l], b.vertex[1][2][l]);
+    const glm::vec3 p2(b.vertex[2][0][l], b.vertex[2][1][l], b.vertex[2][2][l]);
+    TriangleHit h;
+    if (detail::intersect_watertight_axis<Kz>(r, p0, p1, p2, h)) return true;
+  }
+  return false;
+}
+
 inline bool block_watertight(const TriangleBlock& b, const WatertightRay& r, Hit* best) {
   switch (r.kz) {  // the same way for every leaf of one ray
     case 0:

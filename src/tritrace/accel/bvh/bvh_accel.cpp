@@ -9,9 +9,12 @@
 #include "tritrace/accel/bvh/traversal_stack.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cassert>
 #include <cmath>
+#include <cstddef>
+#include <limits>
 #include <utility>
 
 #if defined(__AVX2__)
@@ -68,7 +71,8 @@ inline bool block_scalar(const TriangleBlock& b, const TriangleArrays& tris,
 // closest_hit), so that the block test inlines into the traversal loop with no switch per leaf.
 template <Kernel K, int Kz = -1>
 [[gnu::always_inline]] inline bool intersect_block(const TriangleBlock& b,
-                                                   const TriangleArrays& tris, const Ray& ray,
+                                                   const TriangleArrays& tris,
+                                                   [[maybe_unused]] const Ray& ray,
                                                    const PreparedRay<K>& prepared, Hit* best) {
 #if defined(__AVX2__)
   if constexpr (K == Kernel::kMollerTrumbore) return block_moller_trumbore(b, ray, best);
@@ -199,6 +203,10 @@ bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray) {
   }
 }
 
+// Trees at most this big trace incoherent queries as packets too (see intersect_incoherent). Not
+// tuned: cornell-area's 6 KiB tree was measured, nothing between that and 1 MiB.
+inline constexpr size_t kIncoherentPacketBytes = size_t{64} << 10;
+
 #if defined(__AVX2__)
 // Interleaved traversal of a batch of incoherent rays with the watertight kernel. On a big mesh a
 // single ray spends most of its time waiting for the next node or leaf block to arrive from
@@ -214,60 +222,206 @@ inline constexpr int kInFlight = 12;
 inline constexpr size_t kChunk = 256;
 // Trees at least this big (nodes and blocks) are traversed interleaved.
 inline constexpr size_t kInterleaveBytes = size_t{1} << 20;
-// Trees at most this big trace incoherent queries as packets too (see intersect_incoherent). Not
-// tuned: cornell-area's 6 KiB tree was measured, nothing between that and 1 MiB.
-inline constexpr size_t kIncoherentPacketBytes = size_t{64} << 10;
+
+// The box test's per-ray constants (RayBoxSetup) as eight-lane vectors, kept in a ray's slot:
+// the interleaved steps read them as memory operands rather than broadcasting nine scalars again
+// at every node, since a slot's state does not stay in registers from one step to the next.
+struct WideBoxSetup {
+  __m256 origin_near[3], origin_far[3], inv_dir[3];
+  __m256 tmin, tmax;
+  int near_off[3], far_off[3];
+};
+
+inline void wide_box_setup(const Ray& ray, WideBoxSetup& w) {
+  const RayBoxSetup s = box_setup(ray);
+  for (int a = 0; a < 3; ++a) {
+    w.origin_near[a] = _mm256_set1_ps(s.origin_near[a]);
+    w.origin_far[a] = _mm256_set1_ps(s.origin_far[a]);
+    w.inv_dir[a] = _mm256_set1_ps(s.inv_dir[a]);
+    w.near_off[a] = s.near_off[a];
+    w.far_off[a] = s.far_off[a];
+  }
+  w.tmin = _mm256_set1_ps(ray.tmin);
+  w.tmax = _mm256_set1_ps(ray.tmax);
+}
+
+// bvh::intersect_boxes with the constants above, operation for operation (the same boxes hit,
+// the same entry distances).
+[[gnu::always_inline]] inline uint32_t intersect_boxes(const WideNode& node, const WideBoxSetup& s,
+                                                       __m256 tmax, float* tnear) {
+  const float* base = node.lo_x;
+  __m256 tn = s.tmin;
+  __m256 tf = tmax;
+  for (int a = 0; a < 3; ++a) {
+    const __m256 n = _mm256_mul_ps(
+        _mm256_sub_ps(_mm256_load_ps(base + s.near_off[a]), s.origin_near[a]), s.inv_dir[a]);
+    const __m256 f = _mm256_mul_ps(
+        _mm256_sub_ps(_mm256_load_ps(base + s.far_off[a]), s.origin_far[a]), s.inv_dir[a]);
+    tn = _mm256_max_ps(n, tn);  // returns tn when n is NaN
+    tf = _mm256_min_ps(f, tf);
+  }
+  tf = _mm256_mul_ps(tf, _mm256_set1_ps(bvh::kFarScale));
+  _mm256_store_ps(tnear, tn);
+  return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ)));
+}
+
+// Asks for every cache line of a node or a block (bvh::prefetch): a node (224 bytes on a 32-byte
+// boundary) spans the lines at +0, +64, +128 and +192, a block (320 bytes, on a 64-byte boundary
+// in the big trees that interleave) those and +256. The address is computed from the leaf bit
+// without a select, which the compiler made a branch (unpredictable on incoherent rays).
+struct TreeBases {
+  const char* base[2];  // the nodes, the blocks
+};
+
+[[gnu::always_inline]] inline void prefetch(const TreeBases& t, uint32_t ref) {
+  const size_t leaf = ref >> 31;
+  const size_t bytes = sizeof(WideNode) + leaf * (sizeof(TriangleBlock) - sizeof(WideNode));
+  const char* p = t.base[leaf] + size_t{ref & ~kLeafBit} * bytes;
+  __builtin_prefetch(p);
+  __builtin_prefetch(p + 64);
+  __builtin_prefetch(p + 128);
+  __builtin_prefetch(p + 192);
+  __builtin_prefetch(p + (leaf << 8));
+}
+
+// Both stacks start above kStackFloor entries naming the root, so that the step can
+// prefetch the top kPrefetchDepth entries without asking how many there are (the root stays in
+// the caches).
+inline constexpr int kPrefetchDepth = 2;
+inline constexpr int kStackFloor = kPrefetchDepth;
+
+// For each eight-bit mask, the indices of its set bits in increasing order, one per byte: the
+// permutation that packs a node's hit children into the lowest lanes.
+inline constexpr std::array<uint64_t, 256> kCompress = [] {
+  std::array<uint64_t, 256> table{};
+  for (uint32_t mask = 0; mask < 256; ++mask) {
+    int n = 0;
+    for (uint32_t i = 0; i < 8; ++i) {
+      if (mask >> i & 1u) table[mask] |= uint64_t{i} << (8 * n++);
+    }
+  }
+  return table;
+}();
+
+// The stages of a bitonic network sorting eight lanes in descending order: for k = 2, 4, 8 and
+// j = k / 2 down to 1, lane i meets lane i ^ j and keeps the greater key when
+// (i < i ^ j) == ((i & k) == 0).
+struct SortNetwork {
+  alignas(32) int32_t partner[6][8];
+  alignas(32) int32_t take_max[6][8];
+};
+inline constexpr SortNetwork kSortNetwork = [] {
+  SortNetwork net{};
+  int stage = 0;
+  for (int k = 2; k <= 8; k *= 2) {
+    for (int j = k / 2; j >= 1; j /= 2, ++stage) {
+      for (int i = 0; i < 8; ++i) {
+        net.partner[stage][i] = i ^ j;
+        net.take_max[stage][i] = (i < (i ^ j)) == ((i & k) == 0) ? -1 : 0;
+      }
+    }
+  }
+  return net;
+}();
+
+// One compare-exchange stage of a bitonic sorting network on eight (key, ref) lanes: lane i meets
+// lane partner[i] and keeps the greater key where take_max[i] is set, the smaller otherwise (its
+// own on a tie, so the pair keeps both refs).
+[[gnu::always_inline]] inline void sort_stage(__m256& keys, __m256i& refs, __m256i partner,
+                                              __m256 take_max) {
+  const __m256 pk = _mm256_permutevar8x32_ps(keys, partner);
+  const __m256i pr = _mm256_permutevar8x32_epi32(refs, partner);
+  const __m256 take = _mm256_or_ps(_mm256_and_ps(take_max, _mm256_cmp_ps(pk, keys, _CMP_GT_OQ)),
+                                   _mm256_andnot_ps(take_max, _mm256_cmp_ps(pk, keys, _CMP_LT_OQ)));
+  keys = _mm256_blendv_ps(keys, pk, take);
+  refs = _mm256_castps_si256(
+      _mm256_blendv_ps(_mm256_castsi256_ps(refs), _mm256_castsi256_ps(pr), take));
+}
+
+// Pushes node's children named by mask onto the stack at top with their entry distances, the
+// farthest deepest and the nearest at top[n - 1]; returns n. Branch-free: the children are packed
+// into the low lanes (kCompress), the others get -inf, and a bitonic network (Batcher 1968) sorts
+// the eight lanes by distance, descending; both halves are stored whole (the stack has room).
+// Equal distances may come out in another order than push_nearest_last_ranked's; the closest hit
+// does not depend on the order (offer keeps the least (t, prim) whichever comes first).
+[[gnu::always_inline]] inline int push_sorted(const WideNode& node, uint32_t mask, __m256 tnear,
+                                              StackEntry* top) {
+  const int n = std::popcount(mask);
+  const __m256i order =
+      _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<int64_t>(kCompress[mask])));
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256 live = _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(n), lane));
+  __m256 keys = _mm256_blendv_ps(_mm256_set1_ps(-std::numeric_limits<float>::infinity()),
+                                 _mm256_permutevar8x32_ps(tnear, order), live);
+  __m256i refs = _mm256_permutevar8x32_epi32(
+      _mm256_load_si256(reinterpret_cast<const __m256i*>(node.child)), order);
+  // Stages (k, j) of the network for a descending sort: lane i meets i ^ j and keeps the max when
+  // (i < i ^ j) == ((i & k) == 0).
+  for (int stage = 0; stage < 6; ++stage) {
+    sort_stage(keys, refs,
+               _mm256_load_si256(reinterpret_cast<const __m256i*>(kSortNetwork.partner[stage])),
+               _mm256_castsi256_ps(_mm256_load_si256(
+                   reinterpret_cast<const __m256i*>(kSortNetwork.take_max[stage]))));
+  }
+  // (ref, key) pairs in lane order: unpack works within 128-bit halves, so the halves are swapped
+  // back into place.
+  const __m256 r = _mm256_castsi256_ps(refs);
+  const __m256 lo = _mm256_unpacklo_ps(r, keys), hi = _mm256_unpackhi_ps(r, keys);
+  static_assert(sizeof(StackEntry) == 8);
+  _mm256_storeu_ps(reinterpret_cast<float*>(top), _mm256_permute2f128_ps(lo, hi, 0x20));
+  _mm256_storeu_ps(reinterpret_cast<float*>(top + 4), _mm256_permute2f128_ps(lo, hi, 0x31));
+  return n;
+}
 
 // One slot of the interleaved closest-hit traversal: a ray's state between its steps.
 struct ClosestRay {
-  RayBoxSetup setup;
+  WideBoxSetup setup;
   WatertightRay wt;
   Hit best;
-  float tmin, tmax;
+  float tmax;
   uint32_t ref;
   int sp;
   uint32_t index;
-  StackEntry stack[kStackSize];
+  StackEntry stack[kStackFloor + kStackSize + kWidth];
 };
 
-// The same for the any-hit traversal.
+// The same for the any-hit traversal. The stack has room for a whole node's eight children
+// stored at once above the deepest entry.
 struct AnyRay {
-  RayBoxSetup setup;
+  WideBoxSetup setup;
   WatertightRay wt;
-  float tmin, tmax;
   uint32_t ref;
   int sp;
   uint32_t index;
-  uint32_t stack[kStackSize];
+  uint32_t stack[kStackFloor + kStackSize + kWidth];
 };
 
 // One step of closest_hit_from for ray s: a leaf block or a node. Returns false once the ray is
 // done (s.best is its answer).
 template <int Kz>
-[[gnu::always_inline]] inline bool closest_step(const WideBvh& tree, ClosestRay& s) {
+[[gnu::always_inline]] inline bool closest_step(const WideBvh& tree, const TreeBases& bases,
+                                                ClosestRay& s) {
   if (s.ref & kLeafBit) {
     bvh::block_watertight_axis<Kz>(tree.blocks[s.ref & ~kLeafBit], s.wt, &s.best);
   } else {
     const WideNode& node = tree.nodes[s.ref];
     alignas(32) float tnear[kWidth];
-    uint32_t mask = intersect_boxes(node, s.setup, s.tmin, std::min(s.best.t, s.tmax), tnear);
+    const uint32_t mask =
+        intersect_boxes(node, s.setup, _mm256_set1_ps(std::min(s.best.t, s.tmax)), tnear);
     if (mask) {
-      if (std::has_single_bit(mask)) {
-        s.ref = node.child[std::countr_zero(mask)];
-        prefetch(tree, s.ref);
-        return true;
-      }
-      assert(s.sp + std::popcount(mask) <= kStackSize);
+      // Every hit child stacked at once, sorted by entry distance, farthest deepest, without a
+      // branch on how many there are (see push_sorted); the nearest is traversed next.
+      assert(s.sp + kWidth <= kStackFloor + kStackSize + kWidth);
       StackEntry* top = s.stack + s.sp;
-      const int n = push_nearest_last_ranked(node, mask, tnear, top);
-      for (int i = 0; i < n; ++i) prefetch(tree, top[i].ref);
+      const int n = push_sorted(node, mask, _mm256_load_ps(tnear), top);
+      for (int k = 1; k <= kPrefetchDepth; ++k) prefetch(bases, top[n - k].ref);
       s.sp += n - 1;
       s.ref = top[n - 1].ref;
       return true;
     }
   }
   do {
-    if (s.sp == 0) return false;
+    if (s.sp == kStackFloor) return false;
     --s.sp;
   } while (s.stack[s.sp].key > s.best.t);
   s.ref = s.stack[s.sp].ref;
@@ -276,25 +430,30 @@ template <int Kz>
 
 // One step of any_hit for ray s. Returns false once the ray is done; `hit` says how.
 template <int Kz>
-[[gnu::always_inline]] inline bool any_step(const WideBvh& tree, AnyRay& s, bool& hit) {
+[[gnu::always_inline]] inline bool any_step(const WideBvh& tree, const TreeBases& bases, AnyRay& s,
+                                            bool& hit) {
   if (s.ref & kLeafBit) {
-    if (bvh::block_watertight_axis<Kz>(tree.blocks[s.ref & ~kLeafBit], s.wt, nullptr)) {
+    if (bvh::block_watertight_occluded<Kz>(tree.blocks[s.ref & ~kLeafBit], s.wt)) {
       hit = true;
       return false;
     }
   } else {
     const WideNode& node = tree.nodes[s.ref];
     alignas(32) float tnear[kWidth];
-    uint32_t mask = intersect_boxes(node, s.setup, s.tmin, s.tmax, tnear);
-    while (mask) {
-      assert(s.sp < kStackSize);
-      const uint32_t child = node.child[std::countr_zero(mask)];
-      prefetch(tree, child);
-      s.stack[s.sp++] = child;
-      mask &= mask - 1;
-    }
+    const uint32_t mask = intersect_boxes(node, s.setup, s.setup.tmax, tnear);
+    // The hit children pushed in slot order (the order a loop over the mask bits pushed them) by
+    // one permutation and one store, and the next entries to be popped prefetched: no branch on
+    // how many children were hit, which the predictor cannot learn on incoherent rays.
+    assert(s.sp + kWidth <= kStackFloor + kStackSize + kWidth);
+    const __m256i children = _mm256_load_si256(reinterpret_cast<const __m256i*>(node.child));
+    const __m256i order =
+        _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<int64_t>(kCompress[mask])));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(s.stack + s.sp),
+                        _mm256_permutevar8x32_epi32(children, order));
+    s.sp += std::popcount(mask);
+    for (int k = 1; k <= kPrefetchDepth; ++k) prefetch(bases, s.stack[s.sp - k]);
   }
-  if (s.sp == 0) {
+  if (s.sp == kStackFloor) {
     hit = false;
     return false;
   }
@@ -332,81 +491,91 @@ template <typename Slot, typename Start, typename Step, typename Finish>
   }
 }
 
-// Orders one chunk's traceable rays by dominant axis: order[first[kz] .. first[kz + 1]). Rays
-// that hit nothing by definition (see traceable) are left out; the caller answers them.
+// bvh::traceable on one load: the six coordinates finite and tmin <= tmax.
+[[gnu::always_inline]] inline bool traceable_wide(const Ray& ray) {
+  static_assert(sizeof(Ray) == 8 * sizeof(float) && offsetof(Ray, dir) == 3 * sizeof(float) &&
+                offsetof(Ray, tmin) == 6 * sizeof(float));
+  const __m256 v = _mm256_loadu_ps(&ray.origin.x);
+  const __m256 magnitude = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), v);
+  const uint32_t finite = static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(
+      magnitude, _mm256_set1_ps(std::numeric_limits<float>::infinity()), _CMP_LT_OQ)));
+  return (finite & 0x3Fu) == 0x3Fu && ray.tmin <= ray.tmax;
+}
+
+// Orders one chunk's rays by dominant axis: order[first[kz] .. first[kz + 1]) for kz = 0, 1, 2,
+// and order[first[3] .. first[4]) the rays that hit nothing by definition (see traceable), which
+// the caller answers.
 struct ChunkOrder {
   uint16_t order[kChunk];
-  size_t first[4];
+  size_t first[5];
   WatertightRay wt[kChunk];
 };
 
 inline void order_chunk(std::span<const Ray> rays, ChunkOrder& c) {
-  size_t count[3] = {0, 0, 0};
+  size_t count[4] = {0, 0, 0, 0};
   uint8_t axis[kChunk];
   for (size_t i = 0; i < rays.size(); ++i) {
     c.wt[i] = prepare_watertight(rays[i]);
-    axis[i] = traceable(rays[i]) ? static_cast<uint8_t>(c.wt[i].kz) : 3;
-    if (axis[i] < 3) ++count[axis[i]];
+    axis[i] = traceable_wide(rays[i]) ? static_cast<uint8_t>(c.wt[i].kz) : 3;
+    ++count[axis[i]];
   }
   c.first[0] = 0;
-  for (int a = 0; a < 3; ++a) c.first[a + 1] = c.first[a] + count[a];
-  size_t at[3] = {c.first[0], c.first[1], c.first[2]};
-  for (size_t i = 0; i < rays.size(); ++i) {
-    if (axis[i] < 3) c.order[at[axis[i]]++] = static_cast<uint16_t>(i);
-  }
+  for (int a = 0; a < 4; ++a) c.first[a + 1] = c.first[a] + count[a];
+  size_t at[4] = {c.first[0], c.first[1], c.first[2], c.first[3]};
+  for (size_t i = 0; i < rays.size(); ++i) c.order[at[axis[i]]++] = static_cast<uint16_t>(i);
 }
 
 template <int Kz>
 void closest_interleaved(const WideBvh& tree, std::span<const Ray> rays, const ChunkOrder& c,
                          ClosestRay* slots, std::span<Hit> hits) {
+  const TreeBases bases{{reinterpret_cast<const char*>(tree.nodes.data()),
+                         reinterpret_cast<const char*>(tree.blocks.data())}};
   interleave(
       slots, c.order + c.first[Kz], c.first[Kz + 1] - c.first[Kz],
       [&](ClosestRay& s, uint32_t i) {
         const Ray& ray = rays[i];
-        s.setup = box_setup(ray);
+        wide_box_setup(ray, s.setup);
         s.wt = c.wt[i];
         s.best = Hit{};
-        s.tmin = ray.tmin;
         s.tmax = ray.tmax;
         s.ref = 0;
-        s.sp = 0;
+        s.sp = kStackFloor;
         s.index = i;
       },
-      [&](ClosestRay& s) { return closest_step<Kz>(tree, s); },
+      [&](ClosestRay& s) { return closest_step<Kz>(tree, bases, s); },
       [&](ClosestRay& s) { hits[s.index] = s.best; });
 }
 
 template <int Kz>
 void any_interleaved(const WideBvh& tree, std::span<const Ray> rays, const ChunkOrder& c,
                      AnyRay* slots, std::span<uint8_t> occluded) {
+  const TreeBases bases{{reinterpret_cast<const char*>(tree.nodes.data()),
+                         reinterpret_cast<const char*>(tree.blocks.data())}};
   bool hit = false;
   interleave(
       slots, c.order + c.first[Kz], c.first[Kz + 1] - c.first[Kz],
       [&](AnyRay& s, uint32_t i) {
         const Ray& ray = rays[i];
-        s.setup = box_setup(ray);
+        wide_box_setup(ray, s.setup);
         s.wt = c.wt[i];
-        s.tmin = ray.tmin;
-        s.tmax = ray.tmax;
         s.ref = 0;
-        s.sp = 0;
+        s.sp = kStackFloor;
         s.index = i;
       },
-      [&](AnyRay& s) { return any_step<Kz>(tree, s, hit); },
+      [&](AnyRay& s) { return any_step<Kz>(tree, bases, s, hit); },
       [&](AnyRay& s) { occluded[s.index] = hit ? 1 : 0; });
 }
 
 void closest_hits_interleaved(const WideBvh& tree, std::span<const Ray> rays, std::span<Hit> hits) {
   ChunkOrder c;
   ClosestRay slots[kInFlight];
+  for (ClosestRay& s : slots) std::fill_n(s.stack, kStackFloor, StackEntry{0, 0.0f});  // the root
   for (size_t first = 0; first < rays.size(); first += kChunk) {
     const size_t n = std::min(kChunk, rays.size() - first);
     const std::span<const Ray> chunk = rays.subspan(first, n);
     const std::span<Hit> out = hits.subspan(first, n);
     order_chunk(chunk, c);
-    for (size_t i = 0; i < n; ++i) {
-      if (!traceable(chunk[i])) out[i] = Hit{};
-    }
+    for (size_t k = c.first[3]; k < c.first[4]; ++k) out[c.order[k]] = Hit{};
     closest_interleaved<0>(tree, chunk, c, slots, out);
     closest_interleaved<1>(tree, chunk, c, slots, out);
     closest_interleaved<2>(tree, chunk, c, slots, out);
@@ -417,14 +586,13 @@ void any_hits_interleaved(const WideBvh& tree, std::span<const Ray> rays,
                           std::span<uint8_t> occluded) {
   ChunkOrder c;
   AnyRay slots[kInFlight];
+  for (AnyRay& s : slots) std::fill_n(s.stack, kStackFloor, 0u);  // the root
   for (size_t first = 0; first < rays.size(); first += kChunk) {
     const size_t n = std::min(kChunk, rays.size() - first);
     const std::span<const Ray> chunk = rays.subspan(first, n);
     const std::span<uint8_t> out = occluded.subspan(first, n);
     order_chunk(chunk, c);
-    for (size_t i = 0; i < n; ++i) {
-      if (!traceable(chunk[i])) out[i] = 0;
-    }
+    for (size_t k = c.first[3]; k < c.first[4]; ++k) out[c.order[k]] = 0;
     any_interleaved<0>(tree, chunk, c, slots, out);
     any_interleaved<1>(tree, chunk, c, slots, out);
     any_interleaved<2>(tree, chunk, c, slots, out);
@@ -445,20 +613,7 @@ void for_each_packet(std::span<const Ray> rays, std::span<Out> out, Fn&& fn) {
 
 BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConfig& config,
                    BvhTraversal traversal)
-    : mesh_(mesh),
-      bvh_(bvh::build_wide_bvh(mesh, config)),
-      kernel_(kernel),
-      packets_(traversal == BvhTraversal::kAuto && bvh::has_packet_kernel(kernel)) {
-#if defined(__AVX2__)
-  // Interleaving pays where a ray waits on memory; a tree that stays in the caches is traversed
-  // faster one ray at a time (see docs/PERFORMANCE.md, issue 27).
-  interleave_ = kernel_ == Kernel::kWatertight && !bvh_.nodes.empty() &&
-                (traversal == BvhTraversal::kSingleInterleaved ||
-                 bvh_.node_bytes() + bvh_.block_bytes() >= kInterleaveBytes);
-#endif
-  incoherent_packets_ =
-      packets_ && bvh_.node_bytes() + bvh_.block_bytes() <= kIncoherentPacketBytes;
-}
+    : BvhAccel(mesh, bvh::build_wide_bvh(mesh, config), kernel, traversal) {}
 
 BvhAccel::BvhAccel(const TriangleMesh& mesh, bvh::WideBvh tree, Kernel kernel,
                    BvhTraversal traversal)
@@ -467,7 +622,16 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, bvh::WideBvh tree, Kernel kernel,
       kernel_(kernel),
       packets_(traversal == BvhTraversal::kAuto && bvh::has_packet_kernel(kernel)),
       incoherent_packets_(packets_ &&
-                          bvh_.node_bytes() + bvh_.block_bytes() <= kIncoherentPacketBytes) {}
+                          bvh_.node_bytes() + bvh_.block_bytes() <= kIncoherentPacketBytes) {
+#if defined(__AVX2__)
+  // Interleaving pays where a ray waits on memory; a tree that stays in the caches is traversed
+  // faster one ray at a time (see docs/PERFORMANCE.md, issue 27). Decided here for both
+  // constructors (GeometrySet's big meshes interleave too).
+  interleave_ = kernel_ == Kernel::kWatertight && !bvh_.nodes.empty() &&
+                (traversal == BvhTraversal::kSingleInterleaved ||
+                 bvh_.node_bytes() + bvh_.block_bytes() >= kInterleaveBytes);
+#endif
+}
 
 void BvhAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
   if constexpr (bvh::kPacketSize > 0) {
