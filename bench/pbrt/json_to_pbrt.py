@@ -117,7 +117,7 @@ def convert(scene, args):
     out = ["# Written by tritrace's bench/pbrt/json_to_pbrt.py from %s; do not edit." % args.scene]
     out += camera_lines(cam, width, height)
     out.append('Film "rgb" "integer xresolution" [%d] "integer yresolution" [%d] '
-               '"string filename" "pbrt.pfm"' % (width, height))
+               '"string filename" "pbrt.pfm" "bool savefp16" false' % (width, height))
     out.append('PixelFilter "box" "float xradius" [0.5] "float yradius" [0.5]')
     out.append('Sampler "zsobol" "integer pixelsamples" [%d]' % args.spp)
     out.append('Integrator "%s" "integer maxdepth" [%d]' % (args.integrator, args.maxdepth))
