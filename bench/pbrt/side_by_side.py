@@ -107,7 +107,8 @@ def main():
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--size", type=int, default=256, help="image width and height")
     p.add_argument("--path-spp", type=int, default=256, help="0: no path renders")
-    p.add_argument("--bdpt-spp", type=int, action="append", help="repeatable; default 64")
+    p.add_argument("--bdpt-spp", type=int, action="append",
+                   help="repeatable; default 64; 0: no bdpt renders")
     p.add_argument("--maxdepth", type=int, default=5,
                    help="both renderers (pbrt's bdpt has no Russian roulette, so not 1024)")
     p.add_argument("--grey", action="store_true", help="diffuse albedos replaced by their mean")
@@ -120,9 +121,11 @@ def main():
     if not (os.path.isfile(args.tritrace) and os.access(args.tritrace, os.X_OK)):
         die("--tritrace %s: not an executable file (cmake --build build --target tritrace_cli)" %
             args.tritrace)
-    if args.rounds < 1 or args.threads < 1 or args.size < 16:
-        die("--rounds and --threads must be at least 1, --size at least 16")
-    bdpt_spp = args.bdpt_spp or [64]
+    if args.rounds < 1 or args.threads < 1 or args.size < 16 or args.path_spp < 0:
+        die("--rounds and --threads must be at least 1, --size at least 16, --path-spp at least 0")
+    bdpt_spp = [s for s in (args.bdpt_spp or [64]) if s > 0]
+    if args.path_spp == 0 and not bdpt_spp:
+        die("nothing to render: --path-spp 0 and no --bdpt-spp above 0")
     os.makedirs(args.out_dir, exist_ok=True)
     out = os.path.abspath(args.out_dir)
     tt = os.path.abspath(args.tritrace)
