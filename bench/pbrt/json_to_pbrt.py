@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Write one of tritrace's scenes as a pbrt-v4 scene file, for side_by_side.sh.
+"""Write one of tritrace's scenes as a pbrt-v4 scene file, for side_by_side.py.
 
   json_to_pbrt.py SCENE OUT.pbrt [--integrator path|bdpt] [--maxdepth N] [--spp N]
                   [--width W] [--height H] [--grey]
@@ -9,7 +9,7 @@ scenes/caustics.json: a look-at camera, diffuse / emissive / dielectric material
 OBJ meshes with a scale-and-translate transform) or the built-in `cornell-area`, which is
 scenes/cornell.json's box (the lab's 30 triangles, camera and albedos) without its point light and
 ambient term, plus the ceiling light of src/tritrace/scene/cornell_box.cpp (make_cornell_area).
-side_by_side.sh renders the result with tritrace as well and checks that it is the built-in scene's
+side_by_side.py renders the result with tritrace as well and checks that it is the built-in scene's
 image, so the file cannot drift from tritrace's scene unnoticed.
 
 Conventions carried over (docs/SCENE_FORMAT.md, "pbrt-v4 scene files"):
