@@ -164,6 +164,30 @@ class Sampler {
     }
   }
 
+  // The position inside the pixel: by convention the first two dimensions of a sample (the
+  // renderer calls it right after start_pixel_sample), one 2-D group.
+  glm::vec2 get_pixel_2d() {
+    return get_2d();
+  }
+  // The point on a thin lens: by convention the next two dimensions (2 and 3), one 2-D group, drawn
+  // right after get_pixel_2d and only when the camera has a lens, so that pinhole renders keep the
+  // layout (and the images) they had; the integrator's dimensions follow.
+  glm::vec2 get_lens_2d() {
+    return get_2d();
+  }
+
+  uint64_t seed() const {
+    return seed_;
+  }
+  SamplerKind kind() const {
+    return kind_;
+  }
+  // How many dimensions the current sample has used.
+  uint32_t dimension() const {
+    return dimension_;
+  }
+
+ private:
 #if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512DQ__) && defined(__GFNI__)
   // get_2d_groups_batch for Sobol samplers, sixteen to an AVX-512 operation: the keys' 64-bit
   // hashes (vpmullq) and the permutations (vpmulld) in lanes, the bit reversals by a byte shuffle
@@ -239,30 +263,6 @@ class Sampler {
   }
 #endif
 
-  // The position inside the pixel: by convention the first two dimensions of a sample (the
-  // renderer calls it right after start_pixel_sample), one 2-D group.
-  glm::vec2 get_pixel_2d() {
-    return get_2d();
-  }
-  // The point on a thin lens: by convention the next two dimensions (2 and 3), one 2-D group, drawn
-  // right after get_pixel_2d and only when the camera has a lens, so that pinhole renders keep the
-  // layout (and the images) they had; the integrator's dimensions follow.
-  glm::vec2 get_lens_2d() {
-    return get_2d();
-  }
-
-  uint64_t seed() const {
-    return seed_;
-  }
-  SamplerKind kind() const {
-    return kind_;
-  }
-  // How many dimensions the current sample has used.
-  uint32_t dimension() const {
-    return dimension_;
-  }
-
- private:
   // The key of the group starting at the current dimension: its low half scrambles the sample
   // order, its high half (and, for a 2-D group, third_seed) the values.
   uint64_t group_hash() const {
