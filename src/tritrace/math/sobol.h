@@ -33,8 +33,10 @@ constexpr uint32_t sobol_dimension0(uint32_t index) {
 // the index bits k with binomial(k, j) odd, which by Lucas' theorem are the k whose bits contain
 // j's bits. That superset parity is computed for all 32 digits at once by five butterfly steps
 // (the binary zeta transform), in the mirrored order: bit j of the result is digit j + 1.
-constexpr uint32_t sobol_dimension1_mirrored(uint32_t index) {
-  uint32_t z = index;
+// U is uint32_t, or a GCC vector of uint32_t lanes (each lane then the scalar result).
+template <class U>
+constexpr U sobol_dimension1_mirrored(U index) {
+  U z = index;
   z ^= (z >> 1) & 0x55555555u;
   z ^= (z >> 2) & 0x33333333u;
   z ^= (z >> 4) & 0x0f0f0f0fu;
@@ -52,8 +54,10 @@ constexpr uint32_t sobol_dimension1(uint32_t index) {
 // seed and each x ^= x * even changes bit j only as a function of bits 0..j, so every digit is
 // flipped by a hash of the digits before it, which is what Owen scrambling does; each step is a
 // bijection.
-constexpr uint32_t laine_karras_permutation(uint32_t mirrored, uint32_t seed) {
-  uint32_t x = mirrored + seed;
+// U as for sobol_dimension1_mirrored.
+template <class U>
+constexpr U laine_karras_permutation(U mirrored, U seed) {
+  U x = mirrored + seed;
   x ^= x * 0x6c50b47cu;
   x ^= x * 0xb82f1e52u;
   x ^= x * 0xc7afe638u;

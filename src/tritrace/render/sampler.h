@@ -206,22 +206,6 @@ class Sampler {
       return reinterpret_cast<U32x16>(
           _mm512_gf2p8affine_epi64_epi8(bytes, _mm512_set1_epi64(0x8040201008040201ll), 0));
     };
-    const auto permute = [](U32x16 x, U32x16 seed) {
-      x += seed;
-      x ^= x * 0x6c50b47cu;
-      x ^= x * 0xb82f1e52u;
-      x ^= x * 0xc7afe638u;
-      x ^= x * 0x8d22f6e6u;
-      return x;
-    };
-    const auto dimension1 = [](U32x16 z) {
-      z ^= (z >> 1) & 0x55555555u;
-      z ^= (z >> 2) & 0x33333333u;
-      z ^= (z >> 4) & 0x0f0f0f0fu;
-      z ^= (z >> 8) & 0x00ff00ffu;
-      z ^= (z >> 16) & 0x0000ffffu;
-      return z;
-    };
     const auto store_unit = [](float* to, __mmask16 mask, U32x16 bits) {
       using F32x16 = float __attribute__((vector_size(64)));
       const F32x16 unit = __builtin_convertvector(bits >> 8, F32x16) * 0x1p-24f;
@@ -254,10 +238,11 @@ class Sampler {
         const U32x16 index_seed = __builtin_convertvector(h, U32x16);
         const U32x16 value_seed = __builtin_convertvector(h >> 32, U32x16);
         const U32x16 third = __builtin_convertvector((h * 0x9e3779b97f4a7c15ull) >> 32, U32x16);
-        const U32x16 shuffled = reverse(permute(mirrored, index_seed));
-        store_unit(out + 2 * g * stride + j0, mask, reverse(permute(shuffled, value_seed)));
+        const U32x16 shuffled = reverse(laine_karras_permutation(mirrored, index_seed));
+        store_unit(out + 2 * g * stride + j0, mask,
+                   reverse(laine_karras_permutation(shuffled, value_seed)));
         store_unit(out + (2 * g + 1) * stride + j0, mask,
-                   reverse(permute(dimension1(shuffled), third)));
+                   reverse(laine_karras_permutation(sobol_dimension1_mirrored(shuffled), third)));
       }
     }
   }
