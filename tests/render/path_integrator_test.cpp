@@ -512,13 +512,9 @@ TEST(PathRender, DiffuseFastPathGivesTheGeneralPathsImage) {
   EXPECT_GT(sum, 0.0) << "the comparison must be of an image with something in it";
 }
 
-TEST(PathRender, DiffuseLanesGiveTheGeneralPathsImageUnderTiltedTwoSidedLights) {
-  // Diffuse scenes lit by emissive triangles alone shade their vertices eight at a time in SIMD
-  // lanes (path_integrator.cpp, lanes::), meant to be the scalar code's numbers exactly. Here with
-  // what cornell-area's axis-aligned walls and single light leave out: a faceted sphere, a tilted
-  // blocker, two lights, one tilted and two-sided, seen from both sides. The scalar code of the
-  // general version (an unused conductor sends the scene there) is the reference, to the bit, at
-  // depths that stop before, at and long after Russian roulette starts.
+// What cornell-area's axis-aligned walls and single light leave out, for the SIMD lanes' tests:
+// a faceted sphere, a tilted blocker, two lights, one tilted and two-sided, seen from both sides.
+Scene lanes_scene() {
   const std::string text = R"({"camera": {"position": [0, -0.2, -2.4], "look_at": [0, 0.2, 0],
       "up": [0, -1, 0], "vertical_fov": 50, "width": 28, "height": 20},
       "materials": [{"name": "white", "albedo": [0.8, 0.7, 0.6]},
@@ -541,7 +537,17 @@ TEST(PathRender, DiffuseLanesGiveTheGeneralPathsImageUnderTiltedTwoSidedLights) 
   LoadedScene loaded =
       parse_scene_json(text, std::string(TRITRACE_SOURCE_DIR) + "/scenes/models/lanes.json");
   apply_overrides(loaded, {});
-  const Scene plain = std::move(loaded.scene);
+  return std::move(loaded.scene);
+}
+
+TEST(PathRender, DiffuseLanesGiveTheGeneralPathsImageUnderTiltedTwoSidedLights) {
+  // Diffuse scenes lit by emissive triangles alone shade their vertices eight at a time in SIMD
+  // lanes (path_integrator.cpp, lanes::), meant to be the scalar code's numbers exactly. Here with
+  // what cornell-area's axis-aligned walls and single light leave out: a faceted sphere, a tilted
+  // blocker, two lights, one tilted and two-sided, seen from both sides. The scalar code of the
+  // general version (an unused conductor sends the scene there) is the reference, to the bit, at
+  // depths that stop before, at and long after Russian roulette starts.
+  const Scene plain = lanes_scene();
   Scene general = plain;
   Material unused;
   unused.type = MaterialType::kConductor;
@@ -556,6 +562,34 @@ TEST(PathRender, DiffuseLanesGiveTheGeneralPathsImageUnderTiltedTwoSidedLights) 
     for (const glm::vec3& p : want.pixels()) sum += p.x + p.y + p.z;
     EXPECT_GT(sum, 0.0) << "the comparison must be of an image with something in it";
   }
+}
+
+// With the albedo, normal and depth AOVs on, the lanes shade the same scene as above: the image
+// and every AOV are the general scalar code's, bit for bit (the AOVs of a plain diffuse scene are
+// its first hits', written before the lanes run).
+TEST(PathRender, DiffuseLanesWithAovsGiveTheGeneralPathsImageAndAovs) {
+  const Scene plain = lanes_scene();
+  Scene general = plain;
+  Material unused;
+  unused.type = MaterialType::kConductor;
+  general.materials.push_back(unused);
+  const BvhAccel accel(plain.mesh, kDefaultKernel);
+  const AovSet aovs{.albedo = true, .normal = true, .depth = true};
+  Film want(28, 20, aovs), got(28, 20, aovs), without(28, 20);
+  render_to_film(general, accel, PathIntegrator(general), want, {.threads = 1, .spp = 8});
+  render_to_film(plain, accel, PathIntegrator(plain), got, {.threads = 1, .spp = 8});
+  render_to_film(plain, accel, PathIntegrator(plain), without, {.threads = 1, .spp = 8});
+  EXPECT_TRUE(same_bits(want.resolve(), got.resolve()));
+  EXPECT_TRUE(same_bits(without.resolve(), got.resolve()));
+  EXPECT_TRUE(same_bits(want.resolve_albedo(), got.resolve_albedo()));
+  EXPECT_TRUE(same_bits(want.resolve_normal(), got.resolve_normal()));
+  EXPECT_TRUE(same_bits(want.resolve_depth(), got.resolve_depth()));
+  double albedo_sum = 0.0, normal_sum = 0.0;
+  const Image albedo = got.resolve_albedo(), normal = got.resolve_normal();
+  for (const glm::vec3& p : albedo.pixels()) albedo_sum += p.x + p.y + p.z;
+  for (const glm::vec3& p : normal.pixels()) normal_sum += std::abs(p.z);
+  EXPECT_GT(albedo_sum, 0.0) << "the comparison must be of AOVs with something in them";
+  EXPECT_GT(normal_sum, 0.0);
 }
 
 TEST(PathRender, SampleRangesAddUpToTheWholeRender) {

@@ -17,6 +17,7 @@
 #include <cstring>
 #include <exception>
 #include <string>
+#include <thread>
 #include <utility>
 
 #include "tritrace/error.h"
@@ -126,7 +127,10 @@ std::vector<uint8_t> encode_exr(const Image& image, const AovImages& aovs, ExrPi
   ExrMemoryStream stream;
   try {
     // The OutputFile writes the offset table when it is destroyed, so it lives only in this scope.
-    Imf::OutputFile file(stream, header);
+    // Compressed on every core: OpenEXR's line blocks are compressed independently and written
+    // in order, so the bytes are the same as with one thread.
+    const int threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    Imf::OutputFile file(stream, header, threads);
     file.setFrameBuffer(frame);
     file.writePixels(image.height());
   } catch (const std::exception& e) {

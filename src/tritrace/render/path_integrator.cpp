@@ -366,11 +366,27 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
   std::array<float, kRows * kStride> vertex_u;
   std::array<Sampler*, kMaxBatch> drawing;
   std::array<uint16_t, kMaxBatch> hit_slot;  // the slot of each column of vertex_u
-  // Diffuse scenes lit by untextured emissive triangles alone, under MIS, without the surface AOVs
-  // (the common case, cornell-area's): their vertices are shaded eight at a time.
-  [[maybe_unused]] const bool lane_vertices =
-      kPlainDiffuse && lights_.untextured_triangles_only() && !uniform_environment &&
-      !lights_.environment() && !surface_aovs && mis;
+  // Diffuse scenes lit by untextured emissive triangles alone, under MIS (the common case,
+  // cornell-area's): their vertices are shaded eight at a time.
+  [[maybe_unused]] const bool lane_vertices = kPlainDiffuse &&
+                                              lights_.untextured_triangles_only() &&
+                                              !uniform_environment && !lights_.environment() && mis;
+  if (kPlainDiffuse && surface_aovs) {
+    // In a plain diffuse scene no surface is specular, so the first hit gives the AOVs: its
+    // material's albedo and its face normal on the camera's side, as the loop below would write
+    // them at depth 0. Written here, they leave nothing for the lanes to do.
+    for (size_t k = 0; k < n; ++k) {
+      const Hit& hit = scratch.hits[k];
+      aov_open[k] = 0;
+      if (!hit.found()) continue;
+      const SurfaceTriangle tri = stored_triangle(mesh, hit.prim);
+      const glm::vec3 wo = -scratch.rays[k].dir;
+      if (!out.albedo.empty()) out.albedo[k] = scene.materials[tri.material].albedo;
+      if (!out.normal.empty()) {
+        out.normal[k] = glm::dot(tri.normal, wo) >= 0.0f ? tri.normal : -tri.normal;
+      }
+    }
+  }
 
 #if defined(__AVX2__)
   // The vertices of the paths in columns [0, drawn) of vertex_u, eight at a time: the diffuse
