@@ -22,7 +22,7 @@ CLI::App* add_denoise_command(CLI::App& app, DenoiseArgs& args) {
   CLI::App* sub = app.add_subcommand(
       "denoise",
       "Denoise a rendered EXR: colour R, G, B with the layers albedo.R/G/B, normal.X/Y/Z and Z "
-      "(render --aov albedo,normal,depth) and, if present, variance.R/G/B, the variance of each "
+      "(render --aovs albedo,normal,depth) and, if present, variance.R/G/B, the variance of each "
       "pixel's mean; without it the variance is estimated from each pixel's neighbourhood, which "
       "overestimates it at edges");
   sub->add_option("IN", args.input, "Rendered image (.exr) with AOV layers")

@@ -56,7 +56,7 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
                   "`tritrace merge`")
       ->type_name("I/N");
   sub->add_option("--time-limit", args.job.time_limit,
-                  "Render the path tracer's samples in passes until SECONDS have passed (the "
+                  "Render the samples (path or bdpt) in passes until SECONDS have passed (the "
                   "first pass of 8 samples always; --spp, if given, is the most a pixel takes), "
                   "or with --noise-threshold until every pixel has stopped, whichever comes "
                   "first; then write the image and say how many spp it reached and why it "
@@ -64,12 +64,13 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
       ->type_name("SECONDS")
       ->check(checked(setting_check("--time-limit")));
   sub->add_flag("--denoise", args.job.denoise,
-                "Denoise the path tracer's image with the built-in feature-guided denoiser "
+                "Denoise the image (path or bdpt) with the built-in feature-guided denoiser "
                 "(docs/DENOISING.md): the film also keeps albedo, normal, depth and the variance "
                 "of each pixel from its two halves of samples; --aovs still chooses which of "
                 "them are written");
   sub->add_option("--noise-threshold", args.job.noise_threshold,
-                  "Adaptive sampling for the path tracer: every pixel takes 64 samples, then as "
+                  "Adaptive sampling (path; bdpt in passes over the whole image, docs/BDPT.md): "
+                  "every pixel takes 64 samples, then as "
                   "many as its neighbours' error says it needs, up to --spp: the neighbours (the "
                   "5 x 5 pixels around it in its 16 x 16 tile, itself left out) give their "
                   "standard error of the mean luminance L over sqrt(L) (sqrt(0.1) below L = 0.1), "

@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
       "--time-limit, or with --noise-threshold until every pixel has converged).\n"
       "Keys: Left/Right orbit the camera, Up/Down move it forward/back, W/S A/D Q/E move the "
       "light along +z/-z, -x/+x, up/down, R resets, P saves a screenshot, N denoises the resting "
-      "image (path), H shows help and statistics, Esc quits.",
+      "image (path or bdpt), H shows help and statistics, Esc quits.",
       "tritrace-view");
   tritrace::view::ViewerOptions options;
   tritrace::cli::add_scene_flags(app, options.scene);
@@ -37,22 +37,22 @@ int main(int argc, char** argv) {
                "Print the view as a 'tritrace render' command each time it comes to rest (for "
                "path, at the scene's spp, the image the window converges to)");
   app.add_option("--noise-threshold", options.scene.noise_threshold,
-                 "Adaptive sampling for path while the view rests, as 'tritrace render "
-                 "--noise-threshold': a pixel stops taking samples once the relative error of its "
-                 "mean is below T (0 < T < 1), checked at 32, 64, 128, ... samples; --spp is the "
-                 "most. The image at rest is then refined in whole adaptive images of 128, 256, "
-                 "... spp, each that of 'tritrace render --noise-threshold T --spp N'")
+                 "Adaptive sampling (path and bdpt) while the view rests, as 'tritrace render "
+                 "--noise-threshold T' (0 < T < 1): every pixel takes a pilot of 64 samples, then "
+                 "as many as its neighbours' error asks for; --spp is the most. The image at "
+                 "rest is refined uniformly up to 64 spp, then in whole adaptive images of 128, "
+                 "256, ... spp, each that of 'tritrace render --noise-threshold T --spp N'")
       ->type_name("T")
       ->check(tritrace::cli::checked(tritrace::setting_check("--noise-threshold")));
   app.add_option("--time-limit", options.time_limit,
-                 "Stop refining the path tracer's image this many seconds after the view comes "
+                 "Stop refining the image (path or bdpt) this many seconds after the view comes "
                  "to rest (the title then says 'stopped: time limit'); without --spp, refinement "
                  "goes on until the time is up")
       ->type_name("SECONDS")
       ->check(tritrace::cli::checked(tritrace::setting_check("--time-limit")));
   app.add_flag("--denoise", options.denoise,
-               "Start with the denoiser on (path; N toggles it): the resting image is shown "
-               "denoised as 'tritrace render --denoise' denoises it");
+               "Start with the denoiser on (path or bdpt; N toggles it): the resting image is "
+               "shown denoised as 'tritrace render --denoise' denoises it");
   std::string frames;
   app.add_option("--benchmark-frames", frames,
                  "Render N frames turning the camera as if Left were held, print the median "

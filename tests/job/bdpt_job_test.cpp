@@ -165,6 +165,36 @@ TEST(BdptJob, NoiseThresholdWithTimeLimitPassesIsTheOneRender) {
   EXPECT_EQ(e.exit_code(), ExitCode::kUsage);
 }
 
+// --denoise and --time-limit take bdpt as they take path (README, the render help): the denoised
+// image is the denoiser on the film's own image and features (what `tritrace denoise` reads from
+// the EXR of a render with those AOVs), and a time limit long enough for every pass gives the one
+// render of --spp, bit for bit, with the denoiser's time recorded.
+TEST(BdptJob, DenoiseIsTheDenoiserOnTheFilmAndTimeLimitPassesAreTheOneRender) {
+  const auto run = [](const JobSettings& s) {
+    RenderJob job(s, load_job_scene(s));
+    job.prepare();
+    return job.render();
+  };
+  JobSettings plain = small_bdpt("cornell-area", "16");
+  plain.aovs = "albedo,normal,depth,variance";
+  const RenderedImage noisy = run(plain);
+  JobSettings s = small_bdpt("cornell-area", "16");
+  s.denoise = true;
+  const RenderedImage denoised = run(s);
+  EXPECT_TRUE(same_pixels(denoised.image,
+                          denoise_film_image(noisy.image, noisy.aovs, SamplerKind::kSobol)));
+  EXPECT_FALSE(same_pixels(denoised.image, noisy.image));
+  EXPECT_GT(denoised.record.denoise_seconds, 0.0);
+
+  s.time_limit = "1e6";
+  const RenderedImage passes = run(s);
+  EXPECT_TRUE(same_pixels(passes.image, denoised.image));
+  EXPECT_EQ(passes.record.spp, 16u);
+  EXPECT_EQ(passes.record.stop, RenderStop::kSpp);
+  EXPECT_GT(passes.record.denoise_seconds, 0.0);
+  EXPECT_EQ(passes.record.time_limit, 1e6);
+}
+
 // --spp-range parts of a bdpt render (light tracing's splats included), written as partial films
 // and merged in any order, are the one-process image bit for bit: the light image is an integer
 // sum, carried by the partial film.
