@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "tritrace/error.h"
@@ -272,6 +273,39 @@ TEST(RenderJob, TimeLimitRendersTheImageOfTheSppItReached) {
     const RenderedImage want = plain.render();
     EXPECT_TRUE(same_pixels(got.image, want.image)) << c.limit << " " << c.spp;
     EXPECT_TRUE(same_pixels(got.aovs.depth, want.aovs.depth));
+  }
+}
+
+// --time-limit with --denoise: the denoiser's time (measured on the first pass's image, kept back
+// from the passes) is recorded, and the image is the denoised render of the spp reached, bit for
+// bit. Clock-independent cases as above: a limit over at once keeps the first pass of 8, one that
+// never ends stops at --spp.
+TEST(RenderJob, TimeLimitWithDenoiseIsTheDenoisedRenderOfTheSppItReached) {
+  for (const auto& [limit, spp, reached] :
+       {std::tuple<const char*, const char*, uint32_t>{"1e-9", "", 8u},
+        std::tuple<const char*, const char*, uint32_t>{"1e6", "20", 20u}}) {
+    JobSettings s = small("cornell-area", spp);
+    s.time_limit = limit;
+    s.denoise = true;
+    RenderJob timed(s, load_job_scene(s));
+    timed.prepare();
+    RenderStats stats;
+    const RenderedImage got = timed.render(&stats);
+    EXPECT_EQ(stats.spp, reached) << limit;
+    EXPECT_EQ(got.record.spp, reached) << limit;
+    EXPECT_GT(got.record.denoise_seconds, 0.0) << limit;
+
+    JobSettings fixed = small("cornell-area", std::to_string(reached));
+    fixed.denoise = true;
+    RenderJob plain(fixed, load_job_scene(fixed));
+    plain.prepare();
+    const RenderedImage want = plain.render();
+    EXPECT_TRUE(same_pixels(got.image, want.image)) << limit;
+    // Denoised, not the noisy image of those samples.
+    fixed.denoise = false;
+    RenderJob noisy(fixed, load_job_scene(fixed));
+    noisy.prepare();
+    EXPECT_FALSE(same_pixels(got.image, noisy.render().image)) << limit;
   }
 }
 
