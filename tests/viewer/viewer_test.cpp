@@ -795,6 +795,26 @@ TEST_F(ViewerTest, DenoisedScreenshotIsTheCliDenoisedImage) {
   EXPECT_NE(ReadFile(plain.path), ReadFile(shot.path));
 }
 
+// bdpt takes --denoise and --time-limit as path does (README): the resting image is denoised,
+// the title says so and says the limit stopped it, and the screenshot is `tritrace render
+// --integrator bdpt --denoise` of its samples byte for byte.
+TEST_F(ViewerTest, BdptDenoisesAndStopsAtTheTimeLimit) {
+  ASSERT_NO_FATAL_FAILURE(
+      StartViewer({"--scene", "cornell-area", "--integrator", "bdpt", "--width", "32", "--height",
+                   "24", "--time-limit", "0.5", "--denoise", "-q"}));
+  EXPECT_TRUE(WaitForTitle([](const std::string& t) {
+    return t.find("stopped: time limit") != std::string::npos &&
+           t.find("denoised at ") != std::string::npos;
+  })) << Title()
+      << "; stderr: " << Err();
+  const Shot shot = Screenshot(1);
+  ASSERT_FALSE(shot.command.empty());
+  EXPECT_EQ(Value(shot, "--integrator"), "bdpt");
+  EXPECT_TRUE(HasFlag(shot, "--denoise"));
+  RenderWithCli(shot.command, "cli.png");
+  EXPECT_EQ(ReadFile(shot.path), ReadFile(work_.path() / "cli.png")) << Value(shot, "--spp");
+}
+
 // The path tracer's settings mean nothing to the lab integrator: refused as `tritrace render`
 // refuses them.
 TEST_F(ViewerTest, PathSettingsWithTheLabIntegratorAreUsageErrors) {
