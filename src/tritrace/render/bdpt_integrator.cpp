@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "tritrace/error.h"
+#include "tritrace/math/random.h"
 #include "tritrace/render/light_sampler.h"
 #include "tritrace/render/material/bsdf.h"
 #include "tritrace/render/shading_normal.h"
@@ -343,6 +344,21 @@ float light_tracing_camera_pdf(float pdf, float count_ratio) {
   return pdf / count_ratio;
 }
 
+// Whether the sample `sampler` is at traces a light subpath (BdptSettings::light_paths = F < 1):
+// sample i of its pixel does when floor((i + 1) F + phi) > floor(i F + phi), phi uniform per pixel
+// from the pixel's key. Over phi each sample does with probability exactly F (so dividing its
+// light strategies by F is unbiased for any sample count), and a pixel's samples take them in
+// even steps (any n consecutive samples hold floor(n F) or ceil(n F)). Deterministic: a function
+// of (seed, pixel, sample index), as every other number of the sample.
+bool traces_light_subpath(const Sampler& sampler, float light_paths) {
+  if (light_paths >= 1.0f) return true;
+  const double f = light_paths;
+  const double phi =
+      static_cast<double>(hash_combine(sampler.pixel_key(), 0x6c69676874706174ull) >> 11) * 0x1p-53;
+  const double i = sampler.sample_index();
+  return std::floor((i + 1.0) * f + phi) > std::floor(i * f + phi);
+}
+
 // Samples whose subpaths are walked side by side: each bounce's rays of all of them are traced in
 // one query (packets on small trees, interleaved traversal on large ones), as the path tracer
 // traces its batch's bounces, instead of one ray per query.
@@ -655,6 +671,10 @@ void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& h
   make_surface(x, w.ray, hit);
   x.beta = w.beta;
   x.pdf_fwd = to_area(w.pdf_dir, prev, x);
+  // Light vertex 1 is where the strategies that light_paths thins out begin (s >= 2): its density
+  // as the light subpath samples it counts light_paths times in the weights (prepare_weights and
+  // mis_weight_recursive read it; mis_weight_walk divides it out and applies the counts itself).
+  if (light && w.count == 1) x.pdf_fwd *= it_.settings_.light_paths;
   x.pdf_rev = 0.0f;
   const int count = ++w.count;
   if (count >= w.max_vertices) return;
@@ -1020,29 +1040,34 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, f
     }
   }
 
+  // Each strategy's number of samples per camera sample (Veach 1997, sec. 9.2: the heuristics
+  // weigh n_i p_i): light tracing takes `ratio` light subpaths per camera sample of the pixel
+  // (adaptive sampling; 1 otherwise), and the strategies with s >= 2 have light_paths' share of
+  // the samples. Applied here as factors of whole strategies; the stored densities that carry
+  // them for the recursion (camera vertex 1's pdf_fwd divided by the ratio, light vertex 1's
+  // multiplied by light_paths) are undone below.
+  const float light_paths = it_.settings_.light_paths;
+  const auto count = [&](int ss, int tt) {
+    return (ss >= 2 ? light_paths : 1.0f) * (tt == 1 ? ratio : 1.0f);
+  };
+  const float own = remap(count(s, t));
   float sum = 0.0f;
   float r = 1.0f;
   // Moving the connection to camera vertex i - 1 gives strategy (s + t - i, i). i = 1 is light
   // tracing, a strategy only with it on and with at least two light vertices ((1, 1), an emitter
   // seen by the camera, is left to (0, 2)).
   const int last_i = it_.settings_.light_tracing && s + t >= 3 ? 1 : 2;
-  // Light tracing takes `ratio` light subpaths per camera sample of the pixel (adaptive sampling;
-  // 1 otherwise): its strategies' densities count `ratio` times, against the camera's own
-  // density at vertex 1 (stored divided by the ratio for the recursion, undone here).
   for (int i = t - 1; i >= last_i; --i) {
-    if (i == 1) {
-      r *= remap(camera[1].pdf_rev) / remap(camera[1].pdf_fwd * ratio) * remap(ratio);
-    } else {
-      r *= remap(camera[i].pdf_rev) / remap(camera[i].pdf_fwd);
-    }
-    if (!camera[i].delta && !camera[i - 1].delta) sum += r;
+    const float fwd = i == 1 ? camera[1].pdf_fwd * ratio : camera[i].pdf_fwd;
+    r *= remap(camera[i].pdf_rev) / remap(fwd);
+    if (!camera[i].delta && !camera[i - 1].delta) sum += r * remap(count(s + t - i, i)) / own;
   }
-  // From light tracing (t = 1) every strategy on the light side is one of the camera's.
-  r = t == 1 ? 1.0f / remap(ratio) : 1.0f;
+  r = 1.0f;
   for (int i = s - 1; i >= 0; --i) {
-    r *= remap(light[i].pdf_rev) / remap(light[i].pdf_fwd);
+    const float fwd = i == 1 ? light[1].pdf_fwd / light_paths : light[i].pdf_fwd;
+    r *= remap(light[i].pdf_rev) / remap(fwd);
     const bool delta_light_side = i > 0 ? light[i - 1].delta : delta_light(light[0]);
-    if (!light[i].delta && !delta_light_side) sum += r;
+    if (!light[i].delta && !delta_light_side) sum += r * remap(count(i, s + t - i)) / own;
   }
 
   pt.pdf_rev = saved_pt;
@@ -1106,6 +1131,11 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
     if (qs_minus != nullptr) qs_minus_rev = pdf_area(*qs, &pt, *qs_minus);
   } else {
     const Vertex& pt_minus = camera[t - 2];
+    // The strategies with s >= 2 count light_paths (F) times: with s = 1 each strategy on the
+    // camera side has s >= 2, so pt (light vertex 1 there) carries F; with s = 0 those past
+    // (1, t - 1) do, through pt_minus. From s >= 2 the light side's (1, .) and (0, .) lose F
+    // through light vertex 1's stored pdf_fwd (walk_step).
+    const float f = it_.settings_.light_paths;
     if (s > 0) {
       // pt is a surface vertex (connectible); qs a surface, light or environment vertex.
       const glm::vec3 w = direction(pt, *qs);
@@ -1113,15 +1143,16 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
       const glm::vec3 w_qs_minus =
           qs_minus != nullptr ? direction(*qs, *qs_minus) : glm::vec3(0.0f);
       pt_rev = pdf_area_given(*qs, w_qs_minus, -w, pt);
+      if (s == 1) pt_rev *= f;
       pt_minus_rev = pdf_area_given(pt, w, w_pt_minus, pt_minus);
       qs_rev = pdf_area_given(pt, w_pt_minus, w, *qs);
       if (qs_minus != nullptr) qs_minus_rev = pdf_area_given(*qs, -w, w_qs_minus, *qs_minus);
     } else if (infinite(pt)) {
       pt_rev = it_.environment_pmf_ * it_.environment_dir_pdf(pt.w_env);
-      pt_minus_rev = pdf_area(pt, nullptr, pt_minus);
+      pt_minus_rev = pdf_area(pt, nullptr, pt_minus) * f;
     } else {
       pt_rev = it_.origin_pdf(pt.prim);
-      pt_minus_rev = to_area(emission_pdf(pt, direction(pt, pt_minus)), pt, pt_minus);
+      pt_minus_rev = to_area(emission_pdf(pt, direction(pt, pt_minus)), pt, pt_minus) * f;
     }
   }
   // ratio * (terms), with no ratio at all where the terms are 0 (an overflowed ratio times 0 is
@@ -1227,7 +1258,9 @@ void BdptTracer::splat_light_subpath(int nl) {
     const glm::vec3 f_light = surface_f(qs, w, qs.wo);
     if (!(max_component(f_light) > 0.0f)) continue;
     const float g = std::abs(glm::dot(qs.ng, w)) / dist2;
-    const glm::vec3 contribution = qs.beta * f_light * (g * camera_dir_pdf(cam, -w, dist2));
+    // Over light_paths' share of the samples (s >= 2 here).
+    const glm::vec3 contribution =
+        qs.beta * f_light * (g * camera_dir_pdf(cam, -w, dist2)) * it_.inverse_light_paths_;
     if (!(max_component(contribution) > 0.0f)) continue;
     Ray ray;
     const bool has_ray = camera_shadow_ray(qs, eye, ray);
@@ -1318,6 +1351,8 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
           light_tracing_camera_pdf(camera_area_pdf(sub.camera[0], sub.camera[1]), st.pixel_ratio);
     }
     light_subpath(sub.light, max_light, u_light[k], walks[k]);
+    // A sample outside light_paths' share keeps only the light subpath's first vertex (for s = 1).
+    if (!traces_light_subpath(samplers[k], settings.light_paths)) walks[k].active = false;
     paths[k] = &sub.light;
   }
   walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
@@ -1378,6 +1413,8 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
         has_ray = shadow_ray(pt, qs, ray);
       }
       if (!(max_component(contribution) > 0.0f)) continue;
+      // Strategies past the light subpath's first vertex have light_paths' share of the samples.
+      if (s >= 2) contribution *= it_.inverse_light_paths_;
       queue(s, t, contribution, has_ray, ray);
     }
   }
@@ -1406,6 +1443,13 @@ bool camera_light_tracing(const Camera& camera) {
   return !camera.is_orthographic() || camera.has_lens();
 }
 
+std::string check_light_paths(double light_paths) {
+  if (light_paths >= kMinLightPaths && light_paths <= 1.0) return "";
+  return "must be the share of samples that trace a light subpath, greater than 0 (at least 1e-6) "
+         "and at most 1, got " +
+         std::to_string(light_paths);
+}
+
 std::string bdpt_unsupported(const Scene& scene) {
   uint64_t instanced = 0;
   for (const Instance& inst : scene.instances) {
@@ -1425,6 +1469,10 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
                                const RayOffsetParams& offset)
     : settings_(settings), offset_(offset) {
   if (const std::string why = bdpt_unsupported(scene); !why.empty()) throw Error("integrator", why);
+  if (const std::string why = check_light_paths(settings_.light_paths); !why.empty()) {
+    throw Error("light_paths", why);
+  }
+  inverse_light_paths_ = 1.0f / settings_.light_paths;
   settings_.light_tracing = settings_.light_tracing && camera_light_tracing(scene.camera);
   std::vector<float> power;
   for (uint32_t i = 0; i < scene.lights.size(); ++i) {
