@@ -344,9 +344,9 @@ float light_tracing_camera_pdf(float pdf, float count_ratio) {
   return pdf / count_ratio;
 }
 
-// Whether the sample `sampler` is at traces a light subpath (BdptSettings::light_paths = F < 1):
-// sample i of its pixel does when floor((i + 1) F + phi) > floor(i F + phi), phi uniform per pixel
-// from the pixel's key. Over phi each sample does with probability exactly F (so dividing its
+// Whether the current sample of `sampler` traces a light subpath (BdptSettings::light_paths = F <
+// 1): sample i of its pixel does when floor((i + 1) F + phi) > floor(i F + phi), phi uniform per
+// pixel from the pixel's key. Over phi each sample does with probability exactly F (so dividing its
 // light strategies by F is unbiased for any sample count), and a pixel's samples take them in
 // even steps (any n consecutive samples hold floor(n F) or ceil(n F)). Deterministic: a function
 // of (seed, pixel, sample index), as every other number of the sample.
@@ -454,12 +454,14 @@ class BdptTracer {
   // Light subpath: its first vertex, and the walk from it in `w` (w.count 0 when the scene has no
   // emitter).
   // `u`: its first three sampler groups (the emitter and side, the point, the direction).
+  // `walk` false (a sample outside BdptSettings::light_paths' share): only the first vertex, for
+  // s = 1, without the direction or ray the walk would start from (w stays inactive).
   void light_subpath(std::vector<Vertex>& path, int max_vertices, const std::array<glm::vec2, 3>& u,
-                     WalkState& w) const;
+                     bool walk, WalkState& w) const;
   // The light subpath from directional light e (light_subpath's choice), its disk point from
   // u_point.
   void directional_light_subpath(std::vector<Vertex>& path, int max_vertices,
-                                 const BdptIntegrator::Emitter& e, glm::vec2 u_point,
+                                 const BdptIntegrator::Emitter& e, glm::vec2 u_point, bool walk,
                                  WalkState& w) const;
   // Sample k's connections (s, t), t >= 2, queued; then its light tracing (sampler: the splats'
   // rounding number and an orthographic lens's offset, drawn after the subpaths').
@@ -759,7 +761,7 @@ void BdptTracer::walk_all(std::vector<Vertex>* const* paths, WalkState* walks, S
 }
 
 void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
-                               const std::array<glm::vec2, 3>& u, WalkState& w) const {
+                               const std::array<glm::vec2, 3>& u, bool walk, WalkState& w) const {
   const glm::vec2 u_choice = u[0], u_point = u[1], u_dir = u[2];
   w = WalkState{};
   w.light = true;
@@ -779,7 +781,7 @@ void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
   Ray& ray = w.ray;
   glm::vec3& beta = w.beta;
   float& pdf_dir = w.pdf_dir;
-  if (e.directional) return directional_light_subpath(path, max_vertices, e, u_point, w);
+  if (e.directional) return directional_light_subpath(path, max_vertices, e, u_point, walk, w);
   if (e.environment) {
     // A direction towards the environment (the map's importance sampling, or uniform for a
     // constant colour), then a point on the disk of the scene's bounding sphere across it, from
@@ -795,6 +797,7 @@ void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
     x.pdf_fwd = pick.pmf * dir_pdf;
     if (!(x.pdf_fwd > 0.0f) || !(max_component(x.le) > 0.0f)) return;
     x.beta = glm::vec3(1.0f / x.pdf_fwd);
+    if (!walk) return;
     const Frame frame = Frame::from_normal(x.w_env);
     const glm::vec2 d = sample_uniform_disk_concentric(u_point);
     const float r = it_.environment_radius_;
@@ -817,10 +820,11 @@ void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
     x.le = e.intensity;
     x.pdf_fwd = pick.pmf;
     x.beta = glm::vec3(1.0f / pick.pmf);
+    if (e.spot) x.spot = &scene_.spot_lights[e.prim];
+    if (!walk) return;
     glm::vec3 w;
     if (e.spot) {
       // A direction in the cone in proportion to its intensity (the vertex's le is the axis's).
-      x.spot = &scene_.spot_lights[e.prim];
       w = sample_spot_direction(*x.spot, u_point.x, u_dir);
       pdf_dir = spot_direction_pdf(*x.spot, w);
       if (!(pdf_dir > 0.0f)) return;
@@ -849,6 +853,8 @@ void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
     x.ng = x.ns = x.tri.normal;
     x.pdf_fwd = pick.pmf / e.area;
     x.beta = glm::vec3(1.0f / x.pdf_fwd);
+    // (x.le, the emission along the sampled direction, is read by nothing but this walk's start.)
+    if (!walk) return;
     const bool back = x.two_sided && u_choice.y >= 0.5f;
     const glm::vec3 n = back ? -x.ng : x.ng;
     const glm::vec3 local = sample_cosine_hemisphere(u_dir);
@@ -868,7 +874,7 @@ void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
 
 void BdptTracer::directional_light_subpath(std::vector<Vertex>& path, int max_vertices,
                                            const BdptIntegrator::Emitter& e, glm::vec2 u_point,
-                                           WalkState& w) const {
+                                           bool walk, WalkState& w) const {
   // Parallel light from direction -l.direction: a ray along it from a point of the disk across it
   // that covers the scene's bounding sphere (density 1 / (pi R^2) by area, pbrt-v4's
   // DistantLight::SampleLe). The vertex is infinite, as the environment's, with the light's
@@ -887,6 +893,7 @@ void BdptTracer::directional_light_subpath(std::vector<Vertex>& path, int max_ve
   x.pdf_fwd = e.pmf;
   if (!(x.pdf_fwd > 0.0f) || !(max_component(x.le) > 0.0f)) return;
   x.beta = glm::vec3(1.0f / x.pdf_fwd);
+  if (!walk) return;
   const Frame frame = Frame::from_normal(x.w_env);
   const glm::vec2 d = sample_uniform_disk_concentric(u_point);
   const float r = it_.environment_radius_;
@@ -1350,9 +1357,9 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
       sub.camera[1].pdf_fwd =
           light_tracing_camera_pdf(camera_area_pdf(sub.camera[0], sub.camera[1]), st.pixel_ratio);
     }
-    light_subpath(sub.light, max_light, u_light[k], walks[k]);
     // A sample outside light_paths' share keeps only the light subpath's first vertex (for s = 1).
-    if (!traces_light_subpath(samplers[k], settings.light_paths)) walks[k].active = false;
+    light_subpath(sub.light, max_light, u_light[k],
+                  traces_light_subpath(samplers[k], settings.light_paths), walks[k]);
     paths[k] = &sub.light;
   }
   walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
