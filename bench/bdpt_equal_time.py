@@ -25,6 +25,10 @@ For each scene:
      seen directly that get light focused by the glass) and "rest". Each region's share of each
      integrator's squared error, and its RMSE ratio, in the equal-time pair.
 
+--light-paths F [F ...] (default 1) measures bdpt with a light subpath in the share F of its
+samples (`tritrace render --light-paths F`), each F as its own bdpt with its own cost c, beside
+the same path renders (all alternated in one loop over seeds); the tables are printed per F.
+
 --ref-cache DIR keeps the reference and region renders (path only, keyed by the scene file's
 contents) between runs, and --ref-only fills it and stops, so that the timed runs of another build
 need not render them again. --sampler independent makes the timed renders plain Monte Carlo (the
@@ -214,6 +218,8 @@ def main():
                     help="folder keeping the reference and region renders between runs")
     ap.add_argument("--ref-only", action="store_true",
                     help="only render the reference and regions into --ref-cache")
+    ap.add_argument("--light-paths", type=float, nargs="+", default=[1.0],
+                    help="bdpt's shares of samples with a light subpath, each measured apart")
     a = ap.parse_args()
     if set(a.seeds) & {a.ref_seed, a.ref_seed + 1, a.ref_seed + 2, a.ref_seed + 3}:
         sys.exit("--seeds must differ from the reference's seeds")
@@ -236,105 +242,127 @@ def main():
         masks = regions(runner, scene, ref, a.ref_seed)
         if a.ref_only:
             continue
-        # 2. calibration
+        # 2. calibration (bdpt for each share F, path once)
         bmax = max(a.bdpt_spp)
         sampler = ["--sampler", a.sampler]
-        _, tb, _ = runner.render(scene.args(), "bdpt", bmax, a.seeds[0], extra=sampler)
+
+        def variant(f):
+            return "bdpt" if f == 1.0 else "bdpt F=%g" % f
+
+        def extra_of(label):
+            if label.startswith("bdpt F="):
+                return sampler + ["--light-paths", label[len("bdpt F="):]]
+            return sampler
+
+        def integrator_of(label):
+            return label.split()[0]
+
         _, tp, _ = runner.render(scene.args(), "path", bmax, a.seeds[0], extra=sampler)
-        cost = tb / tp
-        print("reference: path %d spp, seeds %d+%d, own noise RMS %.5f; bdpt sample = %.2f path "
-              "samples of CPU" % (a.ref_spp, a.ref_seed, a.ref_seed + 1, ref_noise, cost),
+        costs = {}
+        for f in a.light_paths:
+            _, tb, _ = runner.render(scene.args(), "bdpt", bmax, a.seeds[0],
+                                     extra=extra_of(variant(f)))
+            costs[f] = tb / tp
+        print("reference: path %d spp, seeds %d+%d, own noise RMS %.5f; bdpt sample = %s path "
+              "samples of CPU" % (a.ref_spp, a.ref_seed, a.ref_seed + 1, ref_noise,
+                                  ", ".join("%.2f (F %g)" % (costs[f], f) for f in a.light_paths)),
               flush=True)
         # 3. runs, alternated
-        runs = {}  # (integrator, spp) -> list of (rmse, cpu, rays, sq-error image)
+        runs = {}  # (label, spp) -> list of (rmse, cpu, rays, sq-error image)
         configs = []
-        for b in a.bdpt_spp:
-            configs += [("bdpt", b), ("path", max(1, round(b * cost))), ("path", b)]
+        for f in a.light_paths:
+            for b in a.bdpt_spp:
+                configs += [(variant(f), b), ("path", max(1, round(b * costs[f]))), ("path", b)]
         configs = list(dict.fromkeys(configs))
         for seed in a.seeds:
-            for integ, spp in configs:
-                img, cpu, rays = runner.render(scene.args(), integ, spp, seed,
-                                               extra=["--sampler", a.sampler])
+            for label, spp in configs:
+                img, cpu, rays = runner.render(scene.args(), integrator_of(label), spp, seed,
+                                               extra=extra_of(label))
                 err = img - ref
-                runs.setdefault((integ, spp), []).append((rms(err), cpu, rays, (err ** 2).sum(2), img))
+                runs.setdefault((label, spp), []).append((rms(err), cpu, rays, (err ** 2).sum(2), img))
         med = {k: (statistics.median(r[0] for r in v), statistics.median(r[1] for r in v),
                    statistics.median(r[2] for r in v)) for k, v in runs.items()}
         print("\n| integrator | spp | CPU s | RMSE | rays / sample |\n|---|---|---|---|---|")
         for k in configs:
             print("| %s | %d | %.2f | %.5f | %.1f |" % (k[0], k[1], med[k][1], med[k][0], med[k][2]))
-        print("\n| bdpt spp | path spp (equal time) | CPU s bdpt / path | RMSE bdpt / path, "
-              "equal-time pair | same, reference's noise subtracted | RMSE sqrt(t): bdpt / path "
-              "| RMSE bdpt / path, equal spp |")
-        print("|---|---|---|---|---|---|---|")
-        rows = []
-        for b in a.bdpt_spp:
-            pe = max(1, round(b * cost))
-            rb, tb, _ = med[("bdpt", b)]
-            rp, tp, _ = med[("path", pe)]
-            rs = med[("path", b)][0]
-            n2 = ref_noise ** 2
-            row = dict(bdpt_spp=b, path_spp=pe, cpu_bdpt=tb, cpu_path=tp, rmse_bdpt=rb,
-                       rmse_path=rp, ratio_pair=rb / rp,
-                       ratio_pair_denoised_ref=((rb ** 2 - n2) / (rp ** 2 - n2)) ** 0.5,
-                       ratio_scaled=(rb * tb ** 0.5) / (rp * tp ** 0.5), ratio_equal_spp=rb / rs)
-            rows.append(row)
-            print("| %d | %d | %.2f / %.2f | %.2f | %.2f | %.2f | %.2f |" % (
-                b, pe, tb, tp, row["ratio_pair"], row["ratio_pair_denoised_ref"],
-                row["ratio_scaled"], row["ratio_equal_spp"]))
-        # The equal-time ratio split (issue 25): with MSE the mean over seeds of each render's
-        # squared error, the reference's own noise subtracted, and c = path spp / bdpt spp of the
-        # pair, ratio^2 = MSE_bdpt(B) / MSE_path(cB) = c * m * g, where m = MSE_bdpt(B) /
-        # MSE_path(B) is bdpt's error per sample against path's (equal spp) and g = MSE_path(B) /
-        # (c MSE_path(cB)) is how much faster than 1 / spp path's error falls from B to cB (1 for
-        # plain Monte Carlo; below 1 where the Sobol sampler's stratification pays).
-        mse = {k: statistics.fmean(r[0] ** 2 for r in v) - ref_noise ** 2 for k, v in runs.items()}
-        print("\n| bdpt spp | c (path / bdpt spp) | m: MSE bdpt / path at equal spp | g: path's "
-              "convergence beyond 1/spp | c m g = equal-time MSE ratio | its square root |")
-        print("|---|---|---|---|---|---|")
-        for b, row in zip(a.bdpt_spp, rows):
-            pe = max(1, round(b * cost))
-            c = pe / b
-            m = mse[("bdpt", b)] / mse[("path", b)]
-            g = mse[("path", b)] / (c * mse[("path", pe)])
-            row.update(split_c=c, split_m=m, split_g=g)
-            print("| %d | %.2f | %.3f | %.3f | %.2f | %.2f |" % (b, c, m, g, c * m * g,
-                                                             (c * m * g) ** 0.5))
-        # 5. regions, in the equal-time pair at the largest B (squared error summed over seeds)
-        pe = max(1, round(bmax * cost))
-        sq = {i: sum(r[3] for r in runs[k]) / len(runs[k])
-              for i, k in (("bdpt", ("bdpt", bmax)), ("path", ("path", pe)))}
-        print("\nregions at bdpt %d spp / path %d spp (mean over seeds of the squared error):"
-              % (bmax, pe))
-        print("| region | pixels | share of path's squared error | share of bdpt's | "
-              "RMSE bdpt / path in the region | same, reference's noise subtracted |\n"
-              "|---|---|---|---|---|---|")
-        reg = {}
-        for name, mask in masks.items():
-            sp = sq["path"][mask].sum() / sq["path"].sum()
-            sb = sq["bdpt"][mask].sum() / sq["bdpt"].sum()
-            ratio = (sq["bdpt"][mask].sum() / max(sq["path"][mask].sum(), 1e-300)) ** 0.5
-            rn = ref_sq[mask].sum()
-            ratio_d = (max(sq["bdpt"][mask].sum() - rn, 0) /
-                       max(sq["path"][mask].sum() - rn, 1e-300)) ** 0.5
-            reg[name] = dict(pixels=int(mask.sum()), share_path=sp, share_bdpt=sb, ratio=ratio,
-                             ratio_denoised_ref=ratio_d)
-            print("| %s | %d | %.1f%% | %.1f%% | %.2f | %.2f |" % (
-                name, mask.sum(), 100 * sp, 100 * sb, ratio, ratio_d))
-        for drop in (["emitter"], ["emitter", "glass"]):
-            keep = ~np.any([masks[d] for d in drop if d in masks], axis=0)
-            rn = ref_sq[keep].sum()
-            ratio = ((sq["bdpt"][keep].sum() - rn) / (sq["path"][keep].sum() - rn)) ** 0.5
-            print("equal-time RMSE ratio without %s (reference's noise subtracted): %.2f"
-                  % (" and ".join(drop), ratio))
-            reg["ratio_without_" + "_".join(drop)] = ratio
+        per_f = {}
+        for f in a.light_paths:
+            bdpt, cost = variant(f), costs[f]
+            print("\n### %s: bdpt sample = %.2f path samples of CPU" % (bdpt, cost))
+            print("\n| bdpt spp | path spp (equal time) | CPU s bdpt / path | RMSE bdpt / path, "
+                  "equal-time pair | same, reference's noise subtracted | RMSE sqrt(t): bdpt / path "
+                  "| RMSE bdpt / path, equal spp |")
+            print("|---|---|---|---|---|---|---|")
+            rows = []
+            for b in a.bdpt_spp:
+                pe = max(1, round(b * cost))
+                rb, tb, _ = med[(bdpt, b)]
+                rp, tp, _ = med[("path", pe)]
+                rs = med[("path", b)][0]
+                n2 = ref_noise ** 2
+                row = dict(bdpt_spp=b, path_spp=pe, cpu_bdpt=tb, cpu_path=tp, rmse_bdpt=rb,
+                           rmse_path=rp, ratio_pair=rb / rp,
+                           ratio_pair_denoised_ref=((rb ** 2 - n2) / (rp ** 2 - n2)) ** 0.5,
+                           ratio_scaled=(rb * tb ** 0.5) / (rp * tp ** 0.5), ratio_equal_spp=rb / rs)
+                rows.append(row)
+                print("| %d | %d | %.2f / %.2f | %.2f | %.2f | %.2f | %.2f |" % (
+                    b, pe, tb, tp, row["ratio_pair"], row["ratio_pair_denoised_ref"],
+                    row["ratio_scaled"], row["ratio_equal_spp"]))
+            # The equal-time ratio split (issue 25): with MSE the mean over seeds of each render's
+            # squared error, the reference's own noise subtracted, and c = path spp / bdpt spp of the
+            # pair, ratio^2 = MSE_bdpt(B) / MSE_path(cB) = c * m * g, where m = MSE_bdpt(B) /
+            # MSE_path(B) is bdpt's error per sample against path's (equal spp) and g = MSE_path(B) /
+            # (c MSE_path(cB)) is how much faster than 1 / spp path's error falls from B to cB (1 for
+            # plain Monte Carlo; below 1 where the Sobol sampler's stratification pays).
+            mse = {k: statistics.fmean(r[0] ** 2 for r in v) - ref_noise ** 2 for k, v in runs.items()}
+            print("\n| bdpt spp | c (path / bdpt spp) | m: MSE bdpt / path at equal spp | g: path's "
+                  "convergence beyond 1/spp | c m g = equal-time MSE ratio | its square root |")
+            print("|---|---|---|---|---|---|")
+            for b, row in zip(a.bdpt_spp, rows):
+                pe = max(1, round(b * cost))
+                c = pe / b
+                m = mse[(bdpt, b)] / mse[("path", b)]
+                g = mse[("path", b)] / (c * mse[("path", pe)])
+                row.update(split_c=c, split_m=m, split_g=g)
+                print("| %d | %.2f | %.3f | %.3f | %.2f | %.2f |" % (b, c, m, g, c * m * g,
+                                                                 (c * m * g) ** 0.5))
+            # 5. regions, in the equal-time pair at the largest B (squared error summed over seeds)
+            pe = max(1, round(bmax * cost))
+            sq = {i: sum(r[3] for r in runs[k]) / len(runs[k])
+                  for i, k in (("bdpt", (bdpt, bmax)), ("path", ("path", pe)))}
+            print("\nregions at bdpt %d spp / path %d spp (mean over seeds of the squared error):"
+                  % (bmax, pe))
+            print("| region | pixels | share of path's squared error | share of bdpt's | "
+                  "RMSE bdpt / path in the region | same, reference's noise subtracted |\n"
+                  "|---|---|---|---|---|---|")
+            reg = {}
+            for name, mask in masks.items():
+                sp = sq["path"][mask].sum() / sq["path"].sum()
+                sb = sq["bdpt"][mask].sum() / sq["bdpt"].sum()
+                ratio = (sq["bdpt"][mask].sum() / max(sq["path"][mask].sum(), 1e-300)) ** 0.5
+                rn = ref_sq[mask].sum()
+                ratio_d = (max(sq["bdpt"][mask].sum() - rn, 0) /
+                           max(sq["path"][mask].sum() - rn, 1e-300)) ** 0.5
+                reg[name] = dict(pixels=int(mask.sum()), share_path=sp, share_bdpt=sb, ratio=ratio,
+                                 ratio_denoised_ref=ratio_d)
+                print("| %s | %d | %.1f%% | %.1f%% | %.2f | %.2f |" % (
+                    name, mask.sum(), 100 * sp, 100 * sb, ratio, ratio_d))
+            for drop in (["emitter"], ["emitter", "glass"]):
+                keep = ~np.any([masks[d] for d in drop if d in masks], axis=0)
+                rn = ref_sq[keep].sum()
+                ratio = ((sq["bdpt"][keep].sum() - rn) / (sq["path"][keep].sum() - rn)) ** 0.5
+                print("equal-time RMSE ratio without %s (reference's noise subtracted): %.2f"
+                      % (" and ".join(drop), ratio))
+                reg["ratio_without_" + "_".join(drop)] = ratio
+            per_f[bdpt] = dict(cost=cost, rows=rows, regions=reg)
         smallest = min(m[0] for m in med.values())
         print("reference noise / smallest RMSE compared: %.2f" % (ref_noise / smallest))
         # images
         write_png(os.path.join(a.out, "%s_ref.png" % scene.name), ref)
         write_png(os.path.join(a.out, "%s_path.png" % scene.name), runs[("path", pe)][0][4])
-        write_png(os.path.join(a.out, "%s_bdpt.png" % scene.name), runs[("bdpt", bmax)][0][4])
+        write_png(os.path.join(a.out, "%s_bdpt.png" % scene.name), runs[(bdpt, bmax)][0][4])
         region_png(os.path.join(a.out, "%s_regions.png" % scene.name), masks)
-        results[scene.name] = dict(ref_noise=ref_noise, cost=cost, rows=rows, regions=reg,
+        results[scene.name] = dict(ref_noise=ref_noise, light_paths=per_f,
                                    runs={"%s %d" % k: v for k, v in med.items()})
         with open(os.path.join(a.out, "results.json"), "w") as f:
             json.dump(results, f, indent=1)

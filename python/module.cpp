@@ -424,7 +424,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
                    const py::object& distance, const py::object& light,
                    const py::object& time_limit, const py::object& denoise, const py::object& clamp,
                    const py::object& noise_threshold, const py::object& aperture,
-                   const py::object& focus) {
+                   const py::object& focus, const py::object& light_paths) {
   // The CLI's flags, parsed and checked by the CLI's own code.
   FlagTexts texts;
   texts.add_string("--integrator", integrator);
@@ -444,6 +444,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   texts.add_number("--noise-threshold", noise_threshold);
   texts.add_number("--aperture", aperture);
   texts.add_number("--focus", focus);
+  texts.add_number("--light-paths", light_paths);
   std::shared_ptr<PyAccel> prebuilt;
   if (!accel.is_none() && !py::isinstance<py::str>(accel)) {
     if (!py::isinstance<PyAccel>(accel)) {
@@ -771,6 +772,7 @@ the argument, wrong types TypeError.)");
         "up"_a = none, "vertical_fov"_a = none, "focal_length"_a = none, "yaw"_a = none,
         "distance"_a = none, "light"_a = none, "time_limit"_a = none, "denoise"_a = none,
         "clamp"_a = none, "noise_threshold"_a = none, "aperture"_a = none, "focus"_a = none,
+        "light_paths"_a = none,
         R"(Renders the scene as `tritrace render` does, returning a tritrace.Frame.
 
 The image is bit for bit the one `tritrace render ... -o out.pfm` writes with the same
@@ -788,7 +790,8 @@ samples, then 64 e / T more in steps of 64, 128, 256, ..., spp the most, e the e
 neighbours' pilots within its 16 x 16 tile, never its own, so the image is unbiased, as
 `tritrace render --noise-threshold`; Frame.mean_spp says how many it took), aperture
 (a thin lens's radius in world units, as `tritrace render --aperture`; path only), focus
-(the distance of the plane in focus, as --focus).
+(the distance of the plane in focus, as --focus), light_paths (bdpt only: the share of samples,
+in (0, 1], that also trace a light subpath, as `tritrace render --light-paths`; default 1).
 aovs: any of "albedo", "normal", "depth", "variance", "spp". Camera settings beyond the CLI's
 flags, as a scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
 focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a

@@ -380,6 +380,7 @@ def render(
     noise_threshold: Optional[float] = None,
     aperture: Optional[float] = None,
     focus: Optional[float] = None,
+    light_paths: Optional[float] = None,
 ) -> Frame:
     """Renders the scene as `tritrace render` does: the image is bit for bit the one
     `tritrace render ... -o out.pfm` writes with the same settings.
@@ -396,7 +397,8 @@ def render(
     its neighbours' relative error over the threshold (never its own, so the image is unbiased; spp
     the most); Frame.mean_spp says how many a pixel took on average, aovs "spp" gives
     Frame.spp_map. aperture and focus: a thin lens's radius and the distance of the plane in
-    focus, as --aperture and --focus. Bad values raise ValueError with the
+    focus, as --aperture and --focus. light_paths (bdpt only): the share of samples, in (0, 1],
+    that also trace a light subpath, as `tritrace render --light-paths` (default 1). Bad values raise ValueError with the
     CLI's message, wrong types TypeError.
     """
 

@@ -126,6 +126,13 @@ void add_scene_flags(CLI::App& app, JobSettings& flags) {
                  "energy clamped away")
       ->type_name("VALUE")
       ->check(rule("--clamp"));
+  app.add_option("--light-paths", flags.light_paths,
+                 "Share of bdpt's samples that also trace a light subpath, greater than 0 and at "
+                 "most 1 (default: the scene's, 1): the others keep the camera subpath, its "
+                 "emitter hits and next-event estimation; the rest is divided by the share, so "
+                 "the image stays unbiased (docs/BDPT.md)")
+      ->type_name("F")
+      ->check(rule("--light-paths"));
   app.add_option("--filter", flags.filter,
                  "Pixel filter for path: box (one pixel), gaussian or blackman-harris (radius 1.5 "
                  "pixels)")

@@ -99,6 +99,7 @@ std::string render_command_line(const JobSettings& flags, const ViewState& state
   if (!flags.focus.empty()) line += " --focus " + shell_quote(flags.focus);
   if (!flags.max_depth.empty()) line += " --max-depth " + std::to_string(rendered.max_depth);
   if (rendered.clamp > 0.0f) line += " --clamp " + format_float(rendered.clamp);
+  if (!flags.light_paths.empty()) line += " --light-paths " + shell_quote(flags.light_paths);
   const FilterKind filter = filter_choice(flags);
   if (filter != FilterKind::kBox) line += " --filter " + std::string(filter_name(filter));
   // Adaptive sampling decides which samples each pixel takes, and the denoiser (N) is the image.

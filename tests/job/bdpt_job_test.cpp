@@ -276,5 +276,52 @@ TEST(BdptJob, TakesSpotAndSunLensAndOrthographicCameras) {
             "--tile");
 }
 
+// --light-paths (BdptSettings::light_paths) through the job: the flag's rule, its refusal with
+// the other integrators, the scene file's key, the job's image against BdptIntegrator with the
+// setting, and an identity that keeps parts of different shares apart.
+TEST(BdptJob, LightPathsFlagSceneKeyAndIdentity) {
+  const auto check = setting_check("--light-paths");
+  ASSERT_NE(check, nullptr);
+  EXPECT_EQ(check("0.25"), "");
+  EXPECT_EQ(check("1"), "");
+  for (const char* bad : {"0", "-0.5", "1.5", "1e-9", "nan", "abc", ""}) {
+    EXPECT_NE(check(bad).find("at most 1"), std::string::npos) << bad;
+  }
+  JobSettings s = small_bdpt("cornell-area");
+  s.light_paths = "0.25";
+  RenderJob job(s, load_job_scene(s));
+  EXPECT_EQ(job.spec().light_paths, 0.25f);
+  job.prepare();
+  const LoadedScene loaded = load_job_scene(s);
+  const auto accel = make_accel(AccelKind::kBvh, loaded.scene, Kernel::kWatertight);
+  const BdptIntegrator integrator(loaded.scene, {.light_paths = 0.25f});
+  EXPECT_TRUE(same_pixels(job.render().image,
+                          render(loaded.scene, *accel, integrator, {.threads = 1, .spp = 4})));
+  JobSettings every = small_bdpt("cornell-area");
+  const RenderJob one(every, load_job_scene(every));
+  EXPECT_FALSE(job.identity() == one.identity());
+  every.light_paths = "1";
+  EXPECT_TRUE(RenderJob(every, load_job_scene(every)).identity() == one.identity());
+  for (const char* other : {"path", "lab"}) {
+    JobSettings o = s;
+    o.integrator = other;
+    const Error e = error_of([&] { RenderJob(o, load_job_scene(o)); });
+    EXPECT_EQ(e.subject(), "--light-paths") << other;
+    EXPECT_EQ(e.exit_code(), ExitCode::kUsage) << other;
+  }
+  const std::string path = std::string(TRITRACE_SOURCE_DIR) + "/scenes/bdpt.json";
+  const LoadedScene file = parse_scene_json(R"({"meshes": [{"generator": "cornell-area"}],
+      "integrator": {"type": "bdpt", "light_paths": 0.5}})",
+                                            path);
+  EXPECT_EQ(file.integrator.light_paths, 0.5f);
+  for (const char* bad : {"0", "1.5", "\"half\""}) {
+    const std::string text = std::string(R"({"meshes": [{"generator": "cornell-area"}],
+        "integrator": {"type": "bdpt", "light_paths": )") +
+                             bad + "}}";
+    const Error e = error_of([&] { parse_scene_json(text, path); });
+    EXPECT_NE(e.reason().find("/integrator/light_paths"), std::string::npos) << bad;
+  }
+}
+
 }  // namespace
 }  // namespace tritrace

@@ -101,6 +101,17 @@ def test_bdpt_is_the_clis(tmp_path, cornell):
         tritrace.render(cornell, integrator="bdpt", spp=2, clamp=1.0)
 
 
+def test_bdpt_light_paths_is_the_clis(tmp_path, cornell):
+    frame = tritrace.render(cornell, integrator="bdpt", spp=4, width=32, height=24,
+                            light_paths=0.25)
+    assert_same_bits(frame.image, cli_image(tmp_path, "--integrator", "bdpt", "--spp", 4,
+                                            "--width", 32, "--height", 24, "--light-paths", 0.25))
+    with pytest.raises(ValueError, match="light_paths: "):
+        tritrace.render(cornell, integrator="bdpt", spp=2, light_paths=1.5)
+    with pytest.raises(ValueError, match="light_paths: "):
+        tritrace.render(cornell, integrator="path", spp=2, light_paths=0.5)
+
+
 def test_aovs_are_the_clis_exr_layers(tmp_path):
     scene = tritrace.Scene.builtin("cornell-area")
     frame = tritrace.render(scene, width=36, height=28, spp=3, aovs=("albedo", "normal", "depth"))

@@ -192,5 +192,53 @@ TEST(BdptAdaptive, WeightsStayAPartitionOfUnityForCountRatiosOtherThanOne) {
   }
 }
 
+// A light subpath in a share of the samples (BdptSettings::light_paths) on top of adaptive
+// sampling: light tracing's strategies then count the pass's ratio times the share. The recursion
+// against the walk (which applies both counts as factors of whole strategies), and the same bits
+// for one and three threads and in passes.
+TEST(BdptAdaptive, LightPathShareWeightsAndBitsWithCountRatios) {
+  for (const bool glass : {false, true}) {
+    const Scene scene =
+        glass ? example("glass.json", 12) : make_cornell_area({.width = 12, .height = 12});
+    const BvhAccel accel(scene.mesh, kDefaultKernel);
+    for (const float scale : {0.05f, 20.0f}) {
+      SCOPED_TRACE(std::string(glass ? "glass.json" : "cornell-area") + " scale " +
+                   std::to_string(scale));
+      BdptSettings::WeightCheck check;
+      const BdptIntegrator bdpt(
+          scene, {.weight_check = &check, .mis_count_scale = scale, .light_paths = 0.25f});
+      (void)render(scene, accel, bdpt,
+                   {.threads = 1, .spp = 72, .seed = 5, .noise_threshold = 0.3f});
+      std::printf("  %s scale %g F 0.25: %llu weights, largest difference %.3g\n",
+                  glass ? "glass.json" : "cornell-area", scale,
+                  static_cast<unsigned long long>(check.count), check.max_difference);
+      EXPECT_GT(check.count, 1000u);
+      EXPECT_LT(check.max_difference, 1e-5) << check.count << " weights";
+    }
+  }
+  const Scene scene = make_cornell_area({.width = 20, .height = 18});
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const BdptIntegrator bdpt(scene, {.light_paths = 0.3f});
+  const RenderOptions base{.threads = 1, .spp = 128, .seed = 3, .noise_threshold = 0.1f};
+  const Image want = render(scene, accel, bdpt, base);
+  RenderOptions three = base;
+  three.threads = 3;
+  three.tile_size = 5;
+  EXPECT_TRUE(same_bits(want, render(scene, accel, bdpt, three)));
+  Film passes(20, 18);
+  AdaptiveState state;
+  uint32_t taken = 0;
+  for (uint32_t n : {40u, 88u}) {
+    RenderOptions pass = base;
+    pass.threads = 2;
+    pass.first_sample = taken;
+    pass.spp = n;
+    pass.adaptive_state = &state;
+    render_to_film(scene, accel, bdpt, passes, pass);
+    taken += n;
+  }
+  EXPECT_TRUE(same_bits(want, passes.resolve()));
+}
+
 }  // namespace
 }  // namespace tritrace

@@ -305,17 +305,19 @@ TEST(Bdpt, LightSubpathThroughGlassAgreesWithTheCameraSubpath) {
 
 // Every strategy alone, weighted by its MIS weight, adds up to the whole image (the weights of
 // each path sum to one), here for paths of up to four bounces, light tracing (t = 1) included.
-void expect_weighted_strategies_sum_to_the_image(const Scene& scene) {
+void expect_weighted_strategies_sum_to_the_image(const Scene& scene, float light_paths = 1.0f) {
   const BvhAccel accel(scene.mesh, kDefaultKernel);
   const int max_depth = 4;
   const RenderOptions options{.threads = 1, .spp = 8, .seed = 9};
-  const Image whole = render_bdpt(scene, accel, {.max_depth = max_depth}, options);
+  const Image whole =
+      render_bdpt(scene, accel, {.max_depth = max_depth, .light_paths = light_paths}, options);
   std::vector<glm::vec3> sum(whole.pixels().size(), glm::vec3(0.0f));
   // t = 1 is light tracing (s >= 2: an emitter seen directly is (0, 2)'s alone).
   for (int t = 1; t <= max_depth + 2; ++t) {
     for (int s = t == 1 ? 2 : 0; s + t <= max_depth + 2; ++s) {
-      const Image part =
-          render_bdpt(scene, accel, {.max_depth = max_depth, .only_s = s, .only_t = t}, options);
+      const Image part = render_bdpt(
+          scene, accel,
+          {.max_depth = max_depth, .only_s = s, .only_t = t, .light_paths = light_paths}, options);
       for (size_t i = 0; i < sum.size(); ++i) sum[i] += part.pixels()[i];
     }
   }
@@ -802,6 +804,127 @@ TEST(Bdpt, WeightedStrategiesSumToTheImageWithTheNewLightsAndCameras) {
                              orthographic_cornell_area(12), orthographic_lens_cornell_area(12)}) {
     expect_weighted_strategies_sum_to_the_image(scene);
   }
+}
+
+// ---- A light subpath for a share F of the samples (BdptSettings::light_paths) ----
+
+// The O(1) recursion, which carries F in light vertex 1's density and in the connection's
+// reverse densities, against the ratio walk, which multiplies each strategy by its own count
+// (F for s >= 2, the adaptive ratio for t = 1) explicitly.
+TEST(Bdpt, WeightRecursionEqualsTheRatioWalkWithALightPathShare) {
+  const std::vector<std::pair<const char*, Scene>> scenes = {
+      {"cornell-area", make_cornell_area({.width = 12, .height = 12})},
+      {"point light box", make_cornell_box({.width = 12, .height = 12})},
+      {"glass.json", example("glass.json", 12)},
+      {"sky.json", example("sky.json", 12)},
+      {"spot and sun", spot_and_sun(12, true, true)},
+      {"orthographic lens", orthographic_lens_cornell_area(12)}};
+  for (const auto& [name, scene] : scenes) {
+    const BvhAccel accel(scene.mesh, kDefaultKernel);
+    for (const float light_paths : {0.25f, 0.5f}) {
+      for (const bool light_tracing : {true, false}) {
+        const bool balance = !light_tracing;
+        SCOPED_TRACE(std::string(name) + " F " + std::to_string(light_paths) +
+                     (light_tracing ? ", light tracing" : ", t >= 2") +
+                     (balance ? ", balance" : ", power"));
+        BdptSettings::WeightCheck check;
+        const BdptSettings settings{.balance = balance,
+                                    .light_tracing = light_tracing,
+                                    .weight_check = &check,
+                                    .light_paths = light_paths};
+        render_bdpt(scene, accel, settings, {.threads = 1, .spp = 8, .seed = 5});
+        std::printf("  %s F %g %d: %llu weights, largest difference %.3g\n", name, light_paths,
+                    light_tracing, static_cast<unsigned long long>(check.count),
+                    check.max_difference);
+        EXPECT_GT(check.count, 500u);
+        EXPECT_LT(check.max_difference, 1e-5) << check.count << " weights";
+      }
+    }
+  }
+}
+
+TEST(Bdpt, WeightedStrategiesSumToTheImageWithALightPathShare) {
+  expect_weighted_strategies_sum_to_the_image(make_cornell_area({.width = 12, .height = 12}),
+                                              0.25f);
+}
+
+// Weights that sum to one over the strategies, with each strategy's contributions divided by its
+// share of the samples, leave the image unbiased: bdpt with a light subpath in a quarter of the
+// samples against the path tracer, under the area light and through glass (the tolerances of the
+// tests above), and under the lab's point light (which only light subpaths find: s = 1 and
+// s >= 2).
+void expect_agree_with_a_light_path_share(const Scene& scene, double tolerance) {
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const Image bdpt = render_bdpt(scene, accel, {.light_paths = 0.25f}, {.spp = 256, .seed = 1});
+  const Image path = render_path(scene, accel, {.spp = 1024, .seed = 2});
+  expect_agree(bdpt, path, tolerance, 16, 0.03, 0.99);
+}
+
+TEST(Bdpt, AgreesWithThePathTracerWithALightPathShare) {
+  {
+    SCOPED_TRACE("cornell-area");
+    expect_agree_with_a_light_path_share(make_cornell_area({.width = 32, .height = 32}), 0.005);
+  }
+  SCOPED_TRACE("glass.json");
+  expect_agree_with_a_light_path_share(example("glass.json", 32), 0.01);
+}
+
+TEST(Bdpt, AgreesWithThePathTracerUnderThePointLightWithALightPathShare) {
+  expect_agree_with_a_light_path_share(make_cornell_box({.width = 32, .height = 32}), 0.005);
+}
+
+// The share's division alone (no weights): a strategy that needs the light subpath past its first
+// vertex, unweighted, against one that does not. F = 0.3 with 32 samples per pixel is 9.6 light
+// subpaths a pixel, not a whole number: the per-pixel phase keeps each sample's chance exactly F.
+// (2, 2) and (1, 3) sample the paths of one bounce between camera and light; (2, 1) (light
+// tracing) and (1, 2) direct light.
+TEST(Bdpt, UnweightedStrategiesWithALightPathShareAgree) {
+  const Scene scene = make_cornell_area({.width = 16, .height = 16});
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const auto alone = [&](int s, int t, int max_depth, float light_paths, uint32_t spp) {
+    const BdptSettings settings{.max_depth = max_depth,
+                                .only_s = s,
+                                .only_t = t,
+                                .unweighted = true,
+                                .light_paths = light_paths};
+    return mean_of_renders(scene, accel, BdptIntegrator(scene, settings), spp, 10, 8);
+  };
+  std::printf("  (2, 2) at F 0.3 vs (1, 3):\n");
+  expect_same_mean(alone(2, 2, 2, 0.3f, 256), alone(1, 3, 2, 1.0f, 32), 0.02);
+  std::printf("  (2, 1) at F 0.3 vs (1, 2):\n");
+  expect_same_mean(alone(2, 1, 1, 0.3f, 64), alone(1, 2, 1, 1.0f, 16), 0.02);
+}
+
+// Which samples trace a light subpath is a function of (seed, pixel, sample index): the same bits
+// for any thread count and tile size, and the light image of samples [0, 7) and [7, 19) rendered
+// apart into one film is the one render's.
+TEST(Bdpt, LightPathShareIsTheSameForThreadsTilesAndSampleRanges) {
+  const Scene scene = make_cornell_box({.width = 24, .height = 20});
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const BdptIntegrator bdpt(scene, {.light_paths = 0.3f});
+  const Image want = render(scene, accel, bdpt, {.threads = 1, .tile_size = 16, .spp = 19});
+  for (int threads : {2, 3}) {
+    for (int tile : {1, 5}) {
+      EXPECT_TRUE(same_bits(
+          want, render(scene, accel, bdpt, {.threads = threads, .tile_size = tile, .spp = 19})))
+          << threads << " threads, tile " << tile;
+    }
+  }
+  Film parts(24, 20);
+  render_to_film(scene, accel, bdpt, parts, {.threads = 2, .spp = 7});
+  render_to_film(scene, accel, bdpt, parts, {.threads = 3, .spp = 12, .first_sample = 7});
+  EXPECT_TRUE(same_bits(want, parts.resolve()));
+  // The share changes the image (a vacuous setting would not).
+  EXPECT_FALSE(same_bits(want, render(scene, accel, BdptIntegrator(scene), {.spp = 19})));
+}
+
+TEST(Bdpt, RefusesALightPathShareOutsideZeroToOne) {
+  const Scene scene = make_cornell_area({.width = 8, .height = 8});
+  for (const float bad : {0.0f, -0.5f, 1.5f, 1e-9f, std::nanf("")}) {
+    EXPECT_THROW(BdptIntegrator(scene, {.light_paths = bad}), Error) << bad;
+  }
+  EXPECT_NO_THROW(BdptIntegrator(scene, {.light_paths = 1e-6f}));
+  EXPECT_NO_THROW(BdptIntegrator(scene, {.light_paths = 1.0f}));
 }
 
 }  // namespace

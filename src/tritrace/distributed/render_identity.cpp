@@ -155,6 +155,10 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
                    " filter=" + std::string(filter_name(options.filter));
     // Only when on, so that the settings text (and the hash) of unclamped renders is as before.
     if (spec.clamp > 0.0f) id.settings += " clamp=" + shortest(spec.clamp);
+    // bdpt's share of samples with a light subpath: only when below 1, as for clamp.
+    if (spec.kind == IntegratorSpec::Kind::kBdpt && spec.light_paths < 1.0f) {
+      id.settings += " light_paths=" + shortest(spec.light_paths);
+    }
     // Adaptive sampling changes which samples each pixel takes; absent when off, so that the
     // identities of uniform renders stay what they were.
     if (options.noise_threshold > 0.0f) {

@@ -5,6 +5,7 @@
 
 #include "tritrace/error.h"
 #include "tritrace/job/setting_values.h"
+#include "tritrace/render/bdpt_integrator.h"
 #include "tritrace/render/make_integrator.h"
 #include "tritrace/scene/io/scene_loader.h"
 #include "tritrace/scene/procedural.h"
@@ -76,6 +77,15 @@ std::string check_clamp(const std::string& s) {
   return v && *v > 0.0f ? std::string() : "must be a finite number greater than 0, got '" + s + "'";
 }
 
+std::string check_light_paths_text(const std::string& s) {
+  const std::optional<float> v = parse_float(s);
+  return v && *v > 0.0f && *v <= 1.0f && check_light_paths(*v).empty()
+             ? std::string()
+             : "must be the share of samples that trace a light subpath, greater than 0 (at least "
+               "1e-6) and at most 1, got '" +
+                   s + "'";
+}
+
 // A relative error: above 0, and below 1 (an error of 100% or more stops every pixel at the
 // first check, which is not what anyone means).
 std::string check_noise_threshold(const std::string& s) {
@@ -105,6 +115,7 @@ constexpr SettingRule kRules[] = {
     {"--sampler", &JobSettings::sampler, check_sampler},
     {"--max-depth", &JobSettings::max_depth, check_max_depth},
     {"--clamp", &JobSettings::clamp, check_clamp},
+    {"--light-paths", &JobSettings::light_paths, check_light_paths_text},
     {"--filter", &JobSettings::filter, check_filter},
     {"--time-limit", &JobSettings::time_limit, check_time_limit},
     {"--noise-threshold", &JobSettings::noise_threshold, check_noise_threshold},
@@ -214,6 +225,7 @@ IntegratorSpec integrator_spec(const JobSettings& settings, const IntegratorSpec
     spec.max_depth = static_cast<int>(*parse_integer(settings.max_depth));
   }
   if (!settings.clamp.empty()) spec.clamp = *parse_float(settings.clamp);
+  if (!settings.light_paths.empty()) spec.light_paths = *parse_float(settings.light_paths);
   return spec;
 }
 

@@ -42,7 +42,8 @@ struct JobSettings {
   std::string seed;
   std::string sampler;
   std::string max_depth;
-  std::string clamp;  // the path tracer's clamp on each sample's indirect light; empty: off
+  std::string clamp;        // the path tracer's clamp on each sample's indirect light; empty: off
+  std::string light_paths;  // bdpt's share of samples with a light subpath; empty: the scene's
   std::string filter = "box";
   std::string time_limit;  // seconds: whole passes of samples until the time is up
   bool denoise = false;    // the feature-guided denoiser on the path tracer's image

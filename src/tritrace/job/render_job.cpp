@@ -288,6 +288,8 @@ void RenderJob::set_up() {
       const char* why;
     } path_only[] = {
         {"--clamp", !settings_.clamp.empty(), "the lab integrator has no indirect samples"},
+        {"--light-paths", !settings_.light_paths.empty(),
+         "the lab integrator traces no light subpaths"},
         {"--time-limit", !settings_.time_limit.empty(),
          "the lab integrator takes one sample per pixel"},
         {"--denoise", settings_.denoise, "the lab integrator's image has no noise"},
@@ -337,6 +339,10 @@ void RenderJob::set_up() {
                             "cannot be rendered apart; ") +
                     (bdpt ? "with bdpt, render the whole image in one go"
                           : "split the image with --tile instead of --spp-range"),
+                ExitCode::kUsage);
+  }
+  if (spec_.kind == IntegratorSpec::Kind::kPath && !settings_.light_paths.empty()) {
+    throw Error("--light-paths", "applies to bdpt; the path tracer traces no light subpaths",
                 ExitCode::kUsage);
   }
   if (spec_.kind == IntegratorSpec::Kind::kBdpt) {

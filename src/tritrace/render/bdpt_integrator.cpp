@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "tritrace/error.h"
+#include "tritrace/math/random.h"
 #include "tritrace/render/light_sampler.h"
 #include "tritrace/render/material/bsdf.h"
 #include "tritrace/render/shading_normal.h"
@@ -343,6 +344,21 @@ float light_tracing_camera_pdf(float pdf, float count_ratio) {
   return pdf / count_ratio;
 }
 
+// Whether the current sample of `sampler` traces a light subpath (BdptSettings::light_paths = F <
+// 1): sample i of its pixel does when floor((i + 1) F + phi) > floor(i F + phi), phi uniform per
+// pixel from the pixel's key. Over phi each sample does with probability exactly F (so dividing its
+// light strategies by F is unbiased for any sample count), and a pixel's samples take them in
+// even steps (any n consecutive samples hold floor(n F) or ceil(n F)). Deterministic: a function
+// of (seed, pixel, sample index), as every other number of the sample.
+bool traces_light_subpath(const Sampler& sampler, float light_paths) {
+  if (light_paths >= 1.0f) return true;
+  const double f = light_paths;
+  const double phi =
+      static_cast<double>(hash_combine(sampler.pixel_key(), 0x6c69676874706174ull) >> 11) * 0x1p-53;
+  const double i = sampler.sample_index();
+  return std::floor((i + 1.0) * f + phi) > std::floor(i * f + phi);
+}
+
 // Samples whose subpaths are walked side by side: each bounce's rays of all of them are traced in
 // one query (packets on small trees, interleaved traversal on large ones), as the path tracer
 // traces its batch's bounces, instead of one ray per query.
@@ -438,12 +454,14 @@ class BdptTracer {
   // Light subpath: its first vertex, and the walk from it in `w` (w.count 0 when the scene has no
   // emitter).
   // `u`: its first three sampler groups (the emitter and side, the point, the direction).
+  // `walk` false (a sample outside BdptSettings::light_paths' share): only the first vertex, for
+  // s = 1, without the direction or ray the walk would start from (w stays inactive).
   void light_subpath(std::vector<Vertex>& path, int max_vertices, const std::array<glm::vec2, 3>& u,
-                     WalkState& w) const;
+                     bool walk, WalkState& w) const;
   // The light subpath from directional light e (light_subpath's choice), its disk point from
   // u_point.
   void directional_light_subpath(std::vector<Vertex>& path, int max_vertices,
-                                 const BdptIntegrator::Emitter& e, glm::vec2 u_point,
+                                 const BdptIntegrator::Emitter& e, glm::vec2 u_point, bool walk,
                                  WalkState& w) const;
   // Sample k's connections (s, t), t >= 2, queued; then its light tracing (sampler: the splats'
   // rounding number and an orthographic lens's offset, drawn after the subpaths').
@@ -655,6 +673,10 @@ void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& h
   make_surface(x, w.ray, hit);
   x.beta = w.beta;
   x.pdf_fwd = to_area(w.pdf_dir, prev, x);
+  // Light vertex 1 is where the strategies that light_paths thins out begin (s >= 2): its density
+  // as the light subpath samples it counts light_paths times in the weights (prepare_weights and
+  // mis_weight_recursive read it; mis_weight_walk divides it out and applies the counts itself).
+  if (light && w.count == 1) x.pdf_fwd *= it_.settings_.light_paths;
   x.pdf_rev = 0.0f;
   const int count = ++w.count;
   if (count >= w.max_vertices) return;
@@ -739,7 +761,7 @@ void BdptTracer::walk_all(std::vector<Vertex>* const* paths, WalkState* walks, S
 }
 
 void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
-                               const std::array<glm::vec2, 3>& u, WalkState& w) const {
+                               const std::array<glm::vec2, 3>& u, bool walk, WalkState& w) const {
   const glm::vec2 u_choice = u[0], u_point = u[1], u_dir = u[2];
   w = WalkState{};
   w.light = true;
@@ -759,7 +781,7 @@ void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
   Ray& ray = w.ray;
   glm::vec3& beta = w.beta;
   float& pdf_dir = w.pdf_dir;
-  if (e.directional) return directional_light_subpath(path, max_vertices, e, u_point, w);
+  if (e.directional) return directional_light_subpath(path, max_vertices, e, u_point, walk, w);
   if (e.environment) {
     // A direction towards the environment (the map's importance sampling, or uniform for a
     // constant colour), then a point on the disk of the scene's bounding sphere across it, from
@@ -775,6 +797,7 @@ void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
     x.pdf_fwd = pick.pmf * dir_pdf;
     if (!(x.pdf_fwd > 0.0f) || !(max_component(x.le) > 0.0f)) return;
     x.beta = glm::vec3(1.0f / x.pdf_fwd);
+    if (!walk) return;
     const Frame frame = Frame::from_normal(x.w_env);
     const glm::vec2 d = sample_uniform_disk_concentric(u_point);
     const float r = it_.environment_radius_;
@@ -797,10 +820,11 @@ void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
     x.le = e.intensity;
     x.pdf_fwd = pick.pmf;
     x.beta = glm::vec3(1.0f / pick.pmf);
+    if (e.spot) x.spot = &scene_.spot_lights[e.prim];
+    if (!walk) return;
     glm::vec3 w;
     if (e.spot) {
       // A direction in the cone in proportion to its intensity (the vertex's le is the axis's).
-      x.spot = &scene_.spot_lights[e.prim];
       w = sample_spot_direction(*x.spot, u_point.x, u_dir);
       pdf_dir = spot_direction_pdf(*x.spot, w);
       if (!(pdf_dir > 0.0f)) return;
@@ -829,6 +853,8 @@ void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
     x.ng = x.ns = x.tri.normal;
     x.pdf_fwd = pick.pmf / e.area;
     x.beta = glm::vec3(1.0f / x.pdf_fwd);
+    // (x.le, the emission along the sampled direction, is read by nothing but this walk's start.)
+    if (!walk) return;
     const bool back = x.two_sided && u_choice.y >= 0.5f;
     const glm::vec3 n = back ? -x.ng : x.ng;
     const glm::vec3 local = sample_cosine_hemisphere(u_dir);
@@ -848,7 +874,7 @@ void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
 
 void BdptTracer::directional_light_subpath(std::vector<Vertex>& path, int max_vertices,
                                            const BdptIntegrator::Emitter& e, glm::vec2 u_point,
-                                           WalkState& w) const {
+                                           bool walk, WalkState& w) const {
   // Parallel light from direction -l.direction: a ray along it from a point of the disk across it
   // that covers the scene's bounding sphere (density 1 / (pi R^2) by area, pbrt-v4's
   // DistantLight::SampleLe). The vertex is infinite, as the environment's, with the light's
@@ -867,6 +893,7 @@ void BdptTracer::directional_light_subpath(std::vector<Vertex>& path, int max_ve
   x.pdf_fwd = e.pmf;
   if (!(x.pdf_fwd > 0.0f) || !(max_component(x.le) > 0.0f)) return;
   x.beta = glm::vec3(1.0f / x.pdf_fwd);
+  if (!walk) return;
   const Frame frame = Frame::from_normal(x.w_env);
   const glm::vec2 d = sample_uniform_disk_concentric(u_point);
   const float r = it_.environment_radius_;
@@ -1020,29 +1047,34 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, f
     }
   }
 
+  // Each strategy's number of samples per camera sample (Veach 1997, sec. 9.2: the heuristics
+  // weigh n_i p_i): light tracing takes `ratio` light subpaths per camera sample of the pixel
+  // (adaptive sampling; 1 otherwise), and the strategies with s >= 2 have light_paths' share of
+  // the samples. Applied here as factors of whole strategies; the stored densities that carry
+  // them for the recursion (camera vertex 1's pdf_fwd divided by the ratio, light vertex 1's
+  // multiplied by light_paths) are undone below.
+  const float light_paths = it_.settings_.light_paths;
+  const auto count = [&](int ss, int tt) {
+    return (ss >= 2 ? light_paths : 1.0f) * (tt == 1 ? ratio : 1.0f);
+  };
+  const float own = remap(count(s, t));
   float sum = 0.0f;
   float r = 1.0f;
   // Moving the connection to camera vertex i - 1 gives strategy (s + t - i, i). i = 1 is light
   // tracing, a strategy only with it on and with at least two light vertices ((1, 1), an emitter
   // seen by the camera, is left to (0, 2)).
   const int last_i = it_.settings_.light_tracing && s + t >= 3 ? 1 : 2;
-  // Light tracing takes `ratio` light subpaths per camera sample of the pixel (adaptive sampling;
-  // 1 otherwise): its strategies' densities count `ratio` times, against the camera's own
-  // density at vertex 1 (stored divided by the ratio for the recursion, undone here).
   for (int i = t - 1; i >= last_i; --i) {
-    if (i == 1) {
-      r *= remap(camera[1].pdf_rev) / remap(camera[1].pdf_fwd * ratio) * remap(ratio);
-    } else {
-      r *= remap(camera[i].pdf_rev) / remap(camera[i].pdf_fwd);
-    }
-    if (!camera[i].delta && !camera[i - 1].delta) sum += r;
+    const float fwd = i == 1 ? camera[1].pdf_fwd * ratio : camera[i].pdf_fwd;
+    r *= remap(camera[i].pdf_rev) / remap(fwd);
+    if (!camera[i].delta && !camera[i - 1].delta) sum += r * remap(count(s + t - i, i)) / own;
   }
-  // From light tracing (t = 1) every strategy on the light side is one of the camera's.
-  r = t == 1 ? 1.0f / remap(ratio) : 1.0f;
+  r = 1.0f;
   for (int i = s - 1; i >= 0; --i) {
-    r *= remap(light[i].pdf_rev) / remap(light[i].pdf_fwd);
+    const float fwd = i == 1 ? light[1].pdf_fwd / light_paths : light[i].pdf_fwd;
+    r *= remap(light[i].pdf_rev) / remap(fwd);
     const bool delta_light_side = i > 0 ? light[i - 1].delta : delta_light(light[0]);
-    if (!light[i].delta && !delta_light_side) sum += r;
+    if (!light[i].delta && !delta_light_side) sum += r * remap(count(i, s + t - i)) / own;
   }
 
   pt.pdf_rev = saved_pt;
@@ -1106,6 +1138,11 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
     if (qs_minus != nullptr) qs_minus_rev = pdf_area(*qs, &pt, *qs_minus);
   } else {
     const Vertex& pt_minus = camera[t - 2];
+    // The strategies with s >= 2 count light_paths (F) times: with s = 1 each strategy on the
+    // camera side has s >= 2, so pt (light vertex 1 there) carries F; with s = 0 those past
+    // (1, t - 1) do, through pt_minus. From s >= 2 the light side's (1, .) and (0, .) lose F
+    // through light vertex 1's stored pdf_fwd (walk_step).
+    const float f = it_.settings_.light_paths;
     if (s > 0) {
       // pt is a surface vertex (connectible); qs a surface, light or environment vertex.
       const glm::vec3 w = direction(pt, *qs);
@@ -1113,15 +1150,16 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
       const glm::vec3 w_qs_minus =
           qs_minus != nullptr ? direction(*qs, *qs_minus) : glm::vec3(0.0f);
       pt_rev = pdf_area_given(*qs, w_qs_minus, -w, pt);
+      if (s == 1) pt_rev *= f;
       pt_minus_rev = pdf_area_given(pt, w, w_pt_minus, pt_minus);
       qs_rev = pdf_area_given(pt, w_pt_minus, w, *qs);
       if (qs_minus != nullptr) qs_minus_rev = pdf_area_given(*qs, -w, w_qs_minus, *qs_minus);
     } else if (infinite(pt)) {
       pt_rev = it_.environment_pmf_ * it_.environment_dir_pdf(pt.w_env);
-      pt_minus_rev = pdf_area(pt, nullptr, pt_minus);
+      pt_minus_rev = pdf_area(pt, nullptr, pt_minus) * f;
     } else {
       pt_rev = it_.origin_pdf(pt.prim);
-      pt_minus_rev = to_area(emission_pdf(pt, direction(pt, pt_minus)), pt, pt_minus);
+      pt_minus_rev = to_area(emission_pdf(pt, direction(pt, pt_minus)), pt, pt_minus) * f;
     }
   }
   // ratio * (terms), with no ratio at all where the terms are 0 (an overflowed ratio times 0 is
@@ -1227,7 +1265,9 @@ void BdptTracer::splat_light_subpath(int nl) {
     const glm::vec3 f_light = surface_f(qs, w, qs.wo);
     if (!(max_component(f_light) > 0.0f)) continue;
     const float g = std::abs(glm::dot(qs.ng, w)) / dist2;
-    const glm::vec3 contribution = qs.beta * f_light * (g * camera_dir_pdf(cam, -w, dist2));
+    // Over light_paths' share of the samples (s >= 2 here).
+    const glm::vec3 contribution =
+        qs.beta * f_light * (g * camera_dir_pdf(cam, -w, dist2)) * it_.inverse_light_paths_;
     if (!(max_component(contribution) > 0.0f)) continue;
     Ray ray;
     const bool has_ray = camera_shadow_ray(qs, eye, ray);
@@ -1317,7 +1357,9 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
       sub.camera[1].pdf_fwd =
           light_tracing_camera_pdf(camera_area_pdf(sub.camera[0], sub.camera[1]), st.pixel_ratio);
     }
-    light_subpath(sub.light, max_light, u_light[k], walks[k]);
+    // A sample outside light_paths' share keeps only the light subpath's first vertex (for s = 1).
+    light_subpath(sub.light, max_light, u_light[k],
+                  traces_light_subpath(samplers[k], settings.light_paths), walks[k]);
     paths[k] = &sub.light;
   }
   walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
@@ -1378,6 +1420,8 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
         has_ray = shadow_ray(pt, qs, ray);
       }
       if (!(max_component(contribution) > 0.0f)) continue;
+      // Strategies past the light subpath's first vertex have light_paths' share of the samples.
+      if (s >= 2) contribution *= it_.inverse_light_paths_;
       queue(s, t, contribution, has_ray, ray);
     }
   }
@@ -1406,6 +1450,13 @@ bool camera_light_tracing(const Camera& camera) {
   return !camera.is_orthographic() || camera.has_lens();
 }
 
+std::string check_light_paths(double light_paths) {
+  if (light_paths >= kMinLightPaths && light_paths <= 1.0) return "";
+  return "must be the share of samples that trace a light subpath, greater than 0 (at least 1e-6) "
+         "and at most 1, got " +
+         std::to_string(light_paths);
+}
+
 std::string bdpt_unsupported(const Scene& scene) {
   uint64_t instanced = 0;
   for (const Instance& inst : scene.instances) {
@@ -1425,6 +1476,10 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
                                const RayOffsetParams& offset)
     : settings_(settings), offset_(offset) {
   if (const std::string why = bdpt_unsupported(scene); !why.empty()) throw Error("integrator", why);
+  if (const std::string why = check_light_paths(settings_.light_paths); !why.empty()) {
+    throw Error("light_paths", why);
+  }
+  inverse_light_paths_ = 1.0f / settings_.light_paths;
   settings_.light_tracing = settings_.light_tracing && camera_light_tracing(scene.camera);
   std::vector<float> power;
   for (uint32_t i = 0; i < scene.lights.size(); ++i) {

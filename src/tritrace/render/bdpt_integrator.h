@@ -51,7 +51,26 @@ struct BdptSettings {
   // splats' normalisation), so that a test can render with ratios other than 1 and check that the
   // weights stay a partition of unity (the image mean does not move).
   float mis_count_scale = 1.0f;
+  // The share F of camera samples that also trace a light subpath, in (0, 1] (at least
+  // kMinLightPaths): sample i of a pixel traces one when floor((i + 1) F + phi) > floor(i F + phi),
+  // with phi uniform per pixel (a hash of the seed and the pixel), so each sample does with
+  // probability F and any n consecutive samples of a pixel hold floor(n F) or ceil(n F) of them.
+  // The strategies that use the light subpath past its first vertex (s >= 2, light tracing
+  // included) are then sampled F times as often: their contributions are divided by F and the
+  // MIS weights count their densities F times (Veach 1997, sec. 9.2: each strategy's density
+  // times its number of samples; Grittmann et al. 2022, "Efficiency-aware multiple importance
+  // sampling for bidirectional rendering algorithms", make the light path count a free
+  // parameter). s = 0 and s = 1 (next-event estimation from the light subpath's first vertex,
+  // which every sample draws) are sampled by every sample. 1: every sample, the image as before.
+  float light_paths = 1.0f;
 };
+
+// The smallest BdptSettings::light_paths accepted (smaller shares divide contributions by
+// numbers whose reciprocals leave float's range in practice).
+inline constexpr float kMinLightPaths = 1e-6f;
+
+// Why `light_paths` is not a valid BdptSettings::light_paths (empty when it is).
+std::string check_light_paths(double light_paths);
 
 // Why bdpt cannot render `scene` correctly yet (empty when it can): the caller refuses it.
 std::string bdpt_unsupported(const Scene& scene);
@@ -98,6 +117,7 @@ class BdptIntegrator final : public Integrator {
   AliasTable table_;
   std::vector<uint32_t> emissive_prims_;  // sorted, for the density of choosing a hit emitter
   std::vector<uint32_t> emissive_index_;  // parallel: the emitter's index in emitters_
+  float inverse_light_paths_ = 1.0f;      // 1 / settings_.light_paths
 
   // Appends the scene's spot and directional lights to emitters_ with their selection weights.
   void add_delta_lights(const Scene& scene, std::vector<float>& power);

@@ -24,6 +24,7 @@ std::unique_ptr<Integrator> make_integrator(const IntegratorSpec& spec, const Sc
   if (spec.kind == IntegratorSpec::Kind::kBdpt) {
     BdptSettings settings;
     settings.max_depth = spec.max_depth;
+    settings.light_paths = spec.light_paths;
     return std::make_unique<BdptIntegrator>(scene, settings);
   }
   PathSettings settings;

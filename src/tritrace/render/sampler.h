@@ -186,6 +186,15 @@ class Sampler {
   uint32_t dimension() const {
     return dimension_;
   }
+  // The current sample's index in its pixel, and the key of (seed, pixel) that scrambles its
+  // numbers: for integrators that decide something per sample from the pixel's sample sequence
+  // (bdpt's share of samples with a light subpath, BdptSettings::light_paths).
+  uint32_t sample_index() const {
+    return reverse_bits(mirrored_index_);
+  }
+  uint64_t pixel_key() const {
+    return pixel_hash_;
+  }
 
  private:
 #if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512DQ__) && defined(__GFNI__)

@@ -24,6 +24,9 @@ struct IntegratorSpec {
   SamplerKind sampler = SamplerKind::kSobol;
   // The path tracer's clamp on each sample's indirect light (PathSettings::clamp_indirect); 0: off.
   float clamp = 0.0f;
+  // bdpt's share of camera samples that also trace a light subpath (BdptSettings::light_paths),
+  // in (0, 1]; 1: every sample.
+  float light_paths = 1.0f;
 };
 
 }  // namespace tritrace

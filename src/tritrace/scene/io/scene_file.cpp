@@ -817,7 +817,7 @@ class Parser {
 
   void parse_integrator(const Json& j) {
     object(j, "/integrator");
-    check_keys(j, "/integrator", {"type", "spp", "max_depth", "seed", "sampler"});
+    check_keys(j, "/integrator", {"type", "spp", "max_depth", "seed", "sampler", "light_paths"});
     IntegratorSpec& spec = out_.integrator;
     if (j.contains("type")) {
       const std::string type = string(j["type"], "/integrator/type");
@@ -851,6 +851,16 @@ class Parser {
              "must be \"sobol\" or \"independent\", got '" + shown(name) + "'");
       }
       spec.sampler = *kind;
+    }
+    if (j.contains("light_paths")) {
+      const double f = number(j["light_paths"], "/integrator/light_paths");
+      if (!(f >= 1e-6 && f <= 1.0)) {
+        fail("/integrator/light_paths",
+             "must be the share of samples that trace a light subpath (bdpt), greater than 0 (at "
+             "least 1e-6) and at most 1, got " +
+                 describe(j["light_paths"]));
+      }
+      spec.light_paths = static_cast<float>(f);
     }
   }
 
