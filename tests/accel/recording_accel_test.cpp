@@ -1,0 +1,188 @@
+// RecordingAccel and the replay behind `tritrace bench --secondary-rays`: it must record every ray
+// of a path-traced frame (counted independently by the renderer, and by the camera's samples),
+// hand the queries on unchanged, put the batches in an order that does not depend on the threads,
+// and the replay must give each ray the answer a brute-force search gives.
+#include "tritrace/accel/recording_accel.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "tritrace/accel/brute_force.h"
+#include "tritrace/accel/make_accel.h"
+#include "tritrace/job/render_job.h"
+
+namespace tritrace {
+namespace {
+
+constexpr int kWidth = 24, kHeight = 16, kSpp = 2;
+
+struct Frame {
+  RecordedRays recorded;
+  RenderStats stats;
+  RenderedImage image;
+};
+
+// A small path-traced frame of `scene` through a RecordingAccel over `accel`.
+Frame record_frame(const LoadedScene& loaded, const Accel& accel, int threads) {
+  JobSettings s;
+  s.width = std::to_string(kWidth);
+  s.height = std::to_string(kHeight);
+  s.spp = std::to_string(kSpp);
+  s.threads = std::to_string(threads);
+  s.integrator = "path";
+  RecordingAccel recording(accel);
+  RenderJob job(s, loaded.scene, loaded.integrator);
+  job.prepare(nullptr, &recording);
+  Frame f;
+  f.image = job.render(&f.stats);
+  f.recorded = recording.take();
+  return f;
+}
+
+size_t sum(const std::vector<uint32_t>& sizes) {
+  size_t n = 0;
+  for (const uint32_t s : sizes) n += s;
+  return n;
+}
+
+LoadedScene load(const std::string& name) {
+  JobSettings s;
+  s.scene = name;
+  s.width = std::to_string(kWidth);
+  s.height = std::to_string(kHeight);
+  s.integrator = "path";
+  return load_job_scene(s);
+}
+
+class RecordingAccelFrame : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(RecordingAccelFrame, RecordsEveryRayAndReplaysToTheSameAnswers) {
+  const LoadedScene loaded = load(GetParam());
+  const auto bvh = make_accel(AccelKind::kBvh, loaded.scene, Kernel::kWatertight);
+  const Frame f = record_frame(loaded, *bvh, 2);
+  const RecordedRays& r = f.recorded;
+
+  // Every ray the renderer counted went through the recorder: one camera ray per sample through
+  // the coherent query, the rest through the incoherent ones.
+  EXPECT_EQ(r.coherent_rays, static_cast<uint64_t>(kWidth) * kHeight * kSpp);
+  EXPECT_EQ(r.coherent_rays + r.closest.rays.size() + r.any.rays.size(), f.stats.rays);
+  EXPECT_GT(r.closest.rays.size(), 0u);
+  EXPECT_GT(r.any.rays.size(), 0u);
+  EXPECT_EQ(sum(r.closest.sizes), r.closest.rays.size());
+  EXPECT_EQ(sum(r.any.sizes), r.any.rays.size());
+  EXPECT_EQ(r.hits.size(), r.closest.rays.size());
+  EXPECT_EQ(r.occluded.size(), r.any.rays.size());
+
+  // The recorder only watches: the frame is the one the bvh renders without it.
+  {
+    JobSettings s;
+    s.width = std::to_string(kWidth);
+    s.height = std::to_string(kHeight);
+    s.spp = std::to_string(kSpp);
+    s.threads = "2";
+    s.integrator = "path";
+    RenderJob plain(s, loaded.scene, loaded.integrator);
+    plain.prepare(nullptr, bvh.get());
+    const RenderedImage want = plain.render();
+    ASSERT_EQ(want.image.pixels().size(), f.image.image.pixels().size());
+    EXPECT_EQ(0, std::memcmp(want.image.pixels().data(), f.image.image.pixels().data(),
+                             want.image.pixels().size() * sizeof(glm::vec3)));
+  }
+
+  // Replayed through the same bvh on one and on three threads: bit for bit the recorded answers.
+  for (const int threads : {1, 3}) {
+    std::vector<Hit> hits(r.hits.size());
+    std::vector<uint8_t> occluded(r.occluded.size());
+    replay_closest(*bvh, r.closest, hits, threads);
+    replay_any(*bvh, r.any, occluded, threads);
+    EXPECT_EQ(0, std::memcmp(hits.data(), r.hits.data(), hits.size() * sizeof(Hit)));
+    EXPECT_EQ(occluded, r.occluded);
+  }
+
+  // The oracle: brute force with the same watertight kernel tests every triangle of every ray.
+  const BruteForceAccel brute(loaded.scene.mesh, Kernel::kWatertight);
+  std::vector<Hit> hits(r.hits.size());
+  std::vector<uint8_t> occluded(r.occluded.size());
+  replay_closest(brute, r.closest, hits, 2);
+  replay_any(brute, r.any, occluded, 2);
+  size_t found = 0;
+  for (size_t i = 0; i < hits.size(); ++i) {
+    ASSERT_EQ(hits[i].found(), r.hits[i].found()) << i;
+    ASSERT_EQ(hits[i].prim, r.hits[i].prim) << i;
+    ASSERT_EQ(hits[i].t, r.hits[i].t) << i;
+    found += hits[i].found();
+  }
+  EXPECT_GT(found, 0u);
+  EXPECT_EQ(occluded, r.occluded);
+}
+
+TEST_P(RecordingAccelFrame, OrderDoesNotDependOnTheThreads) {
+  const LoadedScene loaded = load(GetParam());
+  const auto bvh = make_accel(AccelKind::kBvh, loaded.scene, Kernel::kWatertight);
+  const RecordedRays one = record_frame(loaded, *bvh, 1).recorded;
+  const RecordedRays three = record_frame(loaded, *bvh, 3).recorded;
+  EXPECT_EQ(one.closest.sizes, three.closest.sizes);
+  EXPECT_EQ(one.any.sizes, three.any.sizes);
+  ASSERT_EQ(one.closest.rays.size(), three.closest.rays.size());
+  ASSERT_EQ(one.any.rays.size(), three.any.rays.size());
+  EXPECT_EQ(0, std::memcmp(one.closest.rays.data(), three.closest.rays.data(),
+                           one.closest.rays.size() * sizeof(Ray)));
+  EXPECT_EQ(0, std::memcmp(one.any.rays.data(), three.any.rays.data(),
+                           one.any.rays.size() * sizeof(Ray)));
+  EXPECT_EQ(0, std::memcmp(one.hits.data(), three.hits.data(), one.hits.size() * sizeof(Hit)));
+  EXPECT_EQ(one.occluded, three.occluded);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, RecordingAccelFrame,
+                         ::testing::Values("cornell-area", "terrain:3k"), [](const auto& info) {
+                           std::string name = info.param;
+                           for (char& c : name) {
+                             if (c == '-' || c == ':') c = '_';
+                           }
+                           return name;
+                         });
+
+// Batches from several calls come back sorted by size, then by their rays' bytes, each ray still
+// with its own answer; the coherent queries are counted and not recorded; take() forgets.
+TEST(RecordingAccel, SortsBatchesAndKeepsEachRayWithItsAnswer) {
+  TriangleMesh mesh;
+  mesh.add({-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, 0);
+  const BruteForceAccel brute(mesh, Kernel::kWatertight);
+  RecordingAccel recording(brute);
+  const Ray hit_ray{{0, 0, -1}, {0, 0, 1}};     // hits at t = 1
+  const Ray far_ray{{0, 0, -3}, {0, 0, 1}};     // hits at t = 3
+  const Ray miss_ray{{5, 5, -1}, {0, 0, 1}};    // misses
+  std::vector<Ray> pair = {far_ray, miss_ray};  // a batch of two
+  std::vector<Hit> hits(2);
+  recording.intersect_incoherent(pair, hits);
+  std::vector<Ray> single = {hit_ray};
+  recording.intersect_incoherent(single, std::span(hits).first(1));
+  std::vector<uint8_t> occ(2);
+  recording.occluded_incoherent(pair, occ);
+  recording.intersect(pair, hits);  // coherent: counted only
+  recording.occluded(single, std::span(occ).first(1));
+
+  const RecordedRays r = recording.take();
+  EXPECT_EQ(r.coherent_rays, 3u);
+  ASSERT_EQ(r.closest.sizes, (std::vector<uint32_t>{1, 2}));  // the single batch first
+  ASSERT_EQ(r.closest.rays.size(), 3u);
+  EXPECT_EQ(r.closest.rays[0].origin.z, -1.0f);
+  EXPECT_EQ(r.closest.rays[1].origin.z, -3.0f);
+  EXPECT_EQ(r.closest.rays[2].origin.x, 5.0f);
+  EXPECT_EQ(r.hits[0].t, 1.0f);
+  EXPECT_EQ(r.hits[1].t, 3.0f);
+  EXPECT_FALSE(r.hits[2].found());
+  ASSERT_EQ(r.any.sizes, (std::vector<uint32_t>{2}));
+  EXPECT_EQ(r.occluded, (std::vector<uint8_t>{1, 0}));
+
+  const RecordedRays again = recording.take();
+  EXPECT_TRUE(again.closest.rays.empty());
+  EXPECT_TRUE(again.any.sizes.empty());
+  EXPECT_EQ(again.coherent_rays, 0u);
+}
+
+}  // namespace
+}  // namespace tritrace
