@@ -161,9 +161,12 @@ int run_secondary_rays(const SecondaryRaysOptions& options) {
     }
     scene_rows[0].recorder = true;
 
-    // The frame `bench --integrator path` renders, through the first accel, recorded.
+    // The frame `bench --integrator path` renders, through the first accel, recorded on one
+    // thread so that the batches come in the order of the tiles (RecordingAccel::take); the same
+    // rays on any number of threads.
     RecordingAccel recording(*accels[0]);
     JobSettings row = settings;
+    row.threads = "1";
     row.accel = std::string(accel_name(options.accels[0]));
     row.bvh_build = "sah";
     RenderJob job(row, scene, loaded.integrator);
@@ -175,16 +178,17 @@ int run_secondary_rays(const SecondaryRaysOptions& options) {
     const uint64_t any_rays = recorded.any.rays.size();
     {
       char line[256];
-      std::snprintf(line, sizeof(line),
-                    "%s: frame of %llu rays recorded through %s: %llu camera (coherent), %llu "
-                    "closest-hit in %zu batches, %llu any-hit in %zu batches%s",
-                    scene_name.c_str(), static_cast<unsigned long long>(stats.rays),
-                    row.accel.c_str(), static_cast<unsigned long long>(recorded.coherent_rays),
-                    static_cast<unsigned long long>(closest_rays), recorded.closest.sizes.size(),
-                    static_cast<unsigned long long>(any_rays), recorded.any.sizes.size(),
-                    recorded.coherent_rays + closest_rays + any_rays == stats.rays
-                        ? ""
-                        : " (NOT the frame's count)");
+      std::snprintf(
+          line, sizeof(line),
+          "%s: frame of %llu rays recorded through %s: %llu camera (coherent) in %zu groups, "
+          "%llu closest-hit in %zu batches, %llu any-hit in %zu batches%s",
+          scene_name.c_str(), static_cast<unsigned long long>(stats.rays), row.accel.c_str(),
+          static_cast<unsigned long long>(recorded.coherent_rays), recorded.closest.groups.size(),
+          static_cast<unsigned long long>(closest_rays), recorded.closest.sizes.size(),
+          static_cast<unsigned long long>(any_rays), recorded.any.sizes.size(),
+          recorded.coherent_rays + closest_rays + any_rays == stats.rays
+              ? ""
+              : " (NOT the frame's count)");
       notes.emplace_back(line);
     }
 
@@ -274,7 +278,8 @@ int run_secondary_rays(const SecondaryRaysOptions& options) {
   if (!options.quiet) {
     std::printf(
         "closest: intersect_incoherent (bounce rays), any: occluded_incoherent (shadow rays), "
-        "replayed in the frame's batches; ms: medians of %d alternated rounds after a warm-up; "
+        "recorded on one thread, replayed in the frame's batches and tile order; ms: medians of %d "
+        "alternated rounds after a warm-up; "
         "closestM, anyM: Mrays/s; /single: speed over embree-single's (wall time), cpu/sgl: the "
         "same from process CPU time; t tolerance %g relative\n",
         options.reps, kTTolerance);

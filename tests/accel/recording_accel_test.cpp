@@ -6,8 +6,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
+#include <functional>
+#include <latch>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "tritrace/accel/brute_force.h"
@@ -75,6 +79,13 @@ TEST_P(RecordingAccelFrame, RecordsEveryRayAndReplaysToTheSameAnswers) {
   EXPECT_EQ(sum(r.any.sizes), r.any.rays.size());
   EXPECT_EQ(r.hits.size(), r.closest.rays.size());
   EXPECT_EQ(r.occluded.size(), r.any.rays.size());
+  // Groups: one per coherent query, each starting where the one before ended.
+  EXPECT_EQ(r.closest.groups.size(), r.any.groups.size());
+  EXPECT_TRUE(std::is_sorted(r.closest.groups.begin(), r.closest.groups.end()));
+  EXPECT_TRUE(std::is_sorted(r.any.groups.begin(), r.any.groups.end()));
+  ASSERT_FALSE(r.closest.groups.empty());
+  EXPECT_EQ(r.closest.groups.front(), 0u);
+  EXPECT_LE(r.closest.groups.back(), r.closest.sizes.size());
 
   // The recorder only watches: the frame is the one the bvh renders without it.
   {
@@ -122,10 +133,13 @@ TEST_P(RecordingAccelFrame, RecordsEveryRayAndReplaysToTheSameAnswers) {
 TEST_P(RecordingAccelFrame, OrderDoesNotDependOnTheThreads) {
   const LoadedScene loaded = load(GetParam());
   const auto bvh = make_accel(AccelKind::kBvh, loaded.scene, Kernel::kWatertight);
-  const RecordedRays one = record_frame(loaded, *bvh, 1).recorded;
+  // Several threads: the groups sorted, whichever thread took which tile.
+  const RecordedRays one = record_frame(loaded, *bvh, 2).recorded;
   const RecordedRays three = record_frame(loaded, *bvh, 3).recorded;
   EXPECT_EQ(one.closest.sizes, three.closest.sizes);
   EXPECT_EQ(one.any.sizes, three.any.sizes);
+  EXPECT_EQ(one.closest.groups, three.closest.groups);
+  EXPECT_EQ(one.any.groups, three.any.groups);
   ASSERT_EQ(one.closest.rays.size(), three.closest.rays.size());
   ASSERT_EQ(one.any.rays.size(), three.any.rays.size());
   EXPECT_EQ(0, std::memcmp(one.closest.rays.data(), three.closest.rays.data(),
@@ -145,43 +159,95 @@ INSTANTIATE_TEST_SUITE_P(Scenes, RecordingAccelFrame,
                            return name;
                          });
 
-// Batches from several calls come back sorted by size, then by their rays' bytes, each ray still
-// with its own answer; the coherent queries are counted and not recorded; take() forgets.
-TEST(RecordingAccel, SortsBatchesAndKeepsEachRayWithItsAnswer) {
+// Within a group (the calls after a coherent query, or before any) batches keep their call order;
+// one thread's groups keep their call order too; each ray keeps its own answer; take() forgets.
+TEST(RecordingAccel, OneThreadKeepsCallOrder) {
   TriangleMesh mesh;
   mesh.add({-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, 0);
   const BruteForceAccel brute(mesh, Kernel::kWatertight);
   RecordingAccel recording(brute);
-  const Ray hit_ray{{0, 0, -1}, {0, 0, 1}};     // hits at t = 1
-  const Ray far_ray{{0, 0, -3}, {0, 0, 1}};     // hits at t = 3
-  const Ray miss_ray{{5, 5, -1}, {0, 0, 1}};    // misses
-  std::vector<Ray> pair = {far_ray, miss_ray};  // a batch of two
+  const Ray hit_ray{{0, 0, -1}, {0, 0, 1}};   // hits at t = 1
+  const Ray far_ray{{0, 0, -3}, {0, 0, 1}};   // hits at t = 3
+  const Ray miss_ray{{5, 5, -1}, {0, 0, 1}};  // misses
+  const std::vector<Ray> pair = {far_ray, miss_ray};
+  const std::vector<Ray> single = {hit_ray};
   std::vector<Hit> hits(2);
-  recording.intersect_incoherent(pair, hits);
-  std::vector<Ray> single = {hit_ray};
-  recording.intersect_incoherent(single, std::span(hits).first(1));
   std::vector<uint8_t> occ(2);
+  // Group 0 (no coherent query yet): closest pair, closest single, any pair.
+  recording.intersect_incoherent(pair, hits);
+  recording.intersect_incoherent(single, std::span(hits).first(1));
   recording.occluded_incoherent(pair, occ);
-  recording.intersect(pair, hits);  // coherent: counted only
+  // A group started by a coherent query of two rays: any single.
+  recording.intersect(pair, hits);
+  recording.occluded_incoherent(single, std::span(occ).first(1));
+  // A group started by a coherent query of one ray: closest single.
   recording.occluded(single, std::span(occ).first(1));
+  recording.intersect_incoherent(single, std::span(hits).first(1));
 
   const RecordedRays r = recording.take();
   EXPECT_EQ(r.coherent_rays, 3u);
-  ASSERT_EQ(r.closest.sizes, (std::vector<uint32_t>{1, 2}));  // the single batch first
-  ASSERT_EQ(r.closest.rays.size(), 3u);
-  EXPECT_EQ(r.closest.rays[0].origin.z, -1.0f);
-  EXPECT_EQ(r.closest.rays[1].origin.z, -3.0f);
-  EXPECT_EQ(r.closest.rays[2].origin.x, 5.0f);
-  EXPECT_EQ(r.hits[0].t, 1.0f);
-  EXPECT_EQ(r.hits[1].t, 3.0f);
-  EXPECT_FALSE(r.hits[2].found());
-  ASSERT_EQ(r.any.sizes, (std::vector<uint32_t>{2}));
-  EXPECT_EQ(r.occluded, (std::vector<uint8_t>{1, 0}));
+  ASSERT_EQ(r.closest.sizes, (std::vector<uint32_t>{2, 1, 1}));   // call order, not size order
+  EXPECT_EQ(r.closest.groups, (std::vector<uint32_t>{0, 2, 2}));  // the second group has none
+  ASSERT_EQ(r.closest.rays.size(), 4u);
+  EXPECT_EQ(r.closest.rays[0].origin.z, -3.0f);
+  EXPECT_EQ(r.closest.rays[1].origin.x, 5.0f);
+  EXPECT_EQ(r.closest.rays[2].origin.z, -1.0f);
+  EXPECT_EQ(r.closest.rays[3].origin.z, -1.0f);
+  ASSERT_EQ(r.hits.size(), 4u);
+  EXPECT_EQ(r.hits[0].t, 3.0f);
+  EXPECT_FALSE(r.hits[1].found());
+  EXPECT_EQ(r.hits[2].t, 1.0f);
+  EXPECT_EQ(r.hits[3].t, 1.0f);
+  EXPECT_EQ(r.any.sizes, (std::vector<uint32_t>{2, 1}));
+  EXPECT_EQ(r.any.groups, (std::vector<uint32_t>{0, 1, 2}));  // the third group has none
+  EXPECT_EQ(r.occluded, (std::vector<uint8_t>{1, 0, 1}));
 
   const RecordedRays again = recording.take();
   EXPECT_TRUE(again.closest.rays.empty());
   EXPECT_TRUE(again.any.sizes.empty());
+  EXPECT_TRUE(again.closest.groups.empty());
   EXPECT_EQ(again.coherent_rays, 0u);
+}
+
+// Two threads' groups come back ordered by the coherent query that started them (its size
+// first), whichever thread recorded first.
+TEST(RecordingAccel, SeveralThreadsGroupsAreSortedByTheirCoherentQuery) {
+  TriangleMesh mesh;
+  mesh.add({-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, 0);
+  const BruteForceAccel brute(mesh, Kernel::kWatertight);
+  const Ray hit_ray{{0, 0, -1}, {0, 0, 1}};
+  const Ray far_ray{{0, 0, -3}, {0, 0, 1}};
+  const std::vector<Ray> pair = {far_ray, hit_ray};
+  const std::vector<Ray> single = {hit_ray};
+  for (const bool two_first : {true, false}) {
+    RecordingAccel recording(brute);
+    std::latch done(2);  // both threads alive until both recorded: distinct thread ids
+    const auto two = [&] {
+      std::vector<Hit> hits(2);
+      recording.intersect(pair, hits);
+      recording.intersect_incoherent(single, std::span(hits).first(1));
+      done.arrive_and_wait();
+    };
+    const auto one = [&] {
+      std::vector<Hit> hits(2);
+      recording.intersect(single, std::span(hits).first(1));
+      recording.intersect_incoherent(pair, hits);
+      done.arrive_and_wait();
+    };
+    std::thread a(two_first ? std::function<void()>(two) : std::function<void()>(one));
+    std::thread b(two_first ? std::function<void()>(one) : std::function<void()>(two));
+    a.join();
+    b.join();
+    const RecordedRays r = recording.take();
+    // The one-ray query's group (its closest batch: the pair) before the two-ray query's.
+    EXPECT_EQ(r.closest.sizes, (std::vector<uint32_t>{2, 1})) << two_first;
+    EXPECT_EQ(r.closest.groups, (std::vector<uint32_t>{0, 1})) << two_first;
+    ASSERT_EQ(r.hits.size(), 3u);
+    EXPECT_EQ(r.hits[0].t, 3.0f);
+    EXPECT_EQ(r.hits[1].t, 1.0f);
+    EXPECT_EQ(r.hits[2].t, 1.0f);
+    EXPECT_EQ(r.coherent_rays, 3u);
+  }
 }
 
 }  // namespace
