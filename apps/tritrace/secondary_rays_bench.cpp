@@ -164,7 +164,7 @@ int run_secondary_rays(const SecondaryRaysOptions& options) {
     // The frame `bench --integrator path` renders, through the first accel, recorded on one
     // thread so that the batches come in the order of the tiles (RecordingAccel::take); the same
     // rays on any number of threads.
-    RecordingAccel recording(*accels[0]);
+    RecordingAccel recording(*accels[0], GroupOrder::kCallOrder);
     JobSettings row = settings;
     row.threads = "1";
     row.accel = std::string(accel_name(options.accels[0]));

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <functional>
 #include <latch>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -165,7 +166,7 @@ TEST(RecordingAccel, OneThreadKeepsCallOrder) {
   TriangleMesh mesh;
   mesh.add({-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, 0);
   const BruteForceAccel brute(mesh, Kernel::kWatertight);
-  RecordingAccel recording(brute);
+  RecordingAccel recording(brute, GroupOrder::kCallOrder);
   const Ray hit_ray{{0, 0, -1}, {0, 0, 1}};   // hits at t = 1
   const Ray far_ray{{0, 0, -3}, {0, 0, 1}};   // hits at t = 3
   const Ray miss_ray{{5, 5, -1}, {0, 0, 1}};  // misses
@@ -248,6 +249,18 @@ TEST(RecordingAccel, SeveralThreadsGroupsAreSortedByTheirCoherentQuery) {
     EXPECT_EQ(r.hits[2].t, 1.0f);
     EXPECT_EQ(r.coherent_rays, 3u);
   }
+  // Call order is one thread's: two threads' recordings have none.
+  RecordingAccel call_order(brute, GroupOrder::kCallOrder);
+  std::latch done(2);
+  const auto record = [&] {
+    std::vector<Hit> hits(2);
+    call_order.intersect(pair, hits);
+    done.arrive_and_wait();
+  };
+  std::thread a(record), b(record);
+  a.join();
+  b.join();
+  EXPECT_THROW(call_order.take(), std::logic_error);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstring>
 #include <optional>
+#include <stdexcept>
 
 #include "tritrace/parallel.h"
 
@@ -173,9 +174,10 @@ RecordedRays RecordingAccel::take() {
                       b.get()});
     }
   }
-  // One thread's groups stay in its call order (a render on one thread takes its tiles in
-  // order); several threads' are sorted.
-  if (buffers_.size() > 1)
+  if (order_ == GroupOrder::kCallOrder && buffers_.size() > 1) {
+    throw std::logic_error("RecordingAccel: call order needs every query on one thread");
+  }
+  if (order_ == GroupOrder::kSorted)
     std::sort(refs.begin(), refs.end(), [](const GroupRef& a, const GroupRef& b) {
       if (a.group->key_size != b.group->key_size) return a.group->key_size < b.group->key_size;
       const int first = std::memcmp(&a.group->key_first, &b.group->key_first, sizeof(Ray));

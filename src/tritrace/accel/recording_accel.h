@@ -38,10 +38,16 @@ struct RecordedRays {
   uint64_t coherent_rays = 0;
 };
 
+// How take() orders the groups: kSorted, by the coherent query that started each (the same on
+// any number of threads); kCallOrder, in the order they were recorded, which needs every query
+// made on one thread (a render on one thread, which takes its tiles in order).
+enum class GroupOrder { kSorted, kCallOrder };
+
 class RecordingAccel final : public Accel {
  public:
   // `inner` must outlive this.
-  explicit RecordingAccel(const Accel& inner) : inner_(inner) {}
+  explicit RecordingAccel(const Accel& inner, GroupOrder order = GroupOrder::kSorted)
+      : inner_(inner), order_(order) {}
 
   using Accel::intersect;
   using Accel::occluded;
@@ -54,15 +60,14 @@ class RecordingAccel final : public Accel {
   // buffers in call order, and starts a group at each coherent query (a tile's camera rays): the
   // incoherent batches until the next one belong to it, in call order, so that a replay keeps the
   // locality the renderer's tiles give (a tile's bounces follow one another through the same part
-  // of the tree). When one thread recorded, its groups stay in call order: a render on one thread
-  // takes its tiles in order, so that order is the render's own and deterministic. When several
-  // did, the groups are put in an order that does not depend on which thread traced which: by
-  // the coherent query that started them (its size, its first ray's bytes, a hash of all its
-  // rays), then by their first batches' rays; a deterministic render then records the same
-  // RecordedRays on any number of threads above one. The order matters to a replay's speed:
-  // on terrain:1m, Embree's single rays took 5% longer with sorted groups than in the tiles'
-  // order, and 20-25% longer with every batch sorted on its own (tritrace's: 2-5%).
-  // Not while queries are running.
+  // of the tree). With GroupOrder::kSorted the groups of all threads are put in an order that does
+  // not depend on which thread traced which: by the coherent query that started them (its size,
+  // its first ray's bytes, a hash of all its rays), then by their first batches' rays, so that a
+  // deterministic render records the same RecordedRays on any number of threads. With kCallOrder
+  // they stay in the one recording thread's order (std::logic_error if several threads recorded).
+  // The order matters to a replay's speed: on terrain:1m, Embree's single rays took 5-10% longer
+  // with sorted groups than in the tiles' order, and 20-35% longer with every batch sorted on its
+  // own (tritrace's: 0-5%; docs/PERFORMANCE.md). Not while queries are running.
   RecordedRays take();
 
  private:
@@ -82,6 +87,7 @@ class RecordingAccel final : public Accel {
   Buffer& buffer() const;  // the calling thread's
 
   const Accel& inner_;
+  GroupOrder order_;
   mutable std::mutex mutex_;
   mutable std::unordered_map<std::thread::id, std::unique_ptr<Buffer>> buffers_;
   mutable std::atomic<uint64_t> coherent_rays_{0};
