@@ -15,6 +15,7 @@
 
 #include "build_info.h"
 #include "flags/flag_values.h"
+#include "secondary_rays_bench.h"
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
@@ -166,6 +167,11 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
                 "path: render each frame with the denoiser's AOVs (albedo, normal, depth, "
                 "variance) and time the denoiser on it too (column 'denoise ms', JSON "
                 "denoise_ms_median); frame ms is then the render with AOVs");
+  sub->add_flag("--secondary-rays", args.secondary_rays,
+                "path, bdpt: record one frame's bounce and shadow rays (through the first "
+                "--accel; default bvh and embree-single) and trace exactly those rays again, in "
+                "the frame's batches, through each accel's single-ray queries: closest-hit and "
+                "any-hit Mrays/s, ratios to embree-single, answers checked against the frame's");
   sub->add_option("--json", args.json, "Also write the records as a JSON array to PATH")
       ->type_name("PATH");
   sub->add_flag("-q,--quiet", args.quiet, "Print only the table");
@@ -193,8 +199,22 @@ int run_bench(const BenchArgs& args) {
     scenes = path ? std::vector<std::string>{"cornell-area"}
                   : std::vector<std::string>{"cornell", "terrain:1m", "terrain:10m"};
   }
+  if (args.secondary_rays && !path) {
+    throw Error("--secondary-rays", "records the path tracer's rays; use --integrator path or bdpt",
+                ExitCode::kUsage);
+  }
+  if (args.secondary_rays && (args.denoise || !args.kernels.empty() || !args.bvh_builds.empty())) {
+    throw Error("--secondary-rays",
+                "traces through each accel's default kernel and SAH tree; --denoise, --kernel and "
+                "--bvh-build do not apply",
+                ExitCode::kUsage);
+  }
   std::vector<AccelKind> accels;
   for (const std::string& name : args.accels) accels.push_back(*parse_accel(name));
+  if (accels.empty() && args.secondary_rays) {
+    accels = {AccelKind::kBvh};
+    if (accel_available(AccelKind::kEmbreeSingle)) accels.push_back(AccelKind::kEmbreeSingle);
+  }
   if (accels.empty()) accels = available_accels();
   const auto side = [path](const std::string& given, int lab_default) {
     if (!given.empty()) return static_cast<int>(*parse_integer(given));
@@ -212,6 +232,25 @@ int run_bench(const BenchArgs& args) {
     if (std::find(chosen_kernels.begin(), chosen_kernels.end(), k) == chosen_kernels.end()) {
       chosen_kernels.push_back(k);
     }
+  }
+
+  if (args.secondary_rays) {
+    SecondaryRaysOptions options;
+    for (const std::string& name : scenes) options.sources.emplace_back(name, "");
+    for (const std::string& file : args.files) {
+      options.sources.emplace_back(std::filesystem::path(file).filename().string(), file);
+    }
+    options.accels = accels;
+    options.settings.width = std::to_string(width);
+    options.settings.height = std::to_string(height);
+    options.settings.threads = std::to_string(threads);
+    options.settings.integrator = std::string(integrator_name(spec.kind));
+    options.settings.spp = std::to_string(spec.spp);
+    options.threads = threads;
+    options.reps = reps;
+    options.json = args.json;
+    options.quiet = args.quiet;
+    return run_secondary_rays(options);
   }
 
   // The lab's table keeps its columns; path adds spp and paths per second.

@@ -28,6 +28,9 @@ struct BenchArgs {
   std::string json;                     // empty: no JSON file
   bool denoise = false;  // path: each frame's film keeps the denoiser's AOVs and is denoised
   bool quiet = false;
+  // path, bdpt: the frame's bounce and shadow rays recorded and traced again through each accel
+  // (secondary_rays_bench.h) instead of whole frames.
+  bool secondary_rays = false;
 };
 
 CLI::App* add_bench_command(CLI::App& app, BenchArgs& args);

@@ -827,6 +827,50 @@ TEST_F(CliTest, BenchTimesTheBidirectionalPathTracer) {
   }
 }
 
+// --secondary-rays: one frame's bounce and shadow rays recorded through bvh and traced again. The
+// counts come from the camera (pixels x spp camera rays, the rest recorded) and the recording
+// accel's replay must give its own answers back bit for bit.
+TEST_F(CliTest, BenchSecondaryRaysReplaysTheFramesRays) {
+  const RunResult r =
+      Run({"bench", "--integrator", "path", "--secondary-rays", "--width", "16", "--height", "16",
+           "--spp", "2", "--reps", "1", "--threads", "2", "--json", "s.json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.substr(0, r.out.find('\n')).find("closest"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("recorded through bvh: 512 camera (coherent)"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("NOT the frame's count"), std::string::npos) << r.out;
+  const nlohmann::json records = nlohmann::json::parse(ReadFile(work_ / "s.json"));
+  ASSERT_TRUE(records.is_array());
+#if TRITRACE_HAVE_EMBREE
+  ASSERT_EQ(records.size(), 2u);  // bvh and embree-single by default
+  EXPECT_EQ(records[1]["accel"], "embree-single");
+  EXPECT_DOUBLE_EQ(records[1]["closest_ratio_to_embree_single"].get<double>(), 1.0);
+  EXPECT_EQ(records[1]["closest_rays"], records[0]["closest_rays"]);
+  // Embree's own rounding may send a ray at an edge elsewhere, rarely.
+  EXPECT_LE(records[1]["closest_hit_or_miss_disagreements"].get<double>(),
+            0.01 * records[1]["closest_rays"].get<double>());
+#else
+  ASSERT_EQ(records.size(), 1u);
+#endif
+  const nlohmann::json& bvh = records[0];
+  EXPECT_EQ(bvh["accel"], "bvh");
+  EXPECT_EQ(bvh["recorded_with"], true);
+  EXPECT_EQ(bvh["spp"], 2);
+  EXPECT_EQ(bvh["threads"], 2);
+  EXPECT_GT(bvh["closest_rays"].get<int>(), 0);
+  EXPECT_GT(bvh["any_rays"].get<int>(), 0);
+  EXPECT_GT(bvh["closest_mrays_per_s"].get<double>(), 0.0);
+  EXPECT_EQ(bvh["closest_not_identical"], 0);
+  EXPECT_EQ(bvh["closest_hit_or_miss_disagreements"], 0);
+  EXPECT_EQ(bvh["any_disagreements"], 0);
+
+  ExpectErrorLine(Run({"bench", "--secondary-rays"}), 2, "--secondary-rays",
+                  "use --integrator path or bdpt");
+  ExpectErrorLine(
+      Run({"bench", "--integrator", "path", "--secondary-rays", "--kernel", "moller-trumbore"}), 2,
+      "--secondary-rays", "do not apply");
+}
+
 // The example scene with a spot light and a sun, and a glTF sun, render with bdpt (its light
 // subpaths start on them), through a lens too.
 TEST_F(CliTest, BdptRendersSpotAndDirectionalLightsThroughALens) {

@@ -303,76 +303,6 @@ inline constexpr std::array<uint64_t, 256> kCompress = [] {
   return table;
 }();
 
-// The stages of a bitonic network sorting eight lanes in descending order: for k = 2, 4, 8 and
-// j = k / 2 down to 1, lane i meets lane i ^ j and keeps the greater key when
-// (i < i ^ j) == ((i & k) == 0).
-struct SortNetwork {
-  alignas(32) int32_t partner[6][8];
-  alignas(32) int32_t take_max[6][8];
-};
-inline constexpr SortNetwork kSortNetwork = [] {
-  SortNetwork net{};
-  int stage = 0;
-  for (int k = 2; k <= 8; k *= 2) {
-    for (int j = k / 2; j >= 1; j /= 2, ++stage) {
-      for (int i = 0; i < 8; ++i) {
-        net.partner[stage][i] = i ^ j;
-        net.take_max[stage][i] = (i < (i ^ j)) == ((i & k) == 0) ? -1 : 0;
-      }
-    }
-  }
-  return net;
-}();
-
-// One compare-exchange stage of a bitonic sorting network on eight (key, ref) lanes: lane i meets
-// lane partner[i] and keeps the greater key where take_max[i] is set, the smaller otherwise (its
-// own on a tie, so the pair keeps both refs).
-[[gnu::always_inline]] inline void sort_stage(__m256& keys, __m256i& refs, __m256i partner,
-                                              __m256 take_max) {
-  const __m256 pk = _mm256_permutevar8x32_ps(keys, partner);
-  const __m256i pr = _mm256_permutevar8x32_epi32(refs, partner);
-  const __m256 take = _mm256_or_ps(_mm256_and_ps(take_max, _mm256_cmp_ps(pk, keys, _CMP_GT_OQ)),
-                                   _mm256_andnot_ps(take_max, _mm256_cmp_ps(pk, keys, _CMP_LT_OQ)));
-  keys = _mm256_blendv_ps(keys, pk, take);
-  refs = _mm256_castps_si256(
-      _mm256_blendv_ps(_mm256_castsi256_ps(refs), _mm256_castsi256_ps(pr), take));
-}
-
-// Pushes node's children named by mask onto the stack at top with their entry distances, the
-// farthest deepest and the nearest at top[n - 1]; returns n. Branch-free: the children are packed
-// into the low lanes (kCompress), the others get -inf, and a bitonic network (Batcher 1968) sorts
-// the eight lanes by distance, descending; both halves are stored whole (the stack has room).
-// Equal distances may come out in another order than push_nearest_last_ranked's; the closest hit
-// does not depend on the order (offer keeps the least (t, prim) whichever comes first).
-[[gnu::always_inline]] inline int push_sorted(const WideNode& node, uint32_t mask, __m256 tnear,
-                                              StackEntry* top) {
-  const int n = std::popcount(mask);
-  const __m256i order =
-      _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<int64_t>(kCompress[mask])));
-  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  const __m256 live = _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(n), lane));
-  __m256 keys = _mm256_blendv_ps(_mm256_set1_ps(-std::numeric_limits<float>::infinity()),
-                                 _mm256_permutevar8x32_ps(tnear, order), live);
-  __m256i refs = _mm256_permutevar8x32_epi32(
-      _mm256_load_si256(reinterpret_cast<const __m256i*>(node.child)), order);
-  // Stages (k, j) of the network for a descending sort: lane i meets i ^ j and keeps the max when
-  // (i < i ^ j) == ((i & k) == 0).
-  for (int stage = 0; stage < 6; ++stage) {
-    sort_stage(keys, refs,
-               _mm256_load_si256(reinterpret_cast<const __m256i*>(kSortNetwork.partner[stage])),
-               _mm256_castsi256_ps(_mm256_load_si256(
-                   reinterpret_cast<const __m256i*>(kSortNetwork.take_max[stage]))));
-  }
-  // (ref, key) pairs in lane order: unpack works within 128-bit halves, so the halves are swapped
-  // back into place.
-  const __m256 r = _mm256_castsi256_ps(refs);
-  const __m256 lo = _mm256_unpacklo_ps(r, keys), hi = _mm256_unpackhi_ps(r, keys);
-  static_assert(sizeof(StackEntry) == 8);
-  _mm256_storeu_ps(reinterpret_cast<float*>(top), _mm256_permute2f128_ps(lo, hi, 0x20));
-  _mm256_storeu_ps(reinterpret_cast<float*>(top + 4), _mm256_permute2f128_ps(lo, hi, 0x31));
-  return n;
-}
-
 // One slot of the interleaved closest-hit traversal: a ray's state between its steps.
 struct ClosestRay {
   WideBoxSetup setup;
@@ -409,11 +339,20 @@ template <int Kz>
     const uint32_t mask =
         intersect_boxes(node, s.setup, _mm256_set1_ps(std::min(s.best.t, s.tmax)), tnear);
     if (mask) {
-      // Every hit child stacked at once, sorted by entry distance, farthest deepest, without a
-      // branch on how many there are (see push_sorted); the nearest is traversed next.
+      // One hit child is traversed next without touching the stack. Several are stacked in their
+      // places by entry distance, farthest deepest (push_nearest_last_ranked), and the nearest is
+      // traversed next. The bitonic network that stacked them without a branch on how many there
+      // are (a bitonic network, a13075e) won 4% on random rays but lost 5% (terrain:1m) to 12%
+      // (terrain:10m) on the path tracer's bounce rays in the tiles' order, where a single hit
+      // child is common and the branch predictable (docs/PERFORMANCE.md, issue 27).
+      if (std::has_single_bit(mask)) {
+        s.ref = node.child[std::countr_zero(mask)];
+        prefetch(bases, s.ref);
+        return true;
+      }
       assert(s.sp + kWidth <= kStackFloor + kStackSize + kWidth);
       StackEntry* top = s.stack + s.sp;
-      const int n = push_sorted(node, mask, _mm256_load_ps(tnear), top);
+      const int n = push_nearest_last_ranked(node, mask, tnear, top);
       for (int k = 1; k <= kPrefetchDepth; ++k) prefetch(bases, top[n - k].ref);
       s.sp += n - 1;
       s.ref = top[n - 1].ref;
