@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,24 @@ Scene example(const char* file, int side) {
   return load_scene(std::string(TRITRACE_SOURCE_DIR) + "/scenes/" + file, size).scene;
 }
 
+// Renders into `film` in passes of the given sample counts, continuing one adaptive state (as
+// --time-limit renders), each pass on `threads` threads.
+void render_in_passes(const Scene& scene, const Accel& accel, const Integrator& bdpt, Film& film,
+                      const RenderOptions& base, unsigned threads,
+                      std::initializer_list<uint32_t> counts) {
+  AdaptiveState state;
+  uint32_t taken = 0;
+  for (uint32_t n : counts) {
+    RenderOptions pass = base;
+    pass.threads = threads;
+    pass.first_sample = taken;
+    pass.spp = n;
+    pass.adaptive_state = &state;
+    render_to_film(scene, accel, bdpt, film, pass);
+    taken += n;
+  }
+}
+
 // The same samples give the same bits: 1 and 7 threads, tile sizes 16 and 5 (adaptive sampling
 // renders 16 x 16 tiles whatever it says), render() and a film, and a film continued in passes of
 // 8, 24, 40 and 56 samples with the adaptive state (as --time-limit renders). The spp AOV shows
@@ -56,17 +75,7 @@ TEST(BdptAdaptive, SameBitsForOneAndSevenThreadsTilesAndPassesAndTheSppAovShowsT
   render_to_film(scene, accel, bdpt, one, seven);
   EXPECT_TRUE(same_bits(want, one.resolve()));
   Film passes(24, 20, AovSet{.spp = true});
-  AdaptiveState state;
-  uint32_t taken = 0;
-  for (uint32_t n : {8u, 24u, 40u, 56u}) {
-    RenderOptions pass = base;
-    pass.threads = 3;
-    pass.first_sample = taken;
-    pass.spp = n;
-    pass.adaptive_state = &state;
-    render_to_film(scene, accel, bdpt, passes, pass);
-    taken += n;
-  }
+  render_in_passes(scene, accel, bdpt, passes, base, 3, {8u, 24u, 40u, 56u});
   EXPECT_TRUE(same_bits(want, passes.resolve()));
   const Image spp = one.resolve_spp();
   EXPECT_TRUE(same_bits(spp, passes.resolve_spp()));
@@ -226,17 +235,7 @@ TEST(BdptAdaptive, LightPathShareWeightsAndBitsWithCountRatios) {
   three.tile_size = 5;
   EXPECT_TRUE(same_bits(want, render(scene, accel, bdpt, three)));
   Film passes(20, 18);
-  AdaptiveState state;
-  uint32_t taken = 0;
-  for (uint32_t n : {40u, 88u}) {
-    RenderOptions pass = base;
-    pass.threads = 2;
-    pass.first_sample = taken;
-    pass.spp = n;
-    pass.adaptive_state = &state;
-    render_to_film(scene, accel, bdpt, passes, pass);
-    taken += n;
-  }
+  render_in_passes(scene, accel, bdpt, passes, base, 2, {40u, 88u});
   EXPECT_TRUE(same_bits(want, passes.resolve()));
 }
 

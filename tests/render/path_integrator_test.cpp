@@ -540,6 +540,16 @@ Scene lanes_scene() {
   return std::move(loaded.scene);
 }
 
+// The same scene with an unused conductor among its materials: the path tracer then takes its
+// general scalar code, the lanes' reference.
+Scene general_version(const Scene& plain) {
+  Scene general = plain;
+  Material unused;
+  unused.type = MaterialType::kConductor;
+  general.materials.push_back(unused);
+  return general;
+}
+
 TEST(PathRender, DiffuseLanesGiveTheGeneralPathsImageUnderTiltedTwoSidedLights) {
   // Diffuse scenes lit by emissive triangles alone shade their vertices eight at a time in SIMD
   // lanes (path_integrator.cpp, lanes::), meant to be the scalar code's numbers exactly. Here with
@@ -548,10 +558,7 @@ TEST(PathRender, DiffuseLanesGiveTheGeneralPathsImageUnderTiltedTwoSidedLights) 
   // general version (an unused conductor sends the scene there) is the reference, to the bit, at
   // depths that stop before, at and long after Russian roulette starts.
   const Scene plain = lanes_scene();
-  Scene general = plain;
-  Material unused;
-  unused.type = MaterialType::kConductor;
-  general.materials.push_back(unused);
+  const Scene general = general_version(plain);
   const BvhAccel accel(plain.mesh, kDefaultKernel);
   for (int depth : {1, 3, 1024}) {
     const PathSettings settings{.max_depth = depth};
@@ -569,10 +576,7 @@ TEST(PathRender, DiffuseLanesGiveTheGeneralPathsImageUnderTiltedTwoSidedLights) 
 // its first hits', written before the lanes run).
 TEST(PathRender, DiffuseLanesWithAovsGiveTheGeneralPathsImageAndAovs) {
   const Scene plain = lanes_scene();
-  Scene general = plain;
-  Material unused;
-  unused.type = MaterialType::kConductor;
-  general.materials.push_back(unused);
+  const Scene general = general_version(plain);
   const BvhAccel accel(plain.mesh, kDefaultKernel);
   const AovSet aovs{.albedo = true, .normal = true, .depth = true};
   Film want(28, 20, aovs), got(28, 20, aovs), without(28, 20);
