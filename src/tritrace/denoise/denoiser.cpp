@@ -111,7 +111,7 @@ void check_size(const Image& image, const Image& colour, const char* name) {
   }
 }
 
-void check_finite(const Image& image, const char* name) {
+void check_image_finite(const Image& image, const char* name) {
   for (int y = 0; y < image.height(); ++y) {
     for (int x = 0; x < image.width(); ++x) {
       const glm::vec3& v = image.at(x, y);
@@ -509,11 +509,11 @@ Image denoise(const Image& colour, const Image& variance, const DenoiseFeatures&
   check_size(features.albedo, colour, "the albedo");
   check_size(features.normal, colour, "the normal");
   check_size(features.depth, colour, "the depth");
-  check_finite(colour, "the colour");
-  check_finite(variance, "the variance");
-  check_finite(features.albedo, "the albedo");
-  check_finite(features.normal, "the normal");
-  check_finite(features.depth, "the depth");
+  check_image_finite(colour, "the colour");
+  check_image_finite(variance, "the variance");
+  check_image_finite(features.albedo, "the albedo");
+  check_image_finite(features.normal, "the normal");
+  check_image_finite(features.depth, "the depth");
   const int w = colour.width(), h = colour.height();
   Image out(w, h);
   if (w == 0 || h == 0) return out;
