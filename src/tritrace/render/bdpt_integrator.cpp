@@ -361,8 +361,10 @@ bool traces_light_subpath(const Sampler& sampler, float light_paths) {
 
 // Samples whose subpaths are walked side by side: each bounce's rays of all of them are traced in
 // one query (packets on small trees, interleaved traversal on large ones), as the path tracer
-// traces its batch's bounces, instead of one ray per query.
-inline constexpr size_t kWavefront = 64;
+// traces its batch's bounces, instead of one ray per query. Half a batch (kMaxBatch): larger
+// queries share more of the traversal than 64 did, and the subpaths (about 2.5 MB per thread at
+// 16 vertices each) stay within a few megabytes.
+inline constexpr size_t kWavefront = 128;
 
 // Per thread and per sample of a wavefront: the two subpaths. They grow (doubling) as long
 // subpaths need, up to the depth limit, rather than to it at once: --max-depth 65536 would
