@@ -74,6 +74,10 @@ struct Vertex {
   SurfaceTriangle tri{};
   SmoothCorners corners{};
   Frame frame{};
+  // A diffuse material's surface (untextured parameters): its Bsdf is one Lambert lobe of colour
+  // `albedo`, evaluated, sampled and weighed by the bsdf_* functions below without `bsdf`, which
+  // is then not built.
+  bool lambert = false;
   Bsdf bsdf{Material{}};
   const Material* material = nullptr;
   const SpotLight* spot = nullptr;  // a spot light's vertex: its cone (point_light is set too)
@@ -146,6 +150,46 @@ glm::vec3 sample_spot_direction(const SpotLight& l, float u_region, glm::vec2 u)
       .to_world(glm::vec3(sin_theta * std::cos(phi), sin_theta * std::sin(phi), c));
 }
 
+// Vertex x's Bsdf (Bsdf::eval, pdf and sample). A Lambert vertex's is written out here, operation
+// for operation as Bsdf and its one lobe compute it (bsdf.cpp: the side flip, the lobe's weight 1,
+// lobe_eval, lobe_pdf and lobe_sample of kLambert without a coat), so the numbers are the same
+// bits without the Bsdf's construction, its lobe loops, its choice array and its calls (a tenth of
+// bdpt's CPU on cornell-area at --light-paths 0.125; the path tracer's diffuse vertices skip them
+// likewise).
+glm::vec3 bsdf_eval(const Vertex& x, glm::vec3 wo, glm::vec3 wi) {
+  if (!x.lambert) return x.bsdf.eval(wo, wi);
+  if (wo.z < 0.0f) wo.z = -wo.z, wi.z = -wi.z;
+  glm::vec3 f(0.0f);
+  if (wo.z <= 0.0f || wi.z <= 0.0f) return f;
+  f += 1.0f * (x.albedo * kInvPi);
+  return f;
+}
+
+float bsdf_pdf(const Vertex& x, glm::vec3 wo, glm::vec3 wi) {
+  if (!x.lambert) return x.bsdf.pdf(wo, wi);
+  if (wo.z < 0.0f) wo.z = -wo.z, wi.z = -wi.z;
+  float pdf = 0.0f;
+  pdf += 1.0f * (wo.z <= 0.0f ? 0.0f : cosine_hemisphere_pdf(wi.z));
+  return pdf;
+}
+
+BsdfSample bsdf_sample(const Vertex& x, glm::vec3 wo, float u_lobe, glm::vec2 u) {
+  if (!x.lambert) return x.bsdf.sample(wo, u_lobe, u);
+  const bool below = wo.z < 0.0f;
+  if (below) wo.z = -wo.z;
+  if (wo.z <= 0.0f) return {};
+  BsdfSample s;
+  s.wi = sample_cosine_hemisphere(u);
+  s.pdf = cosine_hemisphere_pdf(s.wi.z);
+  if (s.pdf > 0.0f) {
+    s.weight = (s.wi.z <= 0.0f ? glm::vec3(0.0f) : x.albedo * kInvPi) * (s.wi.z / s.pdf);
+  }
+  if (!s.valid()) return {};
+  s.weight *= 1.0f;
+  if (below) s.wi.z = -s.wi.z;
+  return s;
+}
+
 // Whether direction w (world, leaving the vertex) lies on the same side of the shading and the
 // geometric surface: where it does not, the vertex carries nothing that way (docs/BDPT.md).
 bool agrees(const Vertex& x, glm::vec3 w) {
@@ -158,7 +202,7 @@ glm::vec3 surface_f(const Vertex& x, glm::vec3 w_cam, glm::vec3 w_light) {
   if (!agrees(x, w_cam) || !agrees(x, w_light)) return glm::vec3(0.0f);
   const float cos_g = std::abs(glm::dot(x.ng, w_light));
   if (!(cos_g > 0.0f)) return glm::vec3(0.0f);
-  const glm::vec3 f = x.bsdf.eval(x.frame.to_local(w_cam), x.frame.to_local(w_light));
+  const glm::vec3 f = bsdf_eval(x, x.frame.to_local(w_cam), x.frame.to_local(w_light));
   return f * (std::abs(glm::dot(x.ns, w_light)) / cos_g);
 }
 
@@ -166,7 +210,7 @@ glm::vec3 surface_f(const Vertex& x, glm::vec3 w_cam, glm::vec3 w_light) {
 // subpaths sample with the direction they arrived from as the Bsdf's wo).
 float surface_pdf(const Vertex& x, glm::vec3 w_given, glm::vec3 w_sampled) {
   if (!agrees(x, w_given) || !agrees(x, w_sampled)) return 0.0f;
-  return x.bsdf.pdf(x.frame.to_local(w_given), x.frame.to_local(w_sampled));
+  return bsdf_pdf(x, x.frame.to_local(w_given), x.frame.to_local(w_sampled));
 }
 
 // The solid-angle density with which light vertex (or emitting surface) x emits towards w.
@@ -623,13 +667,19 @@ bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
   }
   build_in_place(x.frame, [&] { return Frame::from_normal(x.ns); });
   const glm::vec3 albedo = surface_albedo(scene_, *x.material, hit.prim, hit.u, hit.v);
-  build_in_place(x.bsdf, [&] {
-    return x.material->has_parameter_textures()
-               ? Bsdf(material_at(scene_, *x.material, hit.prim, hit.u, hit.v), albedo)
-               : Bsdf(*x.material, albedo);
-  });
   x.albedo = albedo;
-  x.connectible = !x.bsdf.all_delta();
+  // Bsdf(material, albedo) of a diffuse material is one Lambert lobe (bsdf_eval above).
+  x.lambert = x.material->is_diffuse() && !x.material->has_parameter_textures();
+  if (x.lambert) {
+    x.connectible = true;
+  } else {
+    build_in_place(x.bsdf, [&] {
+      return x.material->has_parameter_textures()
+                 ? Bsdf(material_at(scene_, *x.material, hit.prim, hit.u, hit.v), albedo)
+                 : Bsdf(*x.material, albedo);
+    });
+    x.connectible = !x.bsdf.all_delta();
+  }
   x.specular = !x.material->is_diffuse() && !x.connectible;
   x.two_sided = x.material->two_sided;
   x.emits = x.material->emits();
@@ -687,7 +737,7 @@ void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& h
   const glm::vec3 w_prev = x.wo;
   if (!agrees(x, w_prev)) return;
   const glm::vec3 wo_local = x.frame.to_local(w_prev);
-  const BsdfSample bs = x.bsdf.sample(wo_local, u_choice.x, u_dir);
+  const BsdfSample bs = bsdf_sample(x, wo_local, u_choice.x, u_dir);
   if (!bs.valid()) return;
   const glm::vec3 w_next = x.frame.to_world(bs.wi);
   if (!agrees(x, w_next)) return;
@@ -703,12 +753,12 @@ void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& h
       // A delta refraction's weight carries radiance's 1 / eta^2; importance does not.
       factor = bs.weight * (shading / bs.radiance_scale);
     } else {
-      factor = x.bsdf.eval(bs.wi, wo_local) * (cos_s_next * shading / bs.pdf);
+      factor = bsdf_eval(x, bs.wi, wo_local) * (cos_s_next * shading / bs.pdf);
     }
   }
   x.delta = bs.delta;
   x.aov_tint = bs.weight * (1.0f / bs.radiance_scale);
-  const float pdf_rev_dir = bs.delta ? 0.0f : x.bsdf.pdf(bs.wi, wo_local);
+  const float pdf_rev_dir = bs.delta ? 0.0f : bsdf_pdf(x, bs.wi, wo_local);
   prev.pdf_rev = to_area(pdf_rev_dir, x, prev);
   w.beta *= factor;
   w.rr_beta *= factor;
