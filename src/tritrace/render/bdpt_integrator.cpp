@@ -1506,7 +1506,9 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
   // The renderer always gives an integrator that splats its film's light image
   // (SampleOutput::splats); without one the light image is missing, never written out of bounds.
   assert(!settings.light_tracing || splats_ != nullptr);
-  if (settings.light_tracing && splats_ != nullptr && !(only && settings.only_t != 1)) {
+  // A light subpath of one vertex makes no splat (s >= 2): its sample draws no numbers for them
+  // (the last a sample draws; each sample's numbers start afresh, so nothing else moves).
+  if (settings.light_tracing && splats_ != nullptr && !(only && settings.only_t != 1) && nl >= 2) {
     // One number per sample for the splats' stochastic rounding (SplatBuffer::add), drawn after
     // every dimension the subpaths use.
     current_->u_round = sampler.get_1d();
