@@ -74,6 +74,10 @@ struct Vertex {
   SurfaceTriangle tri{};
   SmoothCorners corners{};
   Frame frame{};
+  // A diffuse material's surface (untextured parameters): its Bsdf is one Lambert lobe of colour
+  // `albedo`, evaluated, sampled and weighed by the bsdf_* functions below without `bsdf`, which
+  // is then not built.
+  bool lambert = false;
   Bsdf bsdf{Material{}};
   const Material* material = nullptr;
   const SpotLight* spot = nullptr;  // a spot light's vertex: its cone (point_light is set too)
@@ -146,6 +150,53 @@ glm::vec3 sample_spot_direction(const SpotLight& l, float u_region, glm::vec2 u)
       .to_world(glm::vec3(sin_theta * std::cos(phi), sin_theta * std::sin(phi), c));
 }
 
+// Vertex x's Bsdf (Bsdf::eval, pdf and sample). A Lambert vertex's is written out here, operation
+// for operation as Bsdf and its one lobe compute it (bsdf.cpp: the side flip, the lobe's weight 1,
+// lobe_eval, lobe_pdf and lobe_sample of kLambert without a coat), so the numbers are the same
+// bits without the Bsdf's construction, its lobe loops, its choice array and its calls (a tenth of
+// bdpt's CPU on cornell-area at --light-paths 0.125; the path tracer's diffuse vertices skip them
+// likewise).
+// A Lambert vertex's value and density read only the local directions' z (their cosines).
+glm::vec3 lambert_eval(const Vertex& x, float wo_z, float wi_z) {
+  if (wo_z < 0.0f) wo_z = -wo_z, wi_z = -wi_z;
+  glm::vec3 f(0.0f);
+  if (wo_z <= 0.0f || wi_z <= 0.0f) return f;
+  f += 1.0f * (x.albedo * kInvPi);
+  return f;
+}
+
+float lambert_pdf(float wo_z, float wi_z) {
+  if (wo_z < 0.0f) wo_z = -wo_z, wi_z = -wi_z;
+  float pdf = 0.0f;
+  pdf += 1.0f * (wo_z <= 0.0f ? 0.0f : cosine_hemisphere_pdf(wi_z));
+  return pdf;
+}
+
+glm::vec3 bsdf_eval(const Vertex& x, glm::vec3 wo, glm::vec3 wi) {
+  return x.lambert ? lambert_eval(x, wo.z, wi.z) : x.bsdf.eval(wo, wi);
+}
+
+float bsdf_pdf(const Vertex& x, glm::vec3 wo, glm::vec3 wi) {
+  return x.lambert ? lambert_pdf(wo.z, wi.z) : x.bsdf.pdf(wo, wi);
+}
+
+BsdfSample bsdf_sample(const Vertex& x, glm::vec3 wo, float u_lobe, glm::vec2 u) {
+  if (!x.lambert) return x.bsdf.sample(wo, u_lobe, u);
+  const bool below = wo.z < 0.0f;
+  if (below) wo.z = -wo.z;
+  if (wo.z <= 0.0f) return {};
+  BsdfSample s;
+  s.wi = sample_cosine_hemisphere(u);
+  s.pdf = cosine_hemisphere_pdf(s.wi.z);
+  if (s.pdf > 0.0f) {
+    s.weight = (s.wi.z <= 0.0f ? glm::vec3(0.0f) : x.albedo * kInvPi) * (s.wi.z / s.pdf);
+  }
+  if (!s.valid()) return {};
+  s.weight *= 1.0f;
+  if (below) s.wi.z = -s.wi.z;
+  return s;
+}
+
 // Whether direction w (world, leaving the vertex) lies on the same side of the shading and the
 // geometric surface: where it does not, the vertex carries nothing that way (docs/BDPT.md).
 bool agrees(const Vertex& x, glm::vec3 w) {
@@ -158,7 +209,12 @@ glm::vec3 surface_f(const Vertex& x, glm::vec3 w_cam, glm::vec3 w_light) {
   if (!agrees(x, w_cam) || !agrees(x, w_light)) return glm::vec3(0.0f);
   const float cos_g = std::abs(glm::dot(x.ng, w_light));
   if (!(cos_g > 0.0f)) return glm::vec3(0.0f);
-  const glm::vec3 f = x.bsdf.eval(x.frame.to_local(w_cam), x.frame.to_local(w_light));
+  // (Frame::to_local's z is the dot with the frame's z.)
+  const glm::vec3 f =
+      x.lambert ? lambert_eval(x, glm::dot(w_cam, x.frame.z), glm::dot(w_light, x.frame.z))
+                : x.bsdf.eval(x.frame.to_local(w_cam), x.frame.to_local(w_light));
+  // A flat vertex's ns is its ng: the factor is exactly 1.
+  if (!x.smooth) return f;
   return f * (std::abs(glm::dot(x.ns, w_light)) / cos_g);
 }
 
@@ -166,6 +222,7 @@ glm::vec3 surface_f(const Vertex& x, glm::vec3 w_cam, glm::vec3 w_light) {
 // subpaths sample with the direction they arrived from as the Bsdf's wo).
 float surface_pdf(const Vertex& x, glm::vec3 w_given, glm::vec3 w_sampled) {
   if (!agrees(x, w_given) || !agrees(x, w_sampled)) return 0.0f;
+  if (x.lambert) return lambert_pdf(glm::dot(w_given, x.frame.z), glm::dot(w_sampled, x.frame.z));
   return x.bsdf.pdf(x.frame.to_local(w_given), x.frame.to_local(w_sampled));
 }
 
@@ -361,8 +418,10 @@ bool traces_light_subpath(const Sampler& sampler, float light_paths) {
 
 // Samples whose subpaths are walked side by side: each bounce's rays of all of them are traced in
 // one query (packets on small trees, interleaved traversal on large ones), as the path tracer
-// traces its batch's bounces, instead of one ray per query.
-inline constexpr size_t kWavefront = 64;
+// traces its batch's bounces, instead of one ray per query. Half a batch (kMaxBatch): larger
+// queries share more of the traversal than 64 did, and the subpaths (about 2.5 MB per thread at
+// 16 vertices each) stay within a few megabytes.
+inline constexpr size_t kWavefront = 128;
 
 // Per thread and per sample of a wavefront: the two subpaths. They grow (doubling) as long
 // subpaths need, up to the depth limit, rather than to it at once: --max-depth 65536 would
@@ -474,7 +533,7 @@ class BdptTracer {
   // Queues connection (s, t) with its unweighted contribution (t = 1: onto pixel (px, py)) and
   // its shadow ray, if it needs one; flushes the queue when full.
   void queue(int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray, int px = 0,
-             int py = 0, float count_ratio = 1.0f);
+             int py = 0, float count_ratio = 1.0f, glm::vec3 dir = glm::vec3(0.0f));
   // Traces the queued shadow rays in one batch query and adds the unblocked connections, weighted,
   // in the order they were queued (the sums are those of one connection at a time, bit for bit).
   void flush();
@@ -496,7 +555,9 @@ class BdptTracer {
   }
   // The weight of a queued connection: mis_weight, with the camera vertex moved to the lens point
   // of light tracing's connection to an orthographic camera with a lens; `ratio` as mis_weight's.
-  float connection_weight(int s, int t, float ratio);
+  // `dir`: for t >= 2 and s >= 1 the connection's direction from camera vertex t - 1 towards light
+  // vertex s - 1 as connect computed it (direction()'s value, bit for bit), or null.
+  float connection_weight(int s, int t, float ratio, const glm::vec3* dir = nullptr);
   // The MIS weights' partial sums (Vertex::mis_sum) along both subpaths, once per sample.
   void prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) const;
   // The weight of strategy (s, t): O(1) from the partial sums (with the settings' weight_check,
@@ -504,9 +565,10 @@ class BdptTracer {
   // `ratio` is the light-tracing count ratio (count_ratio below) of the path's pixel: the splat's
   // pixel for t = 1, the sample's own otherwise (where the recursion has it already, in the
   // camera's density at camera vertex 1).
-  float mis_weight(Vertex* light, Vertex* camera, int s, int t, float ratio) const;
-  float mis_weight_recursive(const Vertex* light, const Vertex* camera, int s, int t,
-                             float ratio) const;
+  float mis_weight(Vertex* light, Vertex* camera, int s, int t, float ratio,
+                   const glm::vec3* dir = nullptr) const;
+  float mis_weight_recursive(const Vertex* light, const Vertex* camera, int s, int t, float ratio,
+                             const glm::vec3* dir = nullptr) const;
   // The ratio walk over the whole path that the recursion replaced: the tests' oracle. It applies
   // the count ratio as a factor of light tracing's strategies (not through the densities).
   float mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, float ratio) const;
@@ -562,6 +624,7 @@ class BdptTracer {
     int px = 0, py = 0;
     float count_ratio = 1.0f;  // t = 1: the splat's pixel's (SplatPass::count_ratio)
     uint32_t sample = 0;       // the wavefront sample's index
+    glm::vec3 dir{0.0f};       // t >= 2, s >= 1: the connection's direction (connection_weight)
   };
   static constexpr int kMaxPending = 256;
   std::array<Pending, kMaxPending> pending_{};
@@ -570,7 +633,8 @@ class BdptTracer {
   // The MIS weight of a queued connection, with its pixel's count ratio.
   float weight_of(const Pending& p) {
     return connection_weight(
-        p.s, p.t, p.t == 1 ? p.count_ratio * it_.settings_.mis_count_scale : pixel_ratio_);
+        p.s, p.t, p.t == 1 ? p.count_ratio * it_.settings_.mis_count_scale : pixel_ratio_,
+        p.t >= 2 && p.s >= 1 ? &p.dir : nullptr);
   }
   int pending_count_ = 0;
   int ray_count_ = 0;
@@ -621,13 +685,19 @@ bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
   }
   build_in_place(x.frame, [&] { return Frame::from_normal(x.ns); });
   const glm::vec3 albedo = surface_albedo(scene_, *x.material, hit.prim, hit.u, hit.v);
-  build_in_place(x.bsdf, [&] {
-    return x.material->has_parameter_textures()
-               ? Bsdf(material_at(scene_, *x.material, hit.prim, hit.u, hit.v), albedo)
-               : Bsdf(*x.material, albedo);
-  });
   x.albedo = albedo;
-  x.connectible = !x.bsdf.all_delta();
+  // Bsdf(material, albedo) of a diffuse material is one Lambert lobe (bsdf_eval above).
+  x.lambert = x.material->is_diffuse() && !x.material->has_parameter_textures();
+  if (x.lambert) {
+    x.connectible = true;
+  } else {
+    build_in_place(x.bsdf, [&] {
+      return x.material->has_parameter_textures()
+                 ? Bsdf(material_at(scene_, *x.material, hit.prim, hit.u, hit.v), albedo)
+                 : Bsdf(*x.material, albedo);
+    });
+    x.connectible = !x.bsdf.all_delta();
+  }
   x.specular = !x.material->is_diffuse() && !x.connectible;
   x.two_sided = x.material->two_sided;
   x.emits = x.material->emits();
@@ -685,7 +755,7 @@ void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& h
   const glm::vec3 w_prev = x.wo;
   if (!agrees(x, w_prev)) return;
   const glm::vec3 wo_local = x.frame.to_local(w_prev);
-  const BsdfSample bs = x.bsdf.sample(wo_local, u_choice.x, u_dir);
+  const BsdfSample bs = bsdf_sample(x, wo_local, u_choice.x, u_dir);
   if (!bs.valid()) return;
   const glm::vec3 w_next = x.frame.to_world(bs.wi);
   if (!agrees(x, w_next)) return;
@@ -701,12 +771,12 @@ void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& h
       // A delta refraction's weight carries radiance's 1 / eta^2; importance does not.
       factor = bs.weight * (shading / bs.radiance_scale);
     } else {
-      factor = x.bsdf.eval(bs.wi, wo_local) * (cos_s_next * shading / bs.pdf);
+      factor = bsdf_eval(x, bs.wi, wo_local) * (cos_s_next * shading / bs.pdf);
     }
   }
   x.delta = bs.delta;
   x.aov_tint = bs.weight * (1.0f / bs.radiance_scale);
-  const float pdf_rev_dir = bs.delta ? 0.0f : x.bsdf.pdf(bs.wi, wo_local);
+  const float pdf_rev_dir = bs.delta ? 0.0f : bsdf_pdf(x, bs.wi, wo_local);
   prev.pdf_rev = to_area(pdf_rev_dir, x, prev);
   w.beta *= factor;
   w.rr_beta *= factor;
@@ -955,7 +1025,7 @@ bool BdptTracer::camera_shadow_ray(const Vertex& l, glm::vec3 eye, Ray& r) const
 }
 
 void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray, int px,
-                       int py, float count_ratio) {
+                       int py, float count_ratio, glm::vec3 dir) {
   if (pending_count_ == kMaxPending) {
     // flush selects the samples it weighs: the caller's is selected again after it.
     const size_t caller = selected_;
@@ -969,6 +1039,7 @@ void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const
   p.px = px;
   p.py = py;
   p.count_ratio = count_ratio;
+  p.dir = dir;
   p.sample = static_cast<uint32_t>(current_ - state_.data());
   p.ray = -1;
   if (has_ray) {
@@ -1126,7 +1197,7 @@ void BdptTracer::prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) 
 }
 
 float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera, int s, int t,
-                                       float ratio) const {
+                                       float ratio, const glm::vec3* dir) const {
   if (s + t == 2) return 1.0f;  // an emitter seen by the camera: (1, 1) is not a strategy here
   const Vertex& pt = camera[t - 1];
   const Vertex* qs = s > 0 ? &light[s - 1] : nullptr;
@@ -1145,7 +1216,7 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
     const float f = it_.settings_.light_paths;
     if (s > 0) {
       // pt is a surface vertex (connectible); qs a surface, light or environment vertex.
-      const glm::vec3 w = direction(pt, *qs);
+      const glm::vec3 w = dir != nullptr ? *dir : direction(pt, *qs);
       const glm::vec3 w_pt_minus = direction(pt, pt_minus);
       const glm::vec3 w_qs_minus =
           qs_minus != nullptr ? direction(*qs, *qs_minus) : glm::vec3(0.0f);
@@ -1191,8 +1262,9 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
   return 1.0f / (1.0f + sum);
 }
 
-float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t, float ratio) const {
-  const float w = mis_weight_recursive(light, camera, s, t, ratio);
+float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t, float ratio,
+                             const glm::vec3* dir) const {
+  const float w = mis_weight_recursive(light, camera, s, t, ratio, dir);
   if (BdptSettings::WeightCheck* check = it_.settings_.weight_check) {
     const float walked = mis_weight_walk(light, camera, s, t, ratio);
     // A NaN from either, but not both, is a difference that no tolerance passes.
@@ -1230,8 +1302,10 @@ void BdptTracer::select(size_t k) {
   pixel_ratio_ = current_->pixel_ratio;
 }
 
-float BdptTracer::connection_weight(int s, int t, float ratio) {
-  if (t != 1 || !scene_.camera.is_orthographic()) return mis_weight(light_, camera_, s, t, ratio);
+float BdptTracer::connection_weight(int s, int t, float ratio, const glm::vec3* dir) {
+  if (t != 1 || !scene_.camera.is_orthographic()) {
+    return mis_weight(light_, camera_, s, t, ratio, dir);
+  }
   Vertex& eye = camera_[0];
   const glm::vec3 saved = eye.p;
   eye.p = ortho_lens_point(light_[s - 1].p);
@@ -1395,6 +1469,7 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
       if (only && (s != settings.only_s || t != settings.only_t)) continue;
       const Vertex& pt = camera[t - 1];
       glm::vec3 contribution(0.0f);
+      glm::vec3 dir(0.0f);
       Ray ray;
       bool has_ray = false;
       if (s == 0) {
@@ -1418,17 +1493,22 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
         contribution = pt.beta * f_camera * (g * f_light) * qs.beta;
         if (!(max_component(contribution) > 0.0f)) continue;
         has_ray = shadow_ray(pt, qs, ray);
+        // direction(pt, qs), bit for bit (glm::normalize is d / sqrt(d . d) written the same way;
+        // the environment's w_env times 1), for the weight.
+        dir = w;
       }
       if (!(max_component(contribution) > 0.0f)) continue;
       // Strategies past the light subpath's first vertex have light_paths' share of the samples.
       if (s >= 2) contribution *= it_.inverse_light_paths_;
-      queue(s, t, contribution, has_ray, ray);
+      queue(s, t, contribution, has_ray, ray, 0, 0, 1.0f, dir);
     }
   }
   // The renderer always gives an integrator that splats its film's light image
   // (SampleOutput::splats); without one the light image is missing, never written out of bounds.
   assert(!settings.light_tracing || splats_ != nullptr);
-  if (settings.light_tracing && splats_ != nullptr && !(only && settings.only_t != 1)) {
+  // A light subpath of one vertex makes no splat (s >= 2): its sample draws no numbers for them
+  // (the last a sample draws; each sample's numbers start afresh, so nothing else moves).
+  if (settings.light_tracing && splats_ != nullptr && !(only && settings.only_t != 1) && nl >= 2) {
     // One number per sample for the splats' stochastic rounding (SplatBuffer::add), drawn after
     // every dimension the subpaths use.
     current_->u_round = sampler.get_1d();
