@@ -4,8 +4,6 @@
 // make_integrator, as in render and the viewer.
 #include "bench_command.h"
 
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -13,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "bench_stats.h"
 #include "build_info.h"
 #include "flags/flag_values.h"
 #include "secondary_rays_bench.h"
@@ -58,18 +57,6 @@ struct Record {
   int threads = 0;
   int width = 0, height = 0;
 };
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-long peak_rss_mib() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return usage.ru_maxrss / 1024;  // kilobytes on Linux
-}
 
 nlohmann::json to_json(const Record& r) {
   nlohmann::json j = {{"scene", r.scene},

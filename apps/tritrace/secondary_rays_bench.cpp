@@ -1,7 +1,5 @@
 #include "secondary_rays_bench.h"
 
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -12,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "bench_stats.h"
 #include "build_info.h"
 #include "tritrace/accel/recording_accel.h"
 #include "tritrace/image/atomic_file.h"
@@ -22,12 +21,6 @@ namespace {
 
 // Closest hits whose t differ by more than this fraction of t (at least of 1) disagree.
 constexpr double kTTolerance = 1e-5;
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // CPU seconds of the whole process (every thread), which other processes on a loaded machine
 // barely change, beside the wall-clock time.
@@ -286,11 +279,7 @@ int run_secondary_rays(const SecondaryRaysOptions& options) {
     std::printf("integrator %s, %s spp, %sx%s, %d thread%s; peak RSS %ld MiB\n",
                 options.settings.integrator.c_str(), options.settings.spp.c_str(),
                 options.settings.width.c_str(), options.settings.height.c_str(), threads,
-                threads == 1 ? "" : "s", [] {
-                  rusage usage{};
-                  getrusage(RUSAGE_SELF, &usage);
-                  return usage.ru_maxrss / 1024;
-                }());
+                threads == 1 ? "" : "s", peak_rss_mib());
   }
   if (!options.json.empty()) {
     nlohmann::json out = nlohmann::json::array();
