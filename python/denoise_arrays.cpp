@@ -2,9 +2,6 @@
 // filter run with it released (in an arena of `threads` when given), the result copied out.
 #include "denoise_arrays.h"
 
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
-
 #include <cmath>
 #include <optional>
 #include <string>
@@ -13,6 +10,7 @@
 #include "tritrace/denoise/denoiser.h"
 #include "tritrace/image/image.h"
 #include "tritrace/image/image_limits.h"
+#include "tritrace/parallel.h"
 
 namespace tritrace::python {
 namespace {
@@ -155,17 +153,7 @@ py::array_t<float> denoise_arrays(const py::object& color, const py::object& alb
       result = denoise(colour, v, {albedo_image, normal_image, depth_image}, options);
     };
     if (thread_count_given > 0) {
-      // As the renderer does: TBB gives all arenas together at most max_allowed_parallelism
-      // threads (the cores), and an arena asked for more warns on stderr and gets fewer, so the
-      // limit is raised while this one runs.
-      std::optional<tbb::global_control> allow_threads;
-      const auto wanted = static_cast<size_t>(thread_count_given);
-      if (wanted >
-          tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)) {
-        allow_threads.emplace(tbb::global_control::max_allowed_parallelism, wanted);
-      }
-      tbb::task_arena arena(thread_count_given);
-      arena.execute(run);
+      parallel::in_arena(thread_count_given, run);
     } else {
       run();
     }

@@ -15,12 +15,14 @@
 #pragma once
 
 #include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
 #include <algorithm>
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -163,6 +165,35 @@ template <typename Index, typename Value, typename Body, typename Join>
     out = join(std::move(out), static_cast<const Value&>(partial[k]));
   }
   return out;
+}
+
+// f() inside a TBB arena of `threads` threads. TBB gives all arenas together at most
+// max_allowed_parallelism threads, by default the number of cores, and an arena asked for more
+// prints "number of workers is currently limited" and gets fewer; the limit is raised for as long
+// as f runs, so that the arena has every thread asked for.
+template <typename F>
+void in_arena(int threads, const F& f) {
+  threads = std::max(1, threads);
+  std::optional<tbb::global_control> allow_threads;
+  if (static_cast<size_t>(threads) >
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)) {
+    allow_threads.emplace(tbb::global_control::max_allowed_parallelism,
+                          static_cast<size_t>(threads));
+  }
+  tbb::task_arena arena(threads);
+  arena.execute(f);
+}
+
+// f() on `threads` threads at once (the caller's among them), in an arena of that many (in_arena).
+template <typename F>
+void on_threads(int threads, const F& f) {
+  threads = std::max(1, threads);
+  in_arena(threads, [&] {
+    TaskGroup group;
+    for (int t = 1; t < threads; ++t) group.run(f);
+    f();
+    group.wait();
+  });
 }
 
 }  // namespace tritrace::parallel

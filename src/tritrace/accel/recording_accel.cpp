@@ -1,11 +1,7 @@
 #include "tritrace/accel/recording_accel.h"
 
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <cstring>
-#include <optional>
 #include <stdexcept>
 
 #include "tritrace/parallel.h"
@@ -63,8 +59,7 @@ void append_group(const Range& r, const std::vector<Answer>& answers, RayBatches
 }
 
 // Calls trace(rays, first) for every batch on `threads` threads, each taking the next group in
-// order and tracing its batches in order, inside an arena of that many threads (the renderer's
-// set-up).
+// order and tracing its batches in order (the renderer's set-up: parallel::on_threads).
 template <typename Trace>
 void for_each_batch(const RayBatches& batches, int threads, const Trace& trace) {
   const std::vector<size_t> offsets = batch_offsets(batches);
@@ -79,20 +74,7 @@ void for_each_batch(const RayBatches& batches, int threads, const Trace& trace) 
       }
     }
   };
-  threads = std::max(1, threads);
-  std::optional<tbb::global_control> allow_threads;
-  if (static_cast<size_t>(threads) >
-      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)) {
-    allow_threads.emplace(tbb::global_control::max_allowed_parallelism,
-                          static_cast<size_t>(threads));
-  }
-  tbb::task_arena arena(threads);
-  arena.execute([&] {
-    parallel::TaskGroup group;
-    for (int t = 1; t < threads; ++t) group.run(run);
-    run();
-    group.wait();
-  });
+  parallel::on_threads(threads, run);
 }
 
 }  // namespace

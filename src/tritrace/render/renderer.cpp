@@ -1,7 +1,6 @@
 // Tiles over a TBB task arena of the requested thread count.
 #include "tritrace/render/renderer.h"
 
-#include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
 
@@ -12,7 +11,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -375,23 +373,7 @@ void render_tiles(const Scene& scene, const Accel& accel, const Integrator& inte
       slot_rendered[static_cast<size_t>(slot)].store(1, std::memory_order_relaxed);
     }
   };
-  // TBB gives all arenas together at most max_allowed_parallelism threads, by default the number of
-  // cores; an arena asked for more prints "number of workers is currently limited" and gets fewer.
-  // Raised for as long as the render runs, the limit lets the arena have every thread asked for.
-  std::optional<tbb::global_control> allow_threads;
-  const size_t limit =
-      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
-  if (static_cast<size_t>(threads) > limit) {
-    allow_threads.emplace(tbb::global_control::max_allowed_parallelism,
-                          static_cast<size_t>(threads));
-  }
-  tbb::task_arena arena(threads);
-  arena.execute([&] {
-    parallel::TaskGroup group;
-    for (int t = 1; t < threads; ++t) group.run(run_tiles);
-    run_tiles();
-    group.wait();
-  });
+  parallel::on_threads(threads, run_tiles);
 
   const auto stop = std::chrono::steady_clock::now();
   if (stats) {
