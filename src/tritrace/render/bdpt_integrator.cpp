@@ -150,26 +150,22 @@ glm::vec3 sample_spot_direction(const SpotLight& l, float u_region, glm::vec2 u)
       .to_world(glm::vec3(sin_theta * std::cos(phi), sin_theta * std::sin(phi), c));
 }
 
-// Vertex x's Bsdf (Bsdf::eval, pdf and sample). A Lambert vertex's is written out here, operation
-// for operation as Bsdf and its one lobe compute it (bsdf.cpp: the side flip, the lobe's weight 1,
-// lobe_eval, lobe_pdf and lobe_sample of kLambert without a coat), so the numbers are the same
-// bits without the Bsdf's construction, its lobe loops, its choice array and its calls (a tenth of
-// bdpt's CPU on cornell-area at --light-paths 0.125; the path tracer's diffuse vertices skip them
-// likewise).
+// Vertex x's Bsdf (Bsdf::eval, pdf and sample). A Lambert vertex's is written out here as Bsdf
+// and its one lobe compute it (bsdf.cpp: the side flip, lobe_eval, lobe_pdf and lobe_sample of
+// kLambert without a coat; the lobe's weight 1 and the sums over one lobe change no bit), so the
+// numbers are the same bits without the Bsdf's construction, its lobe loops, its choice array and
+// its calls (a tenth of bdpt's CPU on cornell-area at --light-paths 0.125; the path tracer's
+// diffuse vertices skip them likewise).
 // A Lambert vertex's value and density read only the local directions' z (their cosines).
 glm::vec3 lambert_eval(const Vertex& x, float wo_z, float wi_z) {
   if (wo_z < 0.0f) wo_z = -wo_z, wi_z = -wi_z;
-  glm::vec3 f(0.0f);
-  if (wo_z <= 0.0f || wi_z <= 0.0f) return f;
-  f += 1.0f * (x.albedo * kInvPi);
-  return f;
+  if (wo_z <= 0.0f || wi_z <= 0.0f) return glm::vec3(0.0f);
+  return x.albedo * kInvPi;
 }
 
 float lambert_pdf(float wo_z, float wi_z) {
   if (wo_z < 0.0f) wo_z = -wo_z, wi_z = -wi_z;
-  float pdf = 0.0f;
-  pdf += 1.0f * (wo_z <= 0.0f ? 0.0f : cosine_hemisphere_pdf(wi_z));
-  return pdf;
+  return wo_z <= 0.0f ? 0.0f : cosine_hemisphere_pdf(wi_z);
 }
 
 glm::vec3 bsdf_eval(const Vertex& x, glm::vec3 wo, glm::vec3 wi) {
@@ -192,7 +188,6 @@ BsdfSample bsdf_sample(const Vertex& x, glm::vec3 wo, float u_lobe, glm::vec2 u)
     s.weight = (s.wi.z <= 0.0f ? glm::vec3(0.0f) : x.albedo * kInvPi) * (s.wi.z / s.pdf);
   }
   if (!s.valid()) return {};
-  s.weight *= 1.0f;
   if (below) s.wi.z = -s.wi.z;
   return s;
 }
