@@ -68,6 +68,15 @@ struct Vertex {
   // ratio of each one's density to that of the connection just past this vertex. Read only where
   // this vertex's pdf_rev no longer depends on the connection (three or more vertices from it).
   float mis_sum = 0.0f;
+  // The edge from the previous vertex of its subpath, kept by the walk where both are at finite
+  // places (`edge`): its squared length, the direction back along it (direction(x, prev), bit for
+  // bit) and the cosine factor at prev that to_area(., x, prev) multiplies in (|n_g . d| / length;
+  // 1, which changes no bit, where prev is the camera or a point light). The weights' densities
+  // towards prev (to_area_prev, direction_prev) read them rather than measure the edge again.
+  bool edge = false;
+  float edge_dist2 = 0.0f;
+  float prev_factor = 1.0f;
+  glm::vec3 to_prev{0.0f};
   float env_pdf_pos = 0.0f;  // an environment vertex's density per area across w_env
   uint32_t prim = 0;
   float u = 0.0f, v = 0.0f;  // barycentrics on the triangle
@@ -264,6 +273,38 @@ glm::vec3 direction(const Vertex& from, const Vertex& to) {
   return glm::normalize(to.p - from.p);
 }
 
+// Measures the edge from `prev` to the new surface vertex x (Vertex::edge) and returns x's
+// pdf_fwd, to_area(pdf_dir, prev, x), bit for bit: the two ends' distances are the same numbers
+// (d and -d give the same squares, dots of opposite sign and the same magnitude).
+float measure_edge(float pdf_dir, const Vertex& prev, Vertex& x) {
+  x.edge = !infinite(prev);
+  if (!x.edge) return to_area(pdf_dir, prev, x);
+  const glm::vec3 d = x.p - prev.p;
+  const float dist2 = glm::dot(d, d);
+  x.edge_dist2 = dist2;
+  if (!(dist2 > 0.0f)) {
+    x.edge = false;  // direction() of a zero difference, as before
+    return 0.0f;
+  }
+  const float length = std::sqrt(dist2);
+  // glm::normalize(prev.p - x.p): (-d) * (1 / sqrt(d . d)).
+  x.to_prev = -(d * (1.0f / length));
+  x.prev_factor = prev.type == VertexType::kCamera || prev.point_light
+                      ? 1.0f
+                      : std::abs(glm::dot(prev.ng, d)) / length;
+  return pdf_dir / dist2 * (std::abs(glm::dot(x.ng, d)) / length);
+}
+
+// to_area(pdf_dir, x, prev) and direction(x, prev) for x's predecessor prev on its subpath.
+float to_area_prev(float pdf_dir, const Vertex& x, const Vertex& prev) {
+  if (!x.edge) return to_area(pdf_dir, x, prev);
+  return pdf_dir / x.edge_dist2 * x.prev_factor;
+}
+
+glm::vec3 direction_prev(const Vertex& x, const Vertex& prev) {
+  return x.edge ? x.to_prev : direction(x, prev);
+}
+
 // The area density with which vertex x, reached from `prev` (null for a light vertex), samples
 // `next`.
 float pdf_area(const Vertex& x, const Vertex* prev, const Vertex& next) {
@@ -271,16 +312,6 @@ float pdf_area(const Vertex& x, const Vertex* prev, const Vertex& next) {
   const glm::vec3 w_next = direction(x, next);
   if (x.type == VertexType::kLight) return to_area(emission_pdf(x, w_next), x, next);
   return to_area(surface_pdf(x, direction(x, *prev), w_next), x, next);
-}
-
-// pdf_area with the directions given: w_prev = direction(x, prev) (read only at a surface vertex)
-// and w_next = direction(x, next). A connection's weight needs four densities over three
-// directions, each otherwise normalised two or three times (direction(b, a) is exactly
-// -direction(a, b): the difference and the normalisation are symmetric in sign).
-float pdf_area_given(const Vertex& x, glm::vec3 w_prev, glm::vec3 w_next, const Vertex& next) {
-  if (infinite(x)) return to_area(x.env_pdf_pos, x, next);
-  if (x.type == VertexType::kLight) return to_area(emission_pdf(x, w_next), x, next);
-  return to_area(surface_pdf(x, w_prev, w_next), x, next);
 }
 
 // Where a ray from vertex x towards w starts (on the side w leaves to). A vertex takes part in
@@ -520,11 +551,12 @@ class BdptTracer {
   // Sample k's connections (s, t), t >= 2, queued; then its light tracing (sampler: the splats'
   // rounding number and an orthographic lens's offset, drawn after the subpaths').
   void connect(size_t k, Sampler& sampler);
-  // The shadow ray of the connection between camera-side vertex c and light-side vertex l; false
-  // where nothing fits between its two ends (then nothing can block it).
-  bool shadow_ray(const Vertex& c, const Vertex& l, Ray& r) const;
-  // The same between surface vertex l and the camera at `eye`.
-  bool camera_shadow_ray(const Vertex& l, glm::vec3 eye, Ray& r) const;
+  // The shadow ray of the connection between camera-side vertex c and light-side vertex l, whose
+  // direction from c is w (direction(c, l)); false where nothing fits between its two ends (then
+  // nothing can block it).
+  bool shadow_ray(const Vertex& c, const Vertex& l, glm::vec3 w, Ray& r) const;
+  // The same between surface vertex l and the camera at `eye`, w = direction from l to eye.
+  bool camera_shadow_ray(const Vertex& l, glm::vec3 eye, glm::vec3 w, Ray& r) const;
   // Queues connection (s, t) with its unweighted contribution (t = 1: onto pixel (px, py)) and
   // its shadow ray, if it needs one; flushes the queue when full.
   void queue(int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray, int px = 0,
@@ -737,7 +769,7 @@ void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& h
   Vertex& x = path[static_cast<size_t>(w.count)];
   make_surface(x, w.ray, hit);
   x.beta = w.beta;
-  x.pdf_fwd = to_area(w.pdf_dir, prev, x);
+  x.pdf_fwd = measure_edge(w.pdf_dir, prev, x);
   // Light vertex 1 is where the strategies that light_paths thins out begin (s >= 2): its density
   // as the light subpath samples it counts light_paths times in the weights (prepare_weights and
   // mis_weight_recursive read it; mis_weight_walk divides it out and applies the counts itself).
@@ -772,7 +804,7 @@ void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& h
   x.delta = bs.delta;
   x.aov_tint = bs.weight * (1.0f / bs.radiance_scale);
   const float pdf_rev_dir = bs.delta ? 0.0f : bsdf_pdf(x, bs.wi, wo_local);
-  prev.pdf_rev = to_area(pdf_rev_dir, x, prev);
+  prev.pdf_rev = to_area_prev(pdf_rev_dir, x, prev);
   w.beta *= factor;
   w.rr_beta *= factor;
   if (count - 1 >= it_.settings_.roulette_depth) {
@@ -973,8 +1005,7 @@ void BdptTracer::directional_light_subpath(std::vector<Vertex>& path, int max_ve
   walk_begin(path, w);
 }
 
-bool BdptTracer::shadow_ray(const Vertex& c, const Vertex& l, Ray& r) const {
-  const glm::vec3 w = direction(c, l);
+bool BdptTracer::shadow_ray(const Vertex& c, const Vertex& l, glm::vec3 w, Ray& r) const {
   const glm::vec3 from = ray_start(c, w, it_.offset_);
   r.origin = from;
   r.tmin = 0.0f;
@@ -1006,9 +1037,8 @@ bool BdptTracer::shadow_ray(const Vertex& c, const Vertex& l, Ray& r) const {
   return true;
 }
 
-bool BdptTracer::camera_shadow_ray(const Vertex& l, glm::vec3 eye, Ray& r) const {
-  const glm::vec3 d = eye - l.p;
-  const glm::vec3 from = ray_start(l, glm::normalize(d), it_.offset_);
+bool BdptTracer::camera_shadow_ray(const Vertex& l, glm::vec3 eye, glm::vec3 w, Ray& r) const {
+  const glm::vec3 from = ray_start(l, w, it_.offset_);
   const glm::vec3 segment = eye - from;
   const float length = std::sqrt(glm::dot(segment, segment));
   if (!(length > 0.0f)) return false;
@@ -1211,15 +1241,35 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
     const float f = it_.settings_.light_paths;
     if (s > 0) {
       // pt is a surface vertex (connectible); qs a surface, light or environment vertex.
+      // pdf_area_given's densities, with the edges towards pt_minus and qs_minus as the walks
+      // measured them and the connection's distance measured once for both of its ends.
       const glm::vec3 w = dir != nullptr ? *dir : direction(pt, *qs);
-      const glm::vec3 w_pt_minus = direction(pt, pt_minus);
+      const glm::vec3 w_pt_minus = direction_prev(pt, pt_minus);
       const glm::vec3 w_qs_minus =
-          qs_minus != nullptr ? direction(*qs, *qs_minus) : glm::vec3(0.0f);
-      pt_rev = pdf_area_given(*qs, w_qs_minus, -w, pt);
+          qs_minus != nullptr ? direction_prev(*qs, *qs_minus) : glm::vec3(0.0f);
+      const float qs_dir = infinite(*qs)                    ? qs->env_pdf_pos
+                           : qs->type == VertexType::kLight ? emission_pdf(*qs, -w)
+                                                            : surface_pdf(*qs, w_qs_minus, -w);
+      const float pt_dir = surface_pdf(pt, w_pt_minus, w);
+      if (infinite(*qs)) {
+        pt_rev = to_area(qs_dir, *qs, pt);
+        qs_rev = pt_dir;
+      } else {
+        // to_area both ways: d and -d give the same square and cosines' magnitudes.
+        const glm::vec3 d = pt.p - qs->p;
+        const float dist2 = glm::dot(d, d);
+        if (dist2 > 0.0f) {
+          const float length = std::sqrt(dist2);
+          pt_rev = qs_dir / dist2 * (std::abs(glm::dot(pt.ng, d)) / length);
+          qs_rev = pt_dir / dist2;
+          if (!qs->point_light) qs_rev *= std::abs(glm::dot(qs->ng, d)) / length;
+        }
+      }
       if (s == 1) pt_rev *= f;
-      pt_minus_rev = pdf_area_given(pt, w, w_pt_minus, pt_minus);
-      qs_rev = pdf_area_given(pt, w_pt_minus, w, *qs);
-      if (qs_minus != nullptr) qs_minus_rev = pdf_area_given(*qs, -w, w_qs_minus, *qs_minus);
+      pt_minus_rev = to_area_prev(surface_pdf(pt, w, w_pt_minus), pt, pt_minus);
+      if (qs_minus != nullptr) {
+        qs_minus_rev = to_area_prev(surface_pdf(*qs, -w, w_qs_minus), *qs, *qs_minus);
+      }
     } else if (infinite(pt)) {
       pt_rev = it_.environment_pmf_ * it_.environment_dir_pdf(pt.w_env);
       pt_minus_rev = pdf_area(pt, nullptr, pt_minus) * f;
@@ -1339,7 +1389,8 @@ void BdptTracer::splat_light_subpath(int nl) {
         qs.beta * f_light * (g * camera_dir_pdf(cam, -w, dist2)) * it_.inverse_light_paths_;
     if (!(max_component(contribution) > 0.0f)) continue;
     Ray ray;
-    const bool has_ray = camera_shadow_ray(qs, eye, ray);
+    // (w is glm::normalize(d), bit for bit.)
+    const bool has_ray = camera_shadow_ray(qs, eye, w, ray);
     queue(s, 1, contribution, has_ray, ray, px, py, pass_ ? pass_->count_ratio(px, py) : 1.0f);
   }
 }
@@ -1487,9 +1538,9 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
         const float g = std::abs(glm::dot(pt.ng, w)) * cos_light / dist2;
         contribution = pt.beta * f_camera * (g * f_light) * qs.beta;
         if (!(max_component(contribution) > 0.0f)) continue;
-        has_ray = shadow_ray(pt, qs, ray);
-        // direction(pt, qs), bit for bit (glm::normalize is d / sqrt(d . d) written the same way;
-        // the environment's w_env times 1), for the weight.
+        // w is direction(pt, qs), bit for bit (glm::normalize is d / sqrt(d . d) written the same
+        // way; the environment's w_env times 1), for the shadow ray and the weight.
+        has_ray = shadow_ray(pt, qs, w, ray);
         dir = w;
       }
       if (!(max_component(contribution) > 0.0f)) continue;
