@@ -38,8 +38,11 @@ float mean(glm::vec3 c) {
 enum class VertexType : uint8_t { kCamera, kLight, kSurface, kEnvironment };
 
 // One vertex of a subpath. Light vertices are a subpath's first (on a point light or an emissive
-// triangle); surface vertices carry the Bsdf of the hit.
-struct Vertex {
+// triangle); surface vertices carry the Bsdf of the hit. What the walks, the connections and the
+// weights read comes first, in the struct's first four cache lines (a wavefront's subpaths
+// outgrow the first-level cache); the Bsdf, which a diffuse vertex does not build, and the
+// smooth corners come last.
+struct alignas(64) Vertex {
   VertexType type = VertexType::kSurface;
   bool delta = false;        // scattered by a delta lobe here
   bool point_light = false;  // a light vertex on a point or spot light (a delta position)
@@ -48,19 +51,25 @@ struct Vertex {
   bool smooth = false;       // shades with interpolated vertex normals
   bool two_sided = false;    // its material emits (or would emit) from both sides
   bool emits = false;
-  glm::vec3 p{0.0f};
-  glm::vec3 ng{0.0f};     // the triangle's lab normal (zero for the camera and point lights)
-  glm::vec3 ns{0.0f};     // the shading normal on ng's side (the Bsdf frame's z)
-  glm::vec3 wo{0.0f};     // towards the previous vertex of its subpath (surface vertices)
-  glm::vec3 w_env{0.0f};  // an environment vertex's direction, from the scene towards it
-  glm::vec3 beta{0.0f};
-  glm::vec3 le{0.0f};        // a light vertex's emission (radiance, or a point light's intensity)
-  glm::vec3 albedo{0.0f};    // the material's albedo here (textured), for the albedo AOV
-  glm::vec3 aov_tint{1.0f};  // the sampled bounce's weight without 1/eta^2 (the AOVs' tint)
-  bool specular = false;     // every lobe a delta lobe: the AOVs look through it
+  // A diffuse material's surface (untextured parameters): its Bsdf is one Lambert lobe of colour
+  // `albedo`, evaluated, sampled and weighed by the bsdf_* functions below without `bsdf`, which
+  // is then not built.
+  bool lambert = false;
+  bool specular = false;  // every lobe a delta lobe: the AOVs look through it
   // Ray starts on the front (ng) and back side, computed when first needed (ray_start).
   mutable uint8_t start_known = 0;
-  mutable glm::vec3 start[2]{};
+  // The edge from the previous vertex of its subpath, kept by the walk where both are at finite
+  // places (`edge`): its squared length, the direction back along it (direction(x, prev), bit for
+  // bit) and the cosine factor at prev that to_area(., x, prev) multiplies in (|n_g . d| / length;
+  // 1, which changes no bit, where prev is the camera or a point light). The weights' densities
+  // towards prev (to_area_prev, direction_prev) read them rather than measure the edge again.
+  bool edge = false;
+  glm::vec3 p{0.0f};
+  glm::vec3 ng{0.0f};  // the triangle's lab normal (zero for the camera and point lights)
+  glm::vec3 ns{0.0f};  // the shading normal on ng's side (the Bsdf frame's z)
+  glm::vec3 wo{0.0f};  // towards the previous vertex of its subpath (surface vertices)
+  glm::vec3 beta{0.0f};
+  glm::vec3 albedo{0.0f};  // the material's albedo here (textured), for the albedo AOV
   float pdf_fwd = 0.0f;
   float pdf_rev = 0.0f;
   // The MIS weights' partial sum up to this vertex (BdptTracer::prepare_weights): over the
@@ -68,28 +77,22 @@ struct Vertex {
   // ratio of each one's density to that of the connection just past this vertex. Read only where
   // this vertex's pdf_rev no longer depends on the connection (three or more vertices from it).
   float mis_sum = 0.0f;
-  // The edge from the previous vertex of its subpath, kept by the walk where both are at finite
-  // places (`edge`): its squared length, the direction back along it (direction(x, prev), bit for
-  // bit) and the cosine factor at prev that to_area(., x, prev) multiplies in (|n_g . d| / length;
-  // 1, which changes no bit, where prev is the camera or a point light). The weights' densities
-  // towards prev (to_area_prev, direction_prev) read them rather than measure the edge again.
-  bool edge = false;
   float edge_dist2 = 0.0f;
   float prev_factor = 1.0f;
   glm::vec3 to_prev{0.0f};
-  float env_pdf_pos = 0.0f;  // an environment vertex's density per area across w_env
+  mutable glm::vec3 start[2]{};
   uint32_t prim = 0;
   float u = 0.0f, v = 0.0f;  // barycentrics on the triangle
-  SurfaceTriangle tri{};
-  SmoothCorners corners{};
-  Frame frame{};
-  // A diffuse material's surface (untextured parameters): its Bsdf is one Lambert lobe of colour
-  // `albedo`, evaluated, sampled and weighed by the bsdf_* functions below without `bsdf`, which
-  // is then not built.
-  bool lambert = false;
-  Bsdf bsdf{Material{}};
   const Material* material = nullptr;
+  Frame frame{};
+  SurfaceTriangle tri{};
+  glm::vec3 w_env{0.0f};     // an environment vertex's direction, from the scene towards it
+  glm::vec3 le{0.0f};        // a light vertex's emission (radiance, or a point light's intensity)
+  glm::vec3 aov_tint{1.0f};  // the sampled bounce's weight without 1/eta^2 (the AOVs' tint)
+  float env_pdf_pos = 0.0f;  // an environment vertex's density per area across w_env
   const SpotLight* spot = nullptr;  // a spot light's vertex: its cone (point_light is set too)
+  SmoothCorners corners{};
+  Bsdf bsdf{Material{}};
 };
 
 // Builds `member` from make()'s value where it stays: `member = make()` builds the value in a
@@ -1461,11 +1464,29 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
     }
   }
   walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
-  // The light subpaths.
+  // The light subpaths. Their third group (the emission direction) only where the subpath goes on
+  // past its first vertex, or starts at the environment (whose first vertex is a direction): a
+  // sample outside light_paths' share draws nothing after it, so leaving the group undrawn moves
+  // no other number (get_2d_groups<2> then <1> draws what get_2d_groups<3> does).
   std::array<Sampler*, kWavefront> all{};
-  for (size_t k = 0; k < count; ++k) all[k] = &samplers[k];
-  std::array<std::array<glm::vec2, 3>, kWavefront> u_light;
-  draw_groups<3>(all.data(), count, u_light);
+  std::array<bool, kWavefront> walk_light{};
+  for (size_t k = 0; k < count; ++k) {
+    all[k] = &samplers[k];
+    walk_light[k] = traces_light_subpath(samplers[k], settings.light_paths);
+  }
+  std::array<std::array<glm::vec2, 2>, kWavefront> u_start;
+  draw_groups<2>(all.data(), count, u_start);
+  std::array<bool, kWavefront> needs_dir{};
+  size_t m = 0;
+  for (size_t k = 0; k < count; ++k) {
+    needs_dir[k] =
+        walk_light[k] || (it_.has_environment_ && !it_.table_.empty() &&
+                          it_.emitters_[it_.table_.sample(u_start[k][0].x).index].environment);
+    if (needs_dir[k]) all[m++] = &samplers[k];
+  }
+  std::array<std::array<glm::vec2, 1>, kWavefront> u_dir;
+  draw_groups<1>(all.data(), m, u_dir);
+  m = 0;
   for (size_t k = 0; k < count; ++k) {
     Subpaths& sub = subs[k];
     SampleState& st = state_[k];
@@ -1477,9 +1498,10 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
       sub.camera[1].pdf_fwd =
           light_tracing_camera_pdf(camera_area_pdf(sub.camera[0], sub.camera[1]), st.pixel_ratio);
     }
+    const std::array<glm::vec2, 3> u_light{u_start[k][0], u_start[k][1],
+                                           needs_dir[k] ? u_dir[m++][0] : glm::vec2(0.0f)};
     // A sample outside light_paths' share keeps only the light subpath's first vertex (for s = 1).
-    light_subpath(sub.light, max_light, u_light[k],
-                  traces_light_subpath(samplers[k], settings.light_paths), walks[k]);
+    light_subpath(sub.light, max_light, u_light, walk_light[k], walks[k]);
     paths[k] = &sub.light;
   }
   walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
