@@ -10,6 +10,7 @@
 #include <cassert>
 #include <cmath>
 #include <glm/geometric.hpp>
+#include <limits>
 #include <mutex>
 #include <new>
 #include <span>
@@ -20,6 +21,7 @@
 
 #include "tritrace/error.h"
 #include "tritrace/math/random.h"
+#include "tritrace/render/lanes.h"
 #include "tritrace/render/light_sampler.h"
 #include "tritrace/render/material/bsdf.h"
 #include "tritrace/render/shading_normal.h"
@@ -523,15 +525,28 @@ class BdptTracer {
   // A walk from the last of `path`'s w.count vertices: inactive if the subpath is full, else
   // with room for the next vertex.
   static void walk_begin(std::vector<Vertex>& path, WalkState& w);
-  // One bounce of a walk: the vertex at `hit` of w.ray (a miss ends it, with an environment vertex
-  // for a camera subpath, setting `escaped`), its scattering and the next ray (w.active) or the
-  // walk's end. Extends `path` with vertices sampled from w.ray, whose direction has density
-  // w.pdf_dir at the last vertex; w.beta is the throughput the next vertex receives.
-  // `u` holds the bounce's two sampler groups (the lobe choice and roulette, the direction), drawn
-  // by the caller where the walk continues past the hit (will_draw).
-  void walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& hit,
-                 const std::array<glm::vec2, 2>& u, bool& escaped) const;
-  // Whether walk_step uses its sampler numbers at `hit`.
+  // One bounce of a walk in two halves. walk_hit: the vertex at `hit` of w.ray (a miss ends it,
+  // with an environment vertex for a camera subpath, setting `escaped`); false where the walk ends
+  // there. walk_scatter: the scattering at that (last) vertex and the next ray (w.active) or the
+  // walk's end. They extend `path` with vertices sampled from w.ray, whose direction has density
+  // w.pdf_dir at the last vertex; w.beta is the throughput the next vertex receives. `u` holds the
+  // bounce's two sampler groups (the lobe choice and roulette, the direction), drawn by the caller
+  // where the walk continues past the hit (will_draw).
+  bool walk_hit(std::vector<Vertex>& path, WalkState& w, const Hit& hit, bool& escaped) const;
+  void walk_scatter(std::vector<Vertex>& path, WalkState& w,
+                    const std::array<glm::vec2, 2>& u) const;
+  // walk_scatter for n <= 8 camera walks (walks[index[i]] on paths[index[i]], numbers *u[i]) whose
+  // last vertex is a flat Lambert surface, eight to a SIMD operation (lanes.h), bit for bit.
+  void walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState* walks,
+                          const uint32_t* index, const std::array<glm::vec2, 2>* const* u,
+                          size_t n) const;
+  // One bounce of the walks index[0, n) at hits[0, n): walk_hit and walk_scatter for each, u
+  // holding the numbers of those that draw (will_draw), in order; the camera walks' flat Lambert
+  // vertices scatter in lanes after the others.
+  void step_bounce(std::vector<Vertex>* const* paths, WalkState* walks, const uint32_t* index,
+                   const Hit* hits, size_t n, const std::array<glm::vec2, 2>* u,
+                   bool* escaped) const;
+  // Whether walk_scatter will use its sampler numbers at `hit`.
   static bool will_draw(const WalkState& w, const Hit& hit) {
     return hit.found() && w.count + 1 < w.max_vertices;
   }
@@ -703,10 +718,28 @@ bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
   x.prim = hit.prim;
   x.u = hit.u;
   x.v = hit.v;
-  build_in_place(x.tri, [&] { return scene_.triangle(hit.prim); });
+  // A triangle of the scene's own mesh (stored_triangle's members) in registers, stored member by
+  // member, and the point and normal computed from the registers: computed from x.tri's members
+  // they were loaded as wider words than their stores had just written, and a whole triangle
+  // copied through a temporary did the same (store-forwarding stalls, a sixth of the camera
+  // walk's profile). Instanced triangles are built in place as before.
+  if (hit.prim < scene_.mesh.size()) {
+    const TriangleMesh& mesh = scene_.mesh;
+    const glm::vec3 v0 = mesh.v0()[hit.prim], e1 = mesh.e1(hit.prim), e2 = mesh.e2(hit.prim);
+    const glm::vec3 normal = mesh.normal()[hit.prim];
+    x.tri.v0 = v0;
+    x.tri.e1 = e1;
+    x.tri.e2 = e2;
+    x.tri.normal = normal;
+    x.tri.material = mesh.material()[hit.prim];
+    x.p = v0 + hit.u * e1 + hit.v * e2;
+    x.ng = normal;
+  } else {
+    build_in_place(x.tri, [&] { return scene_.triangle(hit.prim); });
+    x.p = x.tri.v0 + hit.u * x.tri.e1 + hit.v * x.tri.e2;
+    x.ng = x.tri.normal;
+  }
   x.material = &scene_.materials[x.tri.material];
-  x.p = x.tri.v0 + hit.u * x.tri.e1 + hit.v * x.tri.e2;
-  x.ng = x.tri.normal;
   x.smooth = shades_smooth(scene_, *x.material, hit.prim);
   x.ns = x.ng;
   if (x.smooth) {
@@ -744,8 +777,8 @@ void BdptTracer::walk_begin(std::vector<Vertex>& path, WalkState& w) {
   }
 }
 
-void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& hit,
-                           const std::array<glm::vec2, 2>& u, bool& escaped) const {
+bool BdptTracer::walk_hit(std::vector<Vertex>& path, WalkState& w, const Hit& hit,
+                          bool& escaped) const {
   w.active = false;
   const bool light = w.light;
   if (!hit.found()) {
@@ -766,7 +799,7 @@ void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& h
       e.pdf_rev = 0.0f;
       ++w.count;
     }
-    return;
+    return false;
   }
   Vertex& prev = path[static_cast<size_t>(w.count - 1)];
   Vertex& x = path[static_cast<size_t>(w.count)];
@@ -778,9 +811,15 @@ void BdptTracer::walk_step(std::vector<Vertex>& path, WalkState& w, const Hit& h
   // mis_weight_recursive read it; mis_weight_walk divides it out and applies the counts itself).
   if (light && w.count == 1) x.pdf_fwd *= it_.settings_.light_paths;
   x.pdf_rev = 0.0f;
-  const int count = ++w.count;
-  if (count >= w.max_vertices) return;
+  return ++w.count < w.max_vertices;
+}
 
+void BdptTracer::walk_scatter(std::vector<Vertex>& path, WalkState& w,
+                              const std::array<glm::vec2, 2>& u) const {
+  const bool light = w.light;
+  const int count = w.count;
+  Vertex& prev = path[static_cast<size_t>(count - 2)];
+  Vertex& x = path[static_cast<size_t>(count - 1)];
   const glm::vec2 u_choice = u[0], u_dir = u[1];
   const glm::vec3 w_prev = x.wo;
   if (!agrees(x, w_prev)) return;
@@ -851,14 +890,161 @@ void BdptTracer::walk_all(std::vector<Vertex>* const* paths, WalkState* walks, S
       if (will_draw(walks[index[j]], hits[j])) drawing[m++] = &samplers[index[j]];
     }
     draw_groups<2>(drawing.data(), m, u);
-    m = 0;
-    for (size_t j = 0; j < n; ++j) {
-      const size_t k = index[j];
-      const bool draws = will_draw(walks[k], hits[j]);
-      walk_step(*paths[k], walks[k], hits[j], u[draws ? m++ : 0], escaped[k]);
-    }
+    step_bounce(paths, walks, index.data(), hits.data(), n, u.data(), escaped);
   }
 }
+
+void BdptTracer::step_bounce(std::vector<Vertex>* const* paths, WalkState* walks,
+                             const uint32_t* index, const Hit* hits, size_t n,
+                             const std::array<glm::vec2, 2>* u, bool* escaped) const {
+  std::array<uint32_t, kWavefront> lane_index;
+  std::array<const std::array<glm::vec2, 2>*, kWavefront> lane_u;
+  size_t lanes_used = 0;
+  size_t m = 0;
+  for (size_t j = 0; j < n; ++j) {
+    const uint32_t k = index[j];
+    const std::array<glm::vec2, 2>& uj = u[will_draw(walks[k], hits[j]) ? m++ : 0];
+    // (walk_hit goes on exactly where will_draw held.)
+    if (!walk_hit(*paths[k], walks[k], hits[j], escaped[k])) continue;
+#if defined(TRITRACE_LANES)
+    const Vertex& x = (*paths[k])[static_cast<size_t>(walks[k].count - 1)];
+    if (!walks[k].light && x.lambert && !x.smooth) {
+      lane_index[lanes_used] = k;
+      lane_u[lanes_used++] = &uj;
+      continue;
+    }
+#endif
+    walk_scatter(*paths[k], walks[k], uj);
+  }
+  for (size_t i = 0; i < lanes_used; i += 8) {
+    walk_scatter_lanes(paths, walks, lane_index.data() + i, lane_u.data() + i,
+                       std::min<size_t>(8, lanes_used - i));
+  }
+}
+
+#if defined(TRITRACE_LANES)
+void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState* walks,
+                                    const uint32_t* index, const std::array<glm::vec2, 2>* const* u,
+                                    size_t n) const {
+  using lanes::F;
+  using lanes::I;
+  using lanes::V3;
+  constexpr size_t W = lanes::kWidth;
+  // Gathered per lane (lanes past n repeat lane 0 and are not written back).
+  alignas(32) float frame_x[3][W], frame_y[3][W], frame_z[3][W], wo[3][W], albedo[3][W], beta[3][W],
+      rr_beta[3][W], ng[3][W], p[3][W], v0[3][W], e1[3][W], e2[3][W];
+  alignas(32) float u_roulette[W], u_x[W], u_y[W], edge_dist2[W], prev_factor[W];
+  alignas(32) int32_t roulette[W], edge[W];
+  for (size_t l = 0; l < W; ++l) {
+    const size_t i = l < n ? l : 0;
+    const WalkState& w = walks[index[i]];
+    const Vertex& x = (*paths[index[i]])[static_cast<size_t>(w.count - 1)];
+    for (int c = 0; c < 3; ++c) {
+      frame_x[c][l] = x.frame.x[c];
+      frame_y[c][l] = x.frame.y[c];
+      frame_z[c][l] = x.frame.z[c];
+      wo[c][l] = x.wo[c];
+      albedo[c][l] = x.albedo[c];
+      beta[c][l] = w.beta[c];
+      rr_beta[c][l] = w.rr_beta[c];
+      ng[c][l] = x.ng[c];
+      p[c][l] = x.p[c];
+      v0[c][l] = x.tri.v0[c];
+      e1[c][l] = x.tri.e1[c];
+      e2[c][l] = x.tri.e2[c];
+    }
+    u_roulette[l] = (*u[i])[0].y;
+    u_x[l] = (*u[i])[1].x;
+    u_y[l] = (*u[i])[1].y;
+    edge_dist2[l] = x.edge_dist2;
+    prev_factor[l] = x.prev_factor;
+    edge[l] = x.edge ? -1 : 0;
+    roulette[l] = w.count - 1 >= it_.settings_.roulette_depth ? -1 : 0;
+  }
+  const V3 fx = lanes::load3(frame_x), fy = lanes::load3(frame_y), fz = lanes::load3(frame_z);
+  // Frame::to_local(x.wo).
+  const V3 w_prev = lanes::load3(wo);
+  const V3 wo_local{lanes::dot(w_prev, fx), lanes::dot(w_prev, fy), lanes::dot(w_prev, fz)};
+  // bsdf_sample's Lambert branch: wo turned up, sample_cosine_hemisphere (its concentric disk
+  // with sincosf lane by lane), the density and the weight, then wi turned back.
+  const I below = wo_local.z < 0.0f;
+  const F wo_z = below ? -wo_local.z : wo_local.z;
+  const I up = ~(wo_z <= 0.0f);
+  const F a = 2.0f * lanes::load(u_x) - 1.0f, b = 2.0f * lanes::load(u_y) - 1.0f;
+  const I centre = (a == 0.0f) & (b == 0.0f);
+  const I wide = lanes::abs(a) > lanes::abs(b);
+  const F radius = wide ? a : b;
+  const F phi = wide ? 0.25f * kPi * (b / a) : 0.5f * kPi - 0.25f * kPi * (a / b);
+  F cos_phi, sin_phi;
+  for (size_t l = 0; l < W; ++l) {
+    float s_l, c_l;
+    ::sincosf(phi[l], &s_l, &c_l);
+    sin_phi[l] = s_l;
+    cos_phi[l] = c_l;
+  }
+  const F dx = centre ? F{} : radius * cos_phi;
+  const F dy = centre ? F{} : radius * sin_phi;
+  const F z = lanes::sqrt(lanes::max(F{}, 1.0f - dx * dx - dy * dy));
+  const F pdf = z > 0.0f ? z * kInvPi : F{};
+  const I has_pdf = pdf > 0.0f;
+  const V3 weight =
+      lanes::select(has_pdf, lanes::load3(albedo) * lanes::splat(kInvPi) * (z / pdf), V3{});
+  const I valid = up & has_pdf & ((weight.x > 0.0f) | (weight.y > 0.0f) | (weight.z > 0.0f));
+  const V3 wi{dx, dy, below ? -z : z};
+  const V3 w_next = fx * wi.x + fy * wi.y + fz * wi.z;  // Frame::to_world
+  // bsdf_pdf(x, wi, wo_local) (lambert_pdf), then to_area_prev towards the previous vertex.
+  const I flip = wi.z < 0.0f;
+  const F rev_o = flip ? -wi.z : wi.z, rev_i = flip ? -wo_local.z : wo_local.z;
+  const F pdf_rev_dir = rev_o <= 0.0f ? F{} : (rev_i > 0.0f ? rev_i * kInvPi : F{});
+  const F prev_pdf_rev = lanes::load_mask(edge)
+                             ? pdf_rev_dir / lanes::load(edge_dist2) * lanes::load(prev_factor)
+                             : F{};
+  // The throughput, Russian roulette, and the walk's test of what is left.
+  V3 beta_next = lanes::load3(beta) * weight;
+  V3 rr_next = lanes::load3(rr_beta) * weight;
+  const I rr = lanes::load_mask(roulette);
+  const F survive = lanes::min(lanes::splat(1.0f), lanes::sqrt(lanes::max_component(rr_next)));
+  I alive = valid & (~rr | (lanes::load(u_roulette) < survive));
+  const F inverse = 1.0f / survive;
+  beta_next = lanes::select(rr, beta_next * inverse, beta_next);
+  rr_next = lanes::select(rr, rr_next * inverse, rr_next);
+  const F largest = lanes::max_component(beta_next);
+  alive &= (largest > 0.0f) & (lanes::abs(largest) <= std::numeric_limits<float>::max());
+  // ray_start: leave_surface on the side w_next leaves to.
+  const V3 n_lab = lanes::load3(ng);
+  const I front = lanes::dot(n_lab, w_next) >= 0.0f;
+  const V3 side = lanes::select(front, n_lab, -n_lab);
+  const V3 e1v = lanes::load3(e1), e2v = lanes::load3(e2);
+  const V3 start =
+      lanes::leave_surface(lanes::load3(v0), e1v, e2v, lanes::triangle_extent(e1v, e2v),
+                           lanes::load3(p), side, it_.offset_);
+  for (size_t l = 0; l < n; ++l) {
+    if (!valid[l]) continue;
+    WalkState& w = walks[index[l]];
+    std::vector<Vertex>& path = *paths[index[l]];
+    Vertex& x = path[static_cast<size_t>(w.count - 1)];
+    x.delta = false;
+    x.aov_tint = glm::vec3(weight.x[l], weight.y[l], weight.z[l]);
+    path[static_cast<size_t>(w.count - 2)].pdf_rev = prev_pdf_rev[l];
+    if (!alive[l]) continue;
+    w.beta = glm::vec3(beta_next.x[l], beta_next.y[l], beta_next.z[l]);
+    w.rr_beta = glm::vec3(rr_next.x[l], rr_next.y[l], rr_next.z[l]);
+    w.pdf_dir = pdf[l];
+    const glm::vec3 origin(start.x[l], start.y[l], start.z[l]);
+    const bool f = front[l] != 0;
+    x.start[f ? 0 : 1] = origin;
+    x.start_known |= f ? 1 : 2;
+    w.ray.origin = origin;
+    w.ray.dir = glm::vec3(w_next.x[l], w_next.y[l], w_next.z[l]);
+    w.ray.tmin = 0.0f;
+    w.ray.tmax = kRayTMax;
+    walk_begin(path, w);
+  }
+}
+#else
+void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const*, WalkState*, const uint32_t*,
+                                    const std::array<glm::vec2, 2>* const*, size_t) const {}
+#endif
 
 void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
                                const std::array<glm::vec2, 3>& u, bool walk, WalkState& w) const {
@@ -1240,7 +1426,7 @@ float BdptTracer::mis_weight_recursive(const Vertex* light, const Vertex* camera
     // The strategies with s >= 2 count light_paths (F) times: with s = 1 each strategy on the
     // camera side has s >= 2, so pt (light vertex 1 there) carries F; with s = 0 those past
     // (1, t - 1) do, through pt_minus. From s >= 2 the light side's (1, .) and (0, .) lose F
-    // through light vertex 1's stored pdf_fwd (walk_step).
+    // through light vertex 1's stored pdf_fwd (walk_hit).
     const float f = it_.settings_.light_paths;
     if (s > 0) {
       // pt is a surface vertex (connectible); qs a surface, light or environment vertex.
@@ -1456,12 +1642,15 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
       }
     }
     draw_groups<2>(drawing.data(), m, u);
-    m = 0;
+    std::array<uint32_t, kWavefront> index;
+    std::array<Hit, kWavefront> hits;
+    size_t n = 0;
     for (size_t k = 0; k < count; ++k) {
       if (!walks[k].active) continue;
-      const bool draws = will_draw(walks[k], first_hits[first + k]);
-      walk_step(subs[k].camera, walks[k], first_hits[first + k], u[draws ? m++ : 0], escaped[k]);
+      index[n] = static_cast<uint32_t>(k);
+      hits[n++] = first_hits[first + k];
     }
+    step_bounce(paths.data(), walks.data(), index.data(), hits.data(), n, u.data(), escaped.data());
   }
   walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
   // The light subpaths. Their third group (the emission direction) only where the subpath goes on

@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "tritrace/math/sampling.h"
+#include "tritrace/render/lanes.h"
 #include "tritrace/render/material/bsdf.h"
 #include "tritrace/render/shading_normal.h"
 #include "tritrace/render/surface_offset.h"
@@ -118,102 +119,8 @@ LightSample uniform_environment_sample(glm::vec3 radiance, const Frame& frame, g
 // of trace<true> below, operation for operation. The build does not contract multiply-adds
 // (-ffp-contract=off) and every operation here is the scalar code's, in its order, so each lane
 // is bit for bit what the scalar code computes for its path; only the branches become masks.
-namespace lanes {
 
-inline constexpr size_t kWidth = 8;
-using F = float __attribute__((vector_size(32)));
-using I = int32_t __attribute__((vector_size(32)));
-using U = uint32_t __attribute__((vector_size(32)));
-
-struct V3 {
-  F x, y, z;
-};
-
-inline F splat(float v) {
-  return F{} + v;
-}
-inline F sqrt(F v) {
-  return reinterpret_cast<F>(_mm256_sqrt_ps(reinterpret_cast<__m256>(v)));
-}
-inline F select(I mask, F a, F b) {
-  return mask ? a : b;
-}
-inline V3 select(I mask, const V3& a, const V3& b) {
-  return {mask ? a.x : b.x, mask ? a.y : b.y, mask ? a.z : b.z};
-}
-inline V3 operator+(const V3& a, const V3& b) {
-  return {a.x + b.x, a.y + b.y, a.z + b.z};
-}
-inline V3 operator-(const V3& a, const V3& b) {
-  return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-inline V3 operator-(const V3& a) {
-  return {-a.x, -a.y, -a.z};
-}
-inline V3 operator*(const V3& a, const V3& b) {
-  return {a.x * b.x, a.y * b.y, a.z * b.z};
-}
-inline V3 operator*(const V3& a, F s) {
-  return {a.x * s, a.y * s, a.z * s};
-}
-inline V3 operator*(F s, const V3& a) {
-  return {s * a.x, s * a.y, s * a.z};
-}
-// glm::dot's order: (x + y) + z.
-inline F dot(const V3& a, const V3& b) {
-  return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-// std::max({x, y, z}) (std::max_element: a later value wins only when strictly greater).
-inline F max_component(const V3& c) {
-  F m = c.x;
-  m = m < c.y ? c.y : m;
-  return m < c.z ? c.z : m;
-}
-// std::max(a, b) and std::min(a, b): b only when strictly beyond a.
-inline F max(F a, F b) {
-  return a < b ? b : a;
-}
-inline F min(F a, F b) {
-  return b < a ? b : a;
-}
-inline F abs(F v) {
-  return reinterpret_cast<F>(reinterpret_cast<U>(v) & 0x7fffffffu);
-}
-
-// offset_ray_origin_scalar, per lane.
-inline V3 offset_ray_origin(const V3& p, const V3& n, F extent, const RayOffsetParams& k) {
-  const auto shift = [&](F pc, F nc) {
-    const I ulps = __builtin_convertvector(k.int_scale * nc, I);
-    const U bits = reinterpret_cast<U>(pc);
-    const F by_ulps = reinterpret_cast<F>(bits + reinterpret_cast<U>(pc < 0.0f ? -ulps : ulps));
-    const F by_extent = pc + k.float_scale * extent * nc;
-    return nc > 0.0f ? max(by_extent, by_ulps) : min(by_extent, by_ulps);
-  };
-  return {shift(p.x, n.x), shift(p.y, n.y), shift(p.z, n.z)};
-}
-
-// triangle_extent.
-inline F triangle_extent(const V3& e1, const V3& e2) {
-  const V3 a{max(abs(e1.x), abs(e2.x)), max(abs(e1.y), abs(e2.y)), max(abs(e1.z), abs(e2.z))};
-  return max_component(a);
-}
-
-// leave_surface (surface_offset.h) for a triangle with vertex v0 and edges e1, e2.
-inline V3 leave_surface(const V3& v0, const V3& e1, const V3& e2, F extent, const V3& x,
-                        const V3& n, const RayOffsetParams& offset) {
-  const V3 sum = e1 + e2;
-  const V3 inward = v0 + V3{sum.x / 3.0f, sum.y / 3.0f, sum.z / 3.0f} - x;
-  const F inward_length = sqrt(dot(inward, inward));
-  const I inside_exists = inward_length > 0.0f;
-  const auto keep = [](F d, F nc) { return d * nc < 0.0f ? F{} : d; };
-  const V3 step = select(inside_exists, inward * (1.0f / inward_length), V3{});
-  const V3 inside =
-      select(inside_exists,
-             offset_ray_origin(x, V3{keep(step.x, n.x), keep(step.y, n.y), keep(step.z, n.z)},
-                               extent, offset),
-             x);
-  return offset_ray_origin(inside, n, extent, offset);
-}
+using lanes::kWidth;
 
 // Eight paths' vertices: what the gather step reads for each lane, in lanes.
 struct Gathered {
@@ -225,20 +132,6 @@ struct Gathered {
       l_radiance[3][kWidth], l_pmf_over_area[kWidth], l_extent[kWidth];
   alignas(32) int32_t l_two_sided[kWidth];
 };
-
-inline F load(const float* p) {
-  F v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-inline V3 load3(const float (&p)[3][kWidth]) {
-  return {load(p[0]), load(p[1]), load(p[2])};
-}
-inline I load_mask(const int32_t* p) {
-  I v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
 
 // What the vertices give back, per lane.
 struct Shaded {
@@ -253,19 +146,6 @@ struct Shaded {
   alignas(32) float x[3][kWidth];
 };
 
-inline void store(float* p, F v) {
-  std::memcpy(p, &v, sizeof v);
-}
-inline void store3(float (&p)[3][kWidth], const V3& v) {
-  store(p[0], v.x);
-  store(p[1], v.y);
-  store(p[2], v.z);
-}
-inline void store_mask(int32_t* p, I v) {
-  std::memcpy(p, &v, sizeof v);
-}
-
-}  // namespace lanes
 #endif
 
 }  // namespace
@@ -402,7 +282,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
     size_t next = 0;
     for (size_t j0 = 0; j0 < drawn; j0 += W) {
       const size_t count = std::min(W, drawn - j0);
-      lanes::Gathered g;
+      Gathered g;
       if (count < W) std::memset(&g, 0, sizeof g);
       for (size_t l = 0; l < count; ++l) {
         const size_t k = hit_slot[j0 + l];
@@ -448,7 +328,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       }
       if (last) continue;
 
-      lanes::Shaded sh;
+      Shaded sh;
       {
         const float* u = vertex_u.data() + j0;
         const F u_roulette = lanes::load(u + kStride);
