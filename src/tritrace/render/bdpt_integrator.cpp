@@ -520,6 +520,8 @@ class BdptTracer {
   // Makes wavefront sample k the one whose subpaths, pixel and sums the connections and weights
   // below read and write.
   void select(size_t k);
+  // x.tri = triangle prim, x.p its point at barycentrics (b1, b2) and x.ng its normal.
+  void set_triangle(Vertex& x, uint32_t prim, float b1, float b2) const;
   // Fills vertex x from a hit of ray `ray`.
   bool make_surface(Vertex& x, const Ray& ray, const Hit& hit) const;
   // A walk from the last of `path`'s w.count vertices: inactive if the subpath is full, else
@@ -718,27 +720,7 @@ bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
   x.prim = hit.prim;
   x.u = hit.u;
   x.v = hit.v;
-  // A triangle of the scene's own mesh (stored_triangle's members) in registers, stored member by
-  // member, and the point and normal computed from the registers: computed from x.tri's members
-  // they were loaded as wider words than their stores had just written, and a whole triangle
-  // copied through a temporary did the same (store-forwarding stalls, a sixth of the camera
-  // walk's profile). Instanced triangles are built in place as before.
-  if (hit.prim < scene_.mesh.size()) {
-    const TriangleMesh& mesh = scene_.mesh;
-    const glm::vec3 v0 = mesh.v0()[hit.prim], e1 = mesh.e1(hit.prim), e2 = mesh.e2(hit.prim);
-    const glm::vec3 normal = mesh.normal()[hit.prim];
-    x.tri.v0 = v0;
-    x.tri.e1 = e1;
-    x.tri.e2 = e2;
-    x.tri.normal = normal;
-    x.tri.material = mesh.material()[hit.prim];
-    x.p = v0 + hit.u * e1 + hit.v * e2;
-    x.ng = normal;
-  } else {
-    build_in_place(x.tri, [&] { return scene_.triangle(hit.prim); });
-    x.p = x.tri.v0 + hit.u * x.tri.e1 + hit.v * x.tri.e2;
-    x.ng = x.tri.normal;
-  }
+  set_triangle(x, hit.prim, hit.u, hit.v);
   x.material = &scene_.materials[x.tri.material];
   x.smooth = shades_smooth(scene_, *x.material, hit.prim);
   x.ns = x.ng;
@@ -767,6 +749,30 @@ bool BdptTracer::make_surface(Vertex& x, const Ray& ray, const Hit& hit) const {
   x.delta = false;
   x.wo = -glm::normalize(ray.dir);
   return true;
+}
+
+void BdptTracer::set_triangle(Vertex& x, uint32_t prim, float b1, float b2) const {
+  // A triangle of the scene's own mesh (stored_triangle's members) in registers, stored member by
+  // member, and the point and normal computed from the registers: computed from x.tri's members
+  // they were loaded as wider words than their stores had just written, and a whole triangle
+  // copied through a temporary did the same (store-forwarding stalls, a sixth of the camera
+  // walk's profile). Instanced triangles are built in place.
+  if (prim < scene_.mesh.size()) {
+    const TriangleMesh& mesh = scene_.mesh;
+    const glm::vec3 v0 = mesh.v0()[prim], e1 = mesh.e1(prim), e2 = mesh.e2(prim);
+    const glm::vec3 normal = mesh.normal()[prim];
+    x.tri.v0 = v0;
+    x.tri.e1 = e1;
+    x.tri.e2 = e2;
+    x.tri.normal = normal;
+    x.tri.material = mesh.material()[prim];
+    x.p = v0 + b1 * e1 + b2 * e2;
+    x.ng = normal;
+  } else {
+    build_in_place(x.tri, [&] { return scene_.triangle(prim); });
+    x.p = x.tri.v0 + b1 * x.tri.e1 + b2 * x.tri.e2;
+    x.ng = x.tri.normal;
+  }
 }
 
 void BdptTracer::walk_begin(std::vector<Vertex>& path, WalkState& w) {
@@ -1126,17 +1132,16 @@ void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
     x.point_light = false;
     x.delta = false;
     x.prim = e.prim;
-    x.tri = scene_.triangle(e.prim);
+    const glm::vec3 b = sample_uniform_triangle(u_point);
+    set_triangle(x, e.prim, b.y, b.z);
     x.material = &scene_.materials[x.tri.material];
     x.two_sided = x.material->two_sided;
     x.emits = true;
     // Emission is taken flat (the lab normal), as the path tracer's light sampling does.
     x.smooth = false;
-    const glm::vec3 b = sample_uniform_triangle(u_point);
     x.u = b.y;
     x.v = b.z;
-    x.p = x.tri.v0 + b.y * x.tri.e1 + b.z * x.tri.e2;
-    x.ng = x.ns = x.tri.normal;
+    x.ns = x.ng;
     x.pdf_fwd = pick.pmf / e.area;
     x.beta = glm::vec3(1.0f / x.pdf_fwd);
     // (x.le, the emission along the sampled direction, is read by nothing but this walk's start.)
