@@ -878,11 +878,13 @@ void BdptTracer::walk_all(std::vector<Vertex>* const* paths, WalkState* walks, S
   std::array<Sampler*, kWavefront> drawing{};
   std::array<std::array<glm::vec2, 2>, kWavefront> u{};
   for (;;) {
+    // The active walks' rays gathered without a branch (which walks are active is random: the
+    // branch mispredicted often).
     size_t n = 0;
     for (size_t k = 0; k < count; ++k) {
-      if (!walks[k].active) continue;
       index[n] = static_cast<uint32_t>(k);
-      rays[n++] = walks[k].ray;
+      rays[n] = walks[k].ray;
+      n += walks[k].active ? 1 : 0;
     }
     if (n == 0) return;
     // Incoherent rays, one query for the wavefront's bounce: on a small tree as packets, on a
@@ -903,8 +905,8 @@ void BdptTracer::walk_all(std::vector<Vertex>* const* paths, WalkState* walks, S
 void BdptTracer::step_bounce(std::vector<Vertex>* const* paths, WalkState* walks,
                              const uint32_t* index, const Hit* hits, size_t n,
                              const std::array<glm::vec2, 2>* u, bool* escaped) const {
-  std::array<uint32_t, kWavefront> lane_index;
-  std::array<const std::array<glm::vec2, 2>*, kWavefront> lane_u;
+  std::array<uint32_t, 8> lane_index;
+  std::array<const std::array<glm::vec2, 2>*, 8> lane_u;
   size_t lanes_used = 0;
   size_t m = 0;
   for (size_t j = 0; j < n; ++j) {
@@ -917,14 +919,18 @@ void BdptTracer::step_bounce(std::vector<Vertex>* const* paths, WalkState* walks
     if (!walks[k].light && x.lambert && !x.smooth) {
       lane_index[lanes_used] = k;
       lane_u[lanes_used++] = &uj;
+      // Eight at a time, while their vertices are still in the first-level cache.
+      if (lanes_used == lanes::kWidth) {
+        walk_scatter_lanes(paths, walks, lane_index.data(), lane_u.data(), lanes_used);
+        lanes_used = 0;
+      }
       continue;
     }
 #endif
     walk_scatter(*paths[k], walks[k], uj);
   }
-  for (size_t i = 0; i < lanes_used; i += 8) {
-    walk_scatter_lanes(paths, walks, lane_index.data() + i, lane_u.data() + i,
-                       std::min<size_t>(8, lanes_used - i));
+  if (lanes_used > 0) {
+    walk_scatter_lanes(paths, walks, lane_index.data(), lane_u.data(), lanes_used);
   }
 }
 
