@@ -916,7 +916,7 @@ void BdptTracer::step_bounce(std::vector<Vertex>* const* paths, WalkState* walks
     if (!walk_hit(*paths[k], walks[k], hits[j], escaped[k])) continue;
 #if defined(TRITRACE_LANES)
     const Vertex& x = (*paths[k])[static_cast<size_t>(walks[k].count - 1)];
-    if (!walks[k].light && x.lambert && !x.smooth) {
+    if (it_.settings_.lanes && !walks[k].light && x.lambert && !x.smooth) {
       lane_index[lanes_used] = k;
       lane_u[lanes_used++] = &uj;
       // Eight at a time, while their vertices are still in the first-level cache.

@@ -63,6 +63,9 @@ struct BdptSettings {
   // parameter). s = 0 and s = 1 (next-event estimation from the light subpath's first vertex,
   // which every sample draws) are sampled by every sample. 1: every sample, the image as before.
   float light_paths = 1.0f;
+  // For tests: false walks every camera vertex with the scalar code, which the SIMD lanes for flat
+  // Lambert vertices (where the build has AVX2) must match bit for bit.
+  bool lanes = true;
 };
 
 // The smallest BdptSettings::light_paths accepted (smaller shares divide contributions by
