@@ -483,7 +483,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   RenderedImage rendered;
   RenderStats stats;
   IntegratorSpec spec;
-  float light_paths = 0.0f;
+  float used_light_paths = 0.0f;
   try {
     py::gil_scoped_release nogil;
     // The view's camera and lights are the scene's while the lock lives: the job is made, builds
@@ -493,7 +493,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
     job.prepare(nullptr, prebuilt ? prebuilt->accel.get() : nullptr);
     rendered = job.render(&stats);
     spec = job.spec();
-    light_paths = job.light_paths();
+    used_light_paths = job.light_paths();
   } catch (const Error& e) {
     // A combination of arguments the job refuses (time_limit with the lab integrator ...).
     if (e.exit_code() == ExitCode::kUsage) raise_value_error(e);
@@ -512,7 +512,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   frame.integrator = std::string(integrator_name(spec.kind));
   frame.spp = stats.spp;
   frame.mean_spp = stats.mean_spp();
-  frame.light_paths = light_paths;
+  frame.light_paths = used_light_paths;
   frame.milliseconds = stats.milliseconds;
   frame.rays = stats.rays;
   frame.threads = stats.threads;

@@ -334,7 +334,7 @@ TEST(BdptJob, LightPathsAutoIsTheChosenSharesImageForAnyThreadsAndParts) {
   RenderJob job(s, load_job_scene(s));
   EXPECT_TRUE(job.spec().light_paths_auto);
   job.prepare();
-  ASSERT_TRUE(job.light_paths_choice().has_value());
+  ASSERT_TRUE(job.light_paths_pilot().has_value());
   const float chosen = job.light_paths();
   EXPECT_LT(chosen, 1.0f);  // a diffuse box (bdpt_pilot_test)
   const RenderedImage auto_image = job.render();

@@ -15,6 +15,7 @@
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/job/setting_values.h"
 #include "tritrace/render/bdpt_integrator.h"
+#include "tritrace/render/bdpt_pilot.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/make_integrator.h"
 
@@ -423,11 +424,14 @@ void RenderJob::remake_integrator() {
     const auto start = std::chrono::steady_clock::now();
     BdptSettings settings;
     settings.max_depth = spec_.max_depth;
-    light_paths_choice_ = choose_light_paths(*scene_, *accel_, settings, spec_.seed, spec_.sampler);
-    pilot_ms_ =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const LightPathsChoice choice =
+        choose_light_paths(*scene_, *accel_, settings, spec_.seed, spec_.sampler);
+    light_paths_pilot_ = LightPathsPilot{
+        choice.light_paths, choice.samples, choice.rays,
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count()};
     IntegratorSpec chosen = spec_;
-    chosen.light_paths = light_paths_choice_->light_paths;
+    chosen.light_paths = choice.light_paths;
     integrator_ = make_integrator(chosen, *scene_);
     return;
   }
@@ -435,19 +439,19 @@ void RenderJob::remake_integrator() {
 }
 
 std::string RenderJob::light_paths_summary() const {
-  if (!light_paths_choice_) return "";
-  const LightPathsChoice& c = *light_paths_choice_;
+  if (!light_paths_pilot_) return "";
+  const LightPathsPilot& c = *light_paths_pilot_;
   char text[160];
   std::snprintf(text, sizeof text,
                 "bdpt --light-paths auto chose %s (pilot: %llu samples, %llu rays, %.1f ms)",
                 format_double(c.light_paths).c_str(), static_cast<unsigned long long>(c.samples),
-                static_cast<unsigned long long>(c.rays), pilot_ms_);
+                static_cast<unsigned long long>(c.rays), c.milliseconds);
   return text;
 }
 
 float RenderJob::light_paths() const {
   if (spec_.kind != IntegratorSpec::Kind::kBdpt) return 0.0f;
-  return light_paths_choice_ ? light_paths_choice_->light_paths : spec_.light_paths;
+  return light_paths_pilot_ ? light_paths_pilot_->light_paths : spec_.light_paths;
 }
 
 Film RenderJob::make_film() const {
@@ -487,7 +491,7 @@ RenderRecord RenderJob::record(const RenderStats& stats, double seconds) const {
   r.noise_threshold = path() ? options_.noise_threshold : 0.0f;
   if (path()) r.sampler = options_.sampler;
   r.light_paths = light_paths();
-  r.light_paths_auto = light_paths_choice_.has_value();
+  r.light_paths_auto = light_paths_pilot_.has_value();
   return r;
 }
 

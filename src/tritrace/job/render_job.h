@@ -19,7 +19,6 @@
 #include "tritrace/image/image_io.h"
 #include "tritrace/job/job_settings.h"
 #include "tritrace/math/random.h"
-#include "tritrace/render/bdpt_pilot.h"
 #include "tritrace/render/film.h"
 #include "tritrace/render/integrator.h"
 #include "tritrace/render/renderer.h"
@@ -156,10 +155,14 @@ class RenderJob {
   // Makes the integrator again for the scene as it is now (the viewer moves the light). With
   // bdpt's `--light-paths auto`, runs its pilot first (render/bdpt_pilot.h).
   void remake_integrator();
-  // The pilot's choice of the last remake_integrator (bdpt with --light-paths auto only), and the
-  // milliseconds it took.
-  const std::optional<LightPathsChoice>& light_paths_choice() const { return light_paths_choice_; }
-  double pilot_ms() const { return pilot_ms_; }
+  // The pilot's choice of the last remake_integrator (bdpt with --light-paths auto only): the
+  // share, the pilot's samples and rays, and the milliseconds it took.
+  struct LightPathsPilot {
+    float light_paths = 1.0f;
+    uint64_t samples = 0, rays = 0;
+    double milliseconds = 0.0;
+  };
+  const std::optional<LightPathsPilot>& light_paths_pilot() const { return light_paths_pilot_; }
   // The share of samples with a light subpath this bdpt render uses (the pilot's with auto; after
   // prepare()); 0 for other integrators.
   float light_paths() const;
@@ -212,8 +215,7 @@ class RenderJob {
   std::unique_ptr<Accel> own_accel_;
   const Accel* accel_ = nullptr;
   std::unique_ptr<Integrator> integrator_;
-  std::optional<LightPathsChoice> light_paths_choice_;
-  double pilot_ms_ = 0.0;
+  std::optional<LightPathsPilot> light_paths_pilot_;
 };
 
 }  // namespace tritrace
