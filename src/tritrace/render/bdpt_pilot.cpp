@@ -114,9 +114,9 @@ LightPathsChoice choose_light_paths(const Scene& scene, const Accel& accel,
         sum2 += x * x;
         thinned += (1.0 / f - 1.0) * r.light[j] * r.light[j] + r.splat2[j] / f;
         cost[j] += static_cast<double>(r.camera_vertices) +
-                   kPilotShadowRayCost * static_cast<double>(r.always_rays) +
+                   kPilotConnectionCost * static_cast<double>(r.always_rays) +
                    f * (static_cast<double>(r.light_vertices) +
-                        kPilotShadowRayCost * static_cast<double>(r.light_rays));
+                        kPilotConnectionCost * static_cast<double>(r.light_rays));
       }
       spread[j] = (sum2 - sum * sum / m) / (m - 1.0) * m;
       moment[j] += baseline + (spread[j] - spread[0]) + thinned;

@@ -36,9 +36,9 @@ inline constexpr double kPilotClamp = 10.0;
 
 // Counted work per sample in the pilot's cost model: a subpath vertex (an extension ray, the
 // hit's shading and the next direction's sampling) costs 1, a connection (two BSDF evaluations,
-// its MIS weight and a shadow ray) kPilotShadowRayCost. Fitted to bdpt's CPU time at F = 1 and
+// its MIS weight and a shadow ray) kPilotConnectionCost. Fitted to bdpt's CPU time at F = 1 and
 // 1/8 on cornell-area and caustics.json (docs/PERFORMANCE.md, 2026-11-28): 1.29 and 1.37.
-inline constexpr double kPilotShadowRayCost = 1.3;
+inline constexpr double kPilotConnectionCost = 1.3;
 
 // One connection of the pilot's F = 1 render into `sample`'s sums: its path x was sampled by
 // strategy i with unweighted contribution `value` (luminance; a light-tracing splat when
