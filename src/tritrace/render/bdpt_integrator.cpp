@@ -566,13 +566,12 @@ class BdptTracer {
   float mis_weight_recursive(const Vertex* light, const Vertex* camera, int s, int t, float ratio,
                              const glm::vec3* dir = nullptr) const;
   // The ratio walk over the whole path that the recursion replaced: the tests' oracle. It applies
-  // the count ratio as a factor of light tracing's strategies (not through the densities), and
-  // counts the strategies with s >= 2 `light_paths` times (the pilot's candidate shares; the
-  // settings' share elsewhere).
-  // With `strategies`, also lists every other strategy that can sample the path with its density
-  // ratio to this one's (remapped: squared for the power heuristic; counts left out) and whether
-  // it uses the light subpath past its first vertex (s >= 2).
-  float mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, float ratio, float light_paths,
+  // the count ratio as a factor of light tracing's strategies (not through the densities).
+  // With `strategies` (`--light-paths auto`'s pilot), also lists every other strategy that can
+  // sample the path with its density ratio to this one's (remapped: squared for the power
+  // heuristic; counts left out) and whether it uses the light subpath past its first vertex (s >=
+  // 2).
+  float mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, float ratio,
                         std::vector<std::pair<float, bool>>* strategies = nullptr) const;
   // Light tracing's count ratio at pixel (x, y) for the MIS weights (SplatPass::count_ratio,
   // times the tests' BdptSettings::mis_count_scale).
@@ -1104,7 +1103,7 @@ void BdptTracer::pilot_record(const Pending& p) {
   pilot_strategies_.clear();
   pilot_strategies_.emplace_back(1.0f, light);
   const float ratio = p.t == 1 ? p.count_ratio * it_.settings_.mis_count_scale : pixel_ratio_;
-  (void)mis_weight_walk(light_, camera_, p.s, p.t, ratio, 1.0f, &pilot_strategies_);
+  (void)mis_weight_walk(light_, camera_, p.s, p.t, ratio, &pilot_strategies_);
   eye.p = saved;
   add_pilot_contribution(rec, v, p.t == 1, pilot_strategies_);
 }
@@ -1115,7 +1114,6 @@ void BdptTracer::pilot_record(const Pending& p) {
 // changes sides. The connection's four neighbouring pdf_rev values are set for this path and
 // restored afterwards.
 float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, float ratio,
-                                  float light_paths,
                                   std::vector<std::pair<float, bool>>* strategies) const {
   if (s + t == 2) return 1.0f;  // an emitter seen by the camera: (1, 1) is not a strategy here
   const bool balance = it_.settings_.balance;
@@ -1157,7 +1155,7 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, f
   // the samples. Applied here as factors of whole strategies; the stored densities that carry
   // them for the recursion (camera vertex 1's pdf_fwd divided by the ratio, light vertex 1's
   // multiplied by light_paths) are undone below.
-  const float stored_light_paths = it_.settings_.light_paths;
+  const float light_paths = it_.settings_.light_paths;
   const auto count = [&](int ss, int tt) {
     return (ss >= 2 ? light_paths : 1.0f) * (tt == 1 ? ratio : 1.0f);
   };
@@ -1178,7 +1176,7 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, f
   }
   r = 1.0f;
   for (int i = s - 1; i >= 0; --i) {
-    const float fwd = i == 1 ? light[1].pdf_fwd / stored_light_paths : light[i].pdf_fwd;
+    const float fwd = i == 1 ? light[1].pdf_fwd / light_paths : light[i].pdf_fwd;
     r *= remap(light[i].pdf_rev) / remap(fwd);
     const bool delta_light_side = i > 0 ? light[i - 1].delta : delta_light(light[0]);
     if (!light[i].delta && !delta_light_side) {
@@ -1305,7 +1303,7 @@ float BdptTracer::mis_weight(Vertex* light, Vertex* camera, int s, int t, float 
                              const glm::vec3* dir) const {
   const float w = mis_weight_recursive(light, camera, s, t, ratio, dir);
   if (BdptSettings::WeightCheck* check = it_.settings_.weight_check) {
-    const float walked = mis_weight_walk(light, camera, s, t, ratio, it_.settings_.light_paths);
+    const float walked = mis_weight_walk(light, camera, s, t, ratio);
     // A NaN from either, but not both, is a difference that no tolerance passes.
     const double difference =
         std::isnan(w) && std::isnan(walked) ? 0.0 : std::abs(static_cast<double>(w) - walked);
