@@ -1,14 +1,14 @@
 // `--light-paths auto`: a short pilot that chooses bdpt's share F of samples that trace a light
 // subpath (BdptSettings::light_paths) for a scene, among kPilotShares {1, 1/2, 1/4, 1/8, 1/16}, by
 // the smallest estimated variance x cost (Grittmann, Yazici, Georgiev and Slusallek 2022,
-// "Efficiency-aware multiple importance sampling for bidirectional rendering algorithms", who
-// choose the light path count per scene the same way: one pilot, each candidate's MIS weights
-// evaluated on its paths, the variance approximated from the weighted contributions' moments and
-// the cost by a linear model of the counts). docs/BDPT.md has the estimates.
+// "Efficiency-aware multiple importance sampling for bidirectional rendering algorithms", choose
+// the light path count per scene with one pilot, each candidate's MIS weights evaluated on its
+// paths and the cost a linear model of counted work; this pilot follows that plan with a cruder
+// variance estimate, from each pixel's samples: docs/BDPT.md).
 //
 // Deterministic: the pilot's pixels, samples and seed depend only on the image size, the render's
 // seed and sampler kind and the scene; it runs on one thread and sums in a fixed order, and its
-// cost is counted work (vertices and shadow rays), never time. So every part of a split render
+// cost is counted work (vertices and connections), never time. So every part of a split render
 // (--spp-range, MPI), every thread count and every pass choose the same F.
 #pragma once
 
