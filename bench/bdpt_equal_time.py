@@ -27,7 +27,8 @@ For each scene:
 
 --light-paths F [F ...] (default 1) measures bdpt with a light subpath in the share F of its
 samples (`tritrace render --light-paths F`), each F as its own bdpt with its own cost c, beside
-the same path renders (all alternated in one loop over seeds); the tables are printed per F.
+the same path renders (all alternated in one loop over seeds); the tables are printed per F. F may
+be `auto` (`--light-paths auto`: the pilot's choice, its cost included in bdpt's CPU time).
 
 --ref-cache DIR keeps the reference and region renders (path only, keyed by the scene file's
 contents) between runs, and --ref-only fills it and stops, so that the timed runs of another build
@@ -55,6 +56,7 @@ import zlib
 import numpy as np
 
 STATS = re.compile(r"\(([\d.]+) Mpaths/s, ([\d.]+) Mrays/s")
+CHOSE = re.compile(r"--light-paths auto chose ([\d.e+-]+)")
 
 
 def read_pfm(path):
@@ -96,6 +98,9 @@ class Scene:
             for mesh in self.doc["meshes"]:  # so that variants written elsewhere find their files
                 if "file" in mesh:
                     mesh["file"] = os.path.join(folder, mesh["file"])
+            env = self.doc.get("environment")
+            if isinstance(env, dict) and "file" in env:  # an environment map (sky.json)
+                env["file"] = os.path.join(folder, env["file"])
             mats = self.doc.get("materials", [])
             self.glass = [m["name"] for m in mats if (m["name"] in glass_names if glass_names
                                                        else m.get("type") == "dielectric")]
@@ -152,6 +157,8 @@ class Runner:
         cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
         m = STATS.search(p.stdout + p.stderr)
         rays = float(m.group(2)) / float(m.group(1)) if m else float("nan")
+        chose = CHOSE.search(p.stdout)
+        self.chosen = chose.group(1) if chose else None
         return read_pfm(out), cpu, rays
 
 
@@ -199,6 +206,11 @@ def region_png(path, masks):
     write_png(path, img)
 
 
+def share(text):
+    """--light-paths' values: a share in (0, 1] or auto."""
+    return text if text == "auto" else float(text)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("tritrace")
@@ -218,8 +230,9 @@ def main():
                     help="folder keeping the reference and region renders between runs")
     ap.add_argument("--ref-only", action="store_true",
                     help="only render the reference and regions into --ref-cache")
-    ap.add_argument("--light-paths", type=float, nargs="+", default=[1.0],
-                    help="bdpt's shares of samples with a light subpath, each measured apart")
+    ap.add_argument("--light-paths", type=share, nargs="+", default=[1.0],
+                    help="bdpt's shares of samples with a light subpath, each measured apart, or "
+                         "auto (the pilot's choice, bdpt_pilot.h)")
     a = ap.parse_args()
     if set(a.seeds) & {a.ref_seed, a.ref_seed + 1, a.ref_seed + 2, a.ref_seed + 3}:
         sys.exit("--seeds must differ from the reference's seeds")
@@ -247,6 +260,8 @@ def main():
         sampler = ["--sampler", a.sampler]
 
         def variant(f):
+            if f == "auto":
+                return "bdpt F=auto"
             return "bdpt" if f == 1.0 else "bdpt F=%g" % f
 
         def extra_of(label):
@@ -265,7 +280,7 @@ def main():
             costs[f] = tb / tp
         print("reference: path %d spp, seeds %d+%d, own noise RMS %.5f; bdpt sample = %s path "
               "samples of CPU" % (a.ref_spp, a.ref_seed, a.ref_seed + 1, ref_noise,
-                                  ", ".join("%.2f (F %g)" % (costs[f], f) for f in a.light_paths)),
+                                  ", ".join("%.2f (F %s)" % (costs[f], f) for f in a.light_paths)),
               flush=True)
         # 3. runs, alternated
         runs = {}  # (label, spp) -> list of (rmse, cpu, rays, sq-error image)
@@ -280,6 +295,9 @@ def main():
                                                extra=extra_of(label))
                 err = img - ref
                 runs.setdefault((label, spp), []).append((rms(err), cpu, rays, (err ** 2).sum(2), img))
+                if runner.chosen is not None:
+                    print("%s %d spp seed %d: auto chose F = %s" % (label, spp, seed, runner.chosen),
+                          flush=True)
         med = {k: (statistics.median(r[0] for r in v), statistics.median(r[1] for r in v),
                    statistics.median(r[2] for r in v)) for k, v in runs.items()}
         print("\n| integrator | spp | CPU s | RMSE | rays / sample |\n|---|---|---|---|---|")

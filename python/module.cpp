@@ -373,6 +373,7 @@ struct Frame {
   std::string integrator;
   uint32_t spp = 0;
   double mean_spp = 0.0;
+  float light_paths = 0.0f;  // bdpt's share of samples with a light subpath (0: not bdpt)
   double milliseconds = 0.0;
   uint64_t rays = 0;
   int threads = 0;
@@ -444,7 +445,12 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   texts.add_number("--noise-threshold", noise_threshold);
   texts.add_number("--aperture", aperture);
   texts.add_number("--focus", focus);
-  texts.add_number("--light-paths", light_paths);
+  // A share, or "auto" (the pilot's choice, bdpt_pilot.h).
+  if (py::isinstance<py::str>(light_paths)) {
+    texts.add_string("--light-paths", light_paths);
+  } else {
+    texts.add_number("--light-paths", light_paths);
+  }
   std::shared_ptr<PyAccel> prebuilt;
   if (!accel.is_none() && !py::isinstance<py::str>(accel)) {
     if (!py::isinstance<PyAccel>(accel)) {
@@ -477,6 +483,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   RenderedImage rendered;
   RenderStats stats;
   IntegratorSpec spec;
+  float used_light_paths = 0.0f;
   try {
     py::gil_scoped_release nogil;
     // The view's camera and lights are the scene's while the lock lives: the job is made, builds
@@ -486,6 +493,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
     job.prepare(nullptr, prebuilt ? prebuilt->accel.get() : nullptr);
     rendered = job.render(&stats);
     spec = job.spec();
+    used_light_paths = job.light_paths();
   } catch (const Error& e) {
     // A combination of arguments the job refuses (time_limit with the lab integrator ...).
     if (e.exit_code() == ExitCode::kUsage) raise_value_error(e);
@@ -504,6 +512,7 @@ Frame render_scene(const std::shared_ptr<SceneData>& data, const py::object& int
   frame.integrator = std::string(integrator_name(spec.kind));
   frame.spp = stats.spp;
   frame.mean_spp = stats.mean_spp();
+  frame.light_paths = used_light_paths;
   frame.milliseconds = stats.milliseconds;
   frame.rays = stats.rays;
   frame.threads = stats.threads;
@@ -722,7 +731,8 @@ bottom-up); albedo, normal: (height, width, 3) and depth: (height, width), or No
 asked for; variance: (height, width, 3), the estimated variance of each pixel's mean (from
 the halves of its samples split by sample index parity), or None; spp_map: (height, width), the
 samples each pixel took (aovs "spp"), or None; integrator, spp (the most a pixel took), mean_spp,
-milliseconds, rays, threads: what was rendered and how.)")
+light_paths (bdpt: the share of samples with a light subpath, light_paths="auto"'s choice; 0
+otherwise), milliseconds, rays, threads: what was rendered and how.)")
       .def_readonly("image", &Frame::image)
       .def_readonly("albedo", &Frame::albedo)
       .def_readonly("normal", &Frame::normal)
@@ -731,6 +741,7 @@ milliseconds, rays, threads: what was rendered and how.)")
       .def_readonly("integrator", &Frame::integrator)
       .def_readonly("spp", &Frame::spp)
       .def_readonly("mean_spp", &Frame::mean_spp)
+      .def_readonly("light_paths", &Frame::light_paths)
       .def_readonly("spp_map", &Frame::spp_map)
       .def_readonly("milliseconds", &Frame::milliseconds)
       .def_readonly("rays", &Frame::rays)
@@ -791,7 +802,8 @@ neighbours' pilots within its 16 x 16 tile, never its own, so the image is unbia
 `tritrace render --noise-threshold`; Frame.mean_spp says how many it took), aperture
 (a thin lens's radius in world units, as `tritrace render --aperture`; path only), focus
 (the distance of the plane in focus, as --focus), light_paths (bdpt only: the share of samples,
-in (0, 1], that also trace a light subpath, as `tritrace render --light-paths`; default 1).
+in (0, 1], that also trace a light subpath, as `tritrace render --light-paths`; default 1; or
+"auto", the pilot's choice per scene, which Frame.light_paths reports).
 aovs: any of "albedo", "normal", "depth", "variance", "spp". Camera settings beyond the CLI's
 flags, as a scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
 focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a

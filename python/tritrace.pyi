@@ -343,6 +343,8 @@ class Frame:
     @property
     def mean_spp(self) -> float: ...
     @property
+    def light_paths(self) -> float: ...
+    @property
     def spp_map(self) -> Optional[npt.NDArray[np.float32]]: ...
     @property
     def milliseconds(self) -> float: ...
@@ -380,7 +382,7 @@ def render(
     noise_threshold: Optional[float] = None,
     aperture: Optional[float] = None,
     focus: Optional[float] = None,
-    light_paths: Optional[float] = None,
+    light_paths: Union[float, Literal["auto"], None] = None,
 ) -> Frame:
     """Renders the scene as `tritrace render` does: the image is bit for bit the one
     `tritrace render ... -o out.pfm` writes with the same settings.
@@ -398,7 +400,9 @@ def render(
     the most); Frame.mean_spp says how many a pixel took on average, aovs "spp" gives
     Frame.spp_map. aperture and focus: a thin lens's radius and the distance of the plane in
     focus, as --aperture and --focus. light_paths (bdpt only): the share of samples, in (0, 1],
-    that also trace a light subpath, as `tritrace render --light-paths` (default 1). Bad values raise ValueError with the
+    that also trace a light subpath, as `tritrace render --light-paths` (default 1), or "auto":
+    a pilot chooses it for the scene among 1, 1/2, 1/4, 1/8 and 1/16 (Frame.light_paths says
+    which). Bad values raise ValueError with the
     CLI's message, wrong types TypeError.
     """
 

@@ -181,6 +181,9 @@ int run_render(const RenderArgs& args) {
                   adaptive_text(settings, stats).c_str(), stats.milliseconds,
                   stats.mrays_per_second(), stats.threads, stats.threads == 1 ? "" : "s",
                   output.c_str());
+      if (const std::string lp = job.light_paths_summary(); !lp.empty()) {
+        std::printf("%s\n", lp.c_str());
+      }
     }
     return 0;
   }
@@ -205,6 +208,9 @@ int run_render(const RenderArgs& args) {
           stats.milliseconds, limit.c_str(), stats.samples_per_second() * 1e-6,
           stats.mrays_per_second(), stats.threads, stats.threads == 1 ? "" : "s", output.c_str());
       if (settings.denoise) std::printf("denoised in %.1f ms\n", rendered.denoise_ms);
+      if (const std::string lp = job.light_paths_summary(); !lp.empty()) {
+        std::printf("%s\n", lp.c_str());
+      }
     } else {
       std::printf("rendered %dx%d in %.1f ms (%.3g Mrays/s, %d thread%s) to %s\n", image.width(),
                   image.height(), stats.milliseconds, stats.mrays_per_second(), stats.threads,

@@ -323,5 +323,86 @@ TEST(BdptJob, LightPathsFlagSceneKeyAndIdentity) {
   }
 }
 
+// --light-paths auto through the job: the pilot chooses before the render, the image is the
+// explicit share's bit for bit, the same for any thread count and the merge of --spp-range parts
+// (every part runs the same pilot), the record and the identity say auto, and bad values stay
+// one-line errors naming the flag or the scene file's key.
+TEST(BdptJob, LightPathsAutoIsTheChosenSharesImageForAnyThreadsAndParts) {
+  JobSettings s = small_bdpt("cornell-area", "21");
+  s.light_paths = "auto";
+  s.threads = std::string(1, '1');
+  RenderJob job(s, load_job_scene(s));
+  EXPECT_TRUE(job.spec().light_paths_auto);
+  job.prepare();
+  ASSERT_TRUE(job.light_paths_pilot().has_value());
+  const float chosen = job.light_paths();
+  EXPECT_LT(chosen, 1.0f);  // a diffuse box (bdpt_pilot_test)
+  const RenderedImage auto_image = job.render();
+  EXPECT_EQ(auto_image.record.light_paths, chosen);
+  EXPECT_TRUE(auto_image.record.light_paths_auto);
+  EXPECT_NE(job.light_paths_summary().find("auto chose"), std::string::npos);
+
+  JobSettings explicit_share = s;
+  explicit_share.light_paths = std::to_string(chosen);
+  RenderJob fixed(explicit_share, load_job_scene(explicit_share));
+  fixed.prepare();
+  const RenderedImage fixed_image = fixed.render();
+  EXPECT_TRUE(same_pixels(auto_image.image, fixed_image.image));
+  EXPECT_FALSE(fixed_image.record.light_paths_auto);
+
+  JobSettings threads = s;
+  threads.threads = std::string(1, '3');
+  RenderJob other(threads, load_job_scene(threads));
+  other.prepare();
+  EXPECT_TRUE(same_pixels(other.render().image, auto_image.image));
+
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("bdpt_auto_parts_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::vector<std::string> files;
+  for (const char* range : {"8:21", "0:8"}) {
+    JobSettings p = s;
+    p.spp_range = range;
+    RenderJob part(p, load_job_scene(p));
+    part.prepare();
+    EXPECT_EQ(part.light_paths(), chosen);
+    EXPECT_TRUE(part.identity() == job.identity());
+    Film film = part.make_film();
+    part.render_to_film(film);
+    files.push_back((dir / (std::string("part") + range[0] + ".exr")).string());
+    part.write_part(film, files.back());
+  }
+  EXPECT_TRUE(same_pixels(merge_parts(files).resolve(), auto_image.image));
+  std::filesystem::remove_all(dir);
+
+  // auto and the share it chose are different settings: their parts never merge.
+  EXPECT_FALSE(job.identity() == fixed.identity());
+  EXPECT_NE(job.identity().settings.find("light_paths=auto"), std::string::npos);
+  const std::vector<ExrAttribute> attributes = render_attributes(auto_image.record);
+  const auto has = [&](const char* name) {
+    return std::any_of(attributes.begin(), attributes.end(),
+                       [&](const ExrAttribute& a) { return a.name == name; });
+  };
+  EXPECT_TRUE(has("tritrace.lightPaths"));
+  EXPECT_TRUE(has("tritrace.lightPathsChosenBy"));
+
+  const auto check = setting_check("--light-paths");
+  EXPECT_EQ(check("auto"), "");
+  for (const char* bad : {"Auto", "automatic", "auto "}) {
+    EXPECT_NE(check(bad).find("must be auto or the share"), std::string::npos) << bad;
+  }
+  const std::string path = std::string(TRITRACE_SOURCE_DIR) + "/scenes/bdpt.json";
+  const LoadedScene file = parse_scene_json(R"({"meshes": [{"generator": "cornell-area"}],
+      "integrator": {"type": "bdpt", "light_paths": "auto"}})",
+                                            path);
+  EXPECT_TRUE(file.integrator.light_paths_auto);
+  const Error e = error_of([&] {
+    parse_scene_json(R"({"meshes": [{"generator": "cornell-area"}],
+        "integrator": {"type": "bdpt", "light_paths": "half"}})",
+                     path);
+  });
+  EXPECT_NE(e.reason().find("\"auto\""), std::string::npos);
+}
+
 }  // namespace
 }  // namespace tritrace

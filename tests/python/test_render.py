@@ -112,6 +112,21 @@ def test_bdpt_light_paths_is_the_clis(tmp_path, cornell):
         tritrace.render(cornell, integrator="path", spp=2, light_paths=0.5)
 
 
+def test_bdpt_light_paths_auto_is_the_clis(tmp_path, cornell):
+    frame = tritrace.render(cornell, integrator="bdpt", spp=4, width=32, height=24,
+                            light_paths="auto")
+    assert frame.light_paths in (1.0, 0.5, 0.25, 0.125, 0.0625)
+    assert_same_bits(frame.image, cli_image(tmp_path, "--integrator", "bdpt", "--spp", 4,
+                                            "--width", 32, "--height", 24, "--light-paths", "auto"))
+    # auto's image is the chosen share's.
+    fixed = tritrace.render(cornell, integrator="bdpt", spp=4, width=32, height=24,
+                            light_paths=frame.light_paths)
+    assert_same_bits(frame.image, fixed.image)
+    with pytest.raises(ValueError, match="light_paths: must be auto"):
+        tritrace.render(cornell, integrator="bdpt", spp=2, light_paths="half")
+    assert tritrace.render(cornell, integrator="path", spp=1, width=8, height=8).light_paths == 0.0
+
+
 def test_aovs_are_the_clis_exr_layers(tmp_path):
     scene = tritrace.Scene.builtin("cornell-area")
     frame = tritrace.render(scene, width=36, height=28, spp=3, aovs=("albedo", "normal", "depth"))

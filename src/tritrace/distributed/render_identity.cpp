@@ -156,7 +156,11 @@ RenderIdentity render_identity(const Scene& scene, const IntegratorSpec& spec,
     // Only when on, so that the settings text (and the hash) of unclamped renders is as before.
     if (spec.clamp > 0.0f) id.settings += " clamp=" + shortest(spec.clamp);
     // bdpt's share of samples with a light subpath: only when below 1, as for clamp.
-    if (spec.kind == IntegratorSpec::Kind::kBdpt && spec.light_paths < 1.0f) {
+    // With auto, the pilot's choice is a function of the scene, the seed and the sampler, which
+    // the identity holds already: every part chooses the same share.
+    if (spec.kind == IntegratorSpec::Kind::kBdpt && spec.light_paths_auto) {
+      id.settings += " light_paths=auto";
+    } else if (spec.kind == IntegratorSpec::Kind::kBdpt && spec.light_paths < 1.0f) {
       id.settings += " light_paths=" + shortest(spec.light_paths);
     }
     // Adaptive sampling changes which samples each pixel takes; absent when off, so that the

@@ -78,11 +78,12 @@ std::string check_clamp(const std::string& s) {
 }
 
 std::string check_light_paths_text(const std::string& s) {
+  if (s == "auto") return "";
   const std::optional<float> v = parse_float(s);
   return v && *v > 0.0f && *v <= 1.0f && check_light_paths(*v).empty()
              ? std::string()
-             : "must be the share of samples that trace a light subpath, greater than 0 (at least "
-               "1e-6) and at most 1, got '" +
+             : "must be auto or the share of samples that trace a light subpath, greater than 0 "
+               "(at least 1e-6) and at most 1, got '" +
                    s + "'";
 }
 
@@ -225,7 +226,13 @@ IntegratorSpec integrator_spec(const JobSettings& settings, const IntegratorSpec
     spec.max_depth = static_cast<int>(*parse_integer(settings.max_depth));
   }
   if (!settings.clamp.empty()) spec.clamp = *parse_float(settings.clamp);
-  if (!settings.light_paths.empty()) spec.light_paths = *parse_float(settings.light_paths);
+  if (settings.light_paths == "auto") {
+    spec.light_paths = 1.0f;
+    spec.light_paths_auto = true;
+  } else if (!settings.light_paths.empty()) {
+    spec.light_paths = *parse_float(settings.light_paths);
+    spec.light_paths_auto = false;
+  }
   return spec;
 }
 

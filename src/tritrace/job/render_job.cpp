@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <utility>
@@ -14,6 +15,7 @@
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/job/setting_values.h"
 #include "tritrace/render/bdpt_integrator.h"
+#include "tritrace/render/bdpt_pilot.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/make_integrator.h"
 
@@ -199,6 +201,11 @@ std::vector<ExrAttribute> render_attributes(const RenderRecord& record) {
   }
   if (record.sampler) {
     out.push_back({"tritrace.sampler", std::string(sampler_name(*record.sampler))});
+  }
+  if (record.light_paths > 0.0f) {
+    out.push_back({"tritrace.lightPaths", record.light_paths});
+    out.push_back(
+        {"tritrace.lightPathsChosenBy", std::string(record.light_paths_auto ? "auto" : "setting")});
   }
   return out;
 }
@@ -411,7 +418,40 @@ void RenderJob::prepare(AccelInfo* info, const Accel* prebuilt, std::optional<do
 }
 
 void RenderJob::remake_integrator() {
+  if (spec_.kind == IntegratorSpec::Kind::kBdpt && spec_.light_paths_auto) {
+    // The pilot's choice depends on the scene, the seed and the sampler only (bdpt_pilot.h), so
+    // every part, pass and thread count of this render makes the same.
+    const auto start = std::chrono::steady_clock::now();
+    BdptSettings settings;
+    settings.max_depth = spec_.max_depth;
+    const LightPathsChoice choice =
+        choose_light_paths(*scene_, *accel_, settings, spec_.seed, spec_.sampler);
+    light_paths_pilot_ = LightPathsPilot{
+        choice.light_paths, choice.samples, choice.rays,
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count()};
+    IntegratorSpec chosen = spec_;
+    chosen.light_paths = choice.light_paths;
+    integrator_ = make_integrator(chosen, *scene_);
+    return;
+  }
   integrator_ = make_integrator(spec_, *scene_);
+}
+
+std::string RenderJob::light_paths_summary() const {
+  if (!light_paths_pilot_) return "";
+  const LightPathsPilot& c = *light_paths_pilot_;
+  char text[160];
+  std::snprintf(text, sizeof text,
+                "bdpt --light-paths auto chose %s (pilot: %llu samples, %llu rays, %.1f ms)",
+                format_double(c.light_paths).c_str(), static_cast<unsigned long long>(c.samples),
+                static_cast<unsigned long long>(c.rays), c.milliseconds);
+  return text;
+}
+
+float RenderJob::light_paths() const {
+  if (spec_.kind != IntegratorSpec::Kind::kBdpt) return 0.0f;
+  return light_paths_pilot_ ? light_paths_pilot_->light_paths : spec_.light_paths;
 }
 
 Film RenderJob::make_film() const {
@@ -450,6 +490,8 @@ RenderRecord RenderJob::record(const RenderStats& stats, double seconds) const {
   r.time_limit = time_limit_seconds(settings_).value_or(0.0);
   r.noise_threshold = path() ? options_.noise_threshold : 0.0f;
   if (path()) r.sampler = options_.sampler;
+  r.light_paths = light_paths();
+  r.light_paths_auto = light_paths_pilot_.has_value();
   return r;
 }
 

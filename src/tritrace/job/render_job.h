@@ -46,13 +46,19 @@ struct RenderRecord {
   RenderStop stop = RenderStop::kSpp;
   // The path tracer's sampler (the denoiser's variance factor depends on it); none for the lab.
   std::optional<SamplerKind> sampler;
+  // bdpt's share of samples with a light subpath (0: not bdpt), and whether the pilot of
+  // `--light-paths auto` chose it.
+  float light_paths = 0.0f;
+  bool light_paths_auto = false;
 };
 
 // The record as EXR header attributes: tritrace.spp (int), tritrace.meanSpp (float, adaptive),
 // tritrace.renderSeconds and tritrace.denoiseSeconds (float, the latter with --denoise),
 // tritrace.timeLimit and tritrace.noiseThreshold (float, when set), tritrace.stoppedBy (string:
 // "spp", "converged" or "time limit"), tritrace.sampler (string: "sobol" or "independent", path
-// renders). Only the two times differ between runs of the same render.
+// renders), tritrace.lightPaths (float, bdpt: the share of samples with a light subpath) and
+// tritrace.lightPathsChosenBy (string, bdpt: "auto" for the pilot's choice, else "setting"). Only
+// the two times differ between runs of the same render.
 // None for a record of no render (spp 0: tritrace denoise's).
 std::vector<ExrAttribute> render_attributes(const RenderRecord& record);
 
@@ -146,8 +152,23 @@ class RenderJob {
   // Builds the accel (or takes `prebuilt`, which must outlive the job) and makes the integrator.
   void prepare(AccelInfo* info = nullptr, const Accel* prebuilt = nullptr,
                std::optional<double> rays = std::nullopt);
-  // Makes the integrator again for the scene as it is now (the viewer moves the light).
+  // Makes the integrator again for the scene as it is now (the viewer moves the light). With
+  // bdpt's `--light-paths auto`, runs its pilot first (render/bdpt_pilot.h).
   void remake_integrator();
+  // The pilot's choice of the last remake_integrator (bdpt with --light-paths auto only): the
+  // share, the pilot's samples and rays, and the milliseconds it took.
+  struct LightPathsPilot {
+    float light_paths = 1.0f;
+    uint64_t samples = 0, rays = 0;
+    double milliseconds = 0.0;
+  };
+  const std::optional<LightPathsPilot>& light_paths_pilot() const { return light_paths_pilot_; }
+  // The share of samples with a light subpath this bdpt render uses (the pilot's with auto; after
+  // prepare()); 0 for other integrators.
+  float light_paths() const;
+  // With --light-paths auto, the line the front ends print after their summary: the chosen share
+  // and the pilot's samples, rays and time ("" otherwise).
+  std::string light_paths_summary() const;
   const Accel& accel() const { return *accel_; }
   const Integrator& integrator() const { return *integrator_; }
 
@@ -194,6 +215,7 @@ class RenderJob {
   std::unique_ptr<Accel> own_accel_;
   const Accel* accel_ = nullptr;
   std::unique_ptr<Integrator> integrator_;
+  std::optional<LightPathsPilot> light_paths_pilot_;
 };
 
 }  // namespace tritrace

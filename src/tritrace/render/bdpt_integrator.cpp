@@ -21,6 +21,7 @@
 
 #include "tritrace/error.h"
 #include "tritrace/math/random.h"
+#include "tritrace/render/bdpt_pilot.h"
 #include "tritrace/render/lanes.h"
 #include "tritrace/render/light_sampler.h"
 #include "tritrace/render/material/bsdf.h"
@@ -618,7 +619,12 @@ class BdptTracer {
                              const glm::vec3* dir = nullptr) const;
   // The ratio walk over the whole path that the recursion replaced: the tests' oracle. It applies
   // the count ratio as a factor of light tracing's strategies (not through the densities).
-  float mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, float ratio) const;
+  // With `strategies` (`--light-paths auto`'s pilot), also lists every other strategy that can
+  // sample the path with its density ratio to this one's (remapped: squared for the power
+  // heuristic; counts left out) and whether it uses the light subpath past its first vertex (s >=
+  // 2).
+  float mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, float ratio,
+                        std::vector<std::pair<float, bool>>* strategies = nullptr) const;
   // Light tracing's count ratio at pixel (x, y) for the MIS weights (SplatPass::count_ratio,
   // times the tests' BdptSettings::mis_count_scale).
   float mis_count_ratio(int x, int y) const;
@@ -638,6 +644,7 @@ class BdptTracer {
   const Scene& scene_;
   const Accel& accel_;
   uint64_t traced_ = 0;
+  size_t first_ = 0;  // the wavefront's first sample in the batch
   // Per wavefront sample: its vertex counts, whether its camera subpath escaped, its radiance so
   // far, the splats' rounding number, an orthographic camera's lens offset for light tracing
   // (ortho_lens_point), its pixel and its count ratio for the weights.
@@ -685,6 +692,10 @@ class BdptTracer {
   }
   int pending_count_ = 0;
   int ray_count_ = 0;
+  std::vector<std::pair<float, bool>> pilot_strategies_;  // pilot_record's
+  // `--light-paths auto`'s pilot (BdptSettings::pilot): queued connection p's work, and its
+  // contribution weighted at each candidate share, into the tally instead of the image.
+  void pilot_record(const Pending& p);
 };
 
 void BdptTracer::surface_aovs(size_t k, glm::vec3& albedo, glm::vec3& normal) const {
@@ -1283,6 +1294,10 @@ void BdptTracer::flush() {
   const bool unweighted = it_.settings_.unweighted;
   for (int k = 0; k < pending_count_; ++k) {
     const Pending& p = pending_[static_cast<size_t>(k)];
+    if (it_.settings_.pilot != nullptr) {
+      pilot_record(p);
+      continue;
+    }
     if (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)]) continue;
     select(p.sample);
     const float weight = unweighted ? 1.0f : weight_of(p);
@@ -1303,12 +1318,33 @@ void BdptTracer::flush() {
   pending_count_ = ray_count_ = 0;
 }
 
+void BdptTracer::pilot_record(const Pending& p) {
+  LightPathsTally::Sample& rec = it_.settings_.pilot->samples[first_ + p.sample];
+  const bool light = p.s >= 2;  // light tracing's t = 1 has s >= 2 too
+  if (p.ray >= 0) ++(light ? rec.light_rays : rec.always_rays);
+  if (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)]) return;
+  const double v = luminance(p.contribution);
+  if (!(v > 0.0) || p.s + p.t == 2) return;
+  select(p.sample);
+  // As connection_weight: light tracing to an orthographic lens joins this connection's lens point.
+  Vertex& eye = camera_[0];
+  const glm::vec3 saved = eye.p;
+  if (p.t == 1 && scene_.camera.is_orthographic()) eye.p = ortho_lens_point(light_[p.s - 1].p);
+  pilot_strategies_.clear();
+  pilot_strategies_.emplace_back(1.0f, light);
+  const float ratio = p.t == 1 ? p.count_ratio * it_.settings_.mis_count_scale : pixel_ratio_;
+  (void)mis_weight_walk(light_, camera_, p.s, p.t, ratio, &pilot_strategies_);
+  eye.p = saved;
+  add_pilot_contribution(rec, v, p.t == 1, pilot_strategies_);
+}
+
 // The power heuristic over the strategies with t >= 2 that can sample the path of light vertices
 // [0, s) and camera vertices [0, t), by the ratio walk of Veach 1997, section 10.2: moving the
 // connection one vertex multiplies the strategy's density by pdf_rev / pdf_fwd of the vertex that
 // changes sides. The connection's four neighbouring pdf_rev values are set for this path and
 // restored afterwards.
-float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, float ratio) const {
+float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, float ratio,
+                                  std::vector<std::pair<float, bool>>* strategies) const {
   if (s + t == 2) return 1.0f;  // an emitter seen by the camera: (1, 1) is not a strategy here
   const bool balance = it_.settings_.balance;
   const auto remap = [balance](float f) { return f != 0.0f ? (balance ? f : f * f) : 1.0f; };
@@ -1363,14 +1399,20 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, f
   for (int i = t - 1; i >= last_i; --i) {
     const float fwd = i == 1 ? camera[1].pdf_fwd * ratio : camera[i].pdf_fwd;
     r *= remap(camera[i].pdf_rev) / remap(fwd);
-    if (!camera[i].delta && !camera[i - 1].delta) sum += r * remap(count(s + t - i, i)) / own;
+    if (!camera[i].delta && !camera[i - 1].delta) {
+      sum += r * remap(count(s + t - i, i)) / own;
+      if (strategies) strategies->emplace_back(r, s + t - i >= 2);
+    }
   }
   r = 1.0f;
   for (int i = s - 1; i >= 0; --i) {
     const float fwd = i == 1 ? light[1].pdf_fwd / light_paths : light[i].pdf_fwd;
     r *= remap(light[i].pdf_rev) / remap(fwd);
     const bool delta_light_side = i > 0 ? light[i - 1].delta : delta_light(light[0]);
-    if (!light[i].delta && !delta_light_side) sum += r * remap(count(i, s + t - i)) / own;
+    if (!light[i].delta && !delta_light_side) {
+      sum += r * remap(count(i, s + t - i)) / own;
+      if (strategies) strategies->emplace_back(r, i >= 2);
+    }
   }
 
   pt.pdf_rev = saved_pt;
@@ -1606,6 +1648,7 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
   std::array<bool, kWavefront> escaped{};
   Sampler* samplers = batch.samplers.data() + first;
   selected_ = kWavefront;
+  first_ = first;
   splats_ = out.splats;
   // The camera subpaths: their first vertices at the given hits, then bounce by bounce.
   for (size_t k = 0; k < count; ++k) {
@@ -1709,6 +1752,11 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
   pending_count_ = ray_count_ = 0;
   for (size_t k = 0; k < count; ++k) {
     state_[k].nl = walks[k].count;
+    if (LightPathsTally* tally = settings.pilot) {
+      LightPathsTally::Sample& rec = tally->samples[first + k];
+      rec.camera_vertices = static_cast<uint32_t>(state_[k].nc);
+      rec.light_vertices = static_cast<uint32_t>(std::max(0, state_[k].nl - 1));
+    }
     connect(k, samplers[k]);
   }
   flush();

@@ -7,6 +7,7 @@
 // environment (a constant colour or a map). docs/BDPT.md has the design.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <mutex>
 #include <string>
@@ -18,6 +19,27 @@
 #include "tritrace/render/integrator.h"
 
 namespace tritrace {
+
+// What the pilot of `--light-paths auto` (render/bdpt_pilot.h) reads off each sample of a
+// BdptIntegrator::radiance call made with BdptSettings::pilot set: per sample of the batch, the
+// luminance of its contributions at F = 1 weighted as a render at each candidate share F
+// (kPilotShares) would weigh them (add_pilot_contribution), split by whether they need the light
+// subpath past its first vertex, and its counted work.
+inline constexpr int kPilotCandidates = 5;
+inline constexpr std::array<float, kPilotCandidates> kPilotShares = {1.0f, 0.5f, 0.25f, 0.125f,
+                                                                     0.0625f};
+struct LightPathsTally {
+  struct Sample {
+    std::array<double, kPilotCandidates> always{};  // s <= 1, t >= 2: every sample has them
+    std::array<double, kPilotCandidates> light{};   // s >= 2, t >= 2 (unscaled: as at F = 1)
+    std::array<double, kPilotCandidates> splat2{};  // the squares of its t = 1 splats
+    // Counted work: camera subpath vertices and shadow rays of s <= 1 (every sample), light
+    // subpath vertices past the first and shadow rays of s >= 2 and t = 1 (F's share).
+    uint32_t camera_vertices = 0, light_vertices = 0;
+    uint32_t always_rays = 0, light_rays = 0;
+  };
+  std::vector<Sample> samples;  // one per sample of the batch (the caller sizes it)
+};
 
 struct BdptSettings {
   // Bounces, as PathSettings::max_depth: paths of at most max_depth + 1 edges (s + t <=
@@ -66,6 +88,10 @@ struct BdptSettings {
   // For tests: false walks every camera vertex with the scalar code, which the SIMD lanes for flat
   // Lambert vertices (where the build has AVX2) must match bit for bit.
   bool lanes = true;
+  // For `--light-paths auto`'s pilot only (render/bdpt_pilot.h): with light_paths 1, each sample's
+  // contributions and work go to this tally instead of the image (no splats are added). Not
+  // thread-safe: one radiance call at a time.
+  LightPathsTally* pilot = nullptr;
 };
 
 // The smallest BdptSettings::light_paths accepted (smaller shares divide contributions by

@@ -853,14 +853,20 @@ class Parser {
       spec.sampler = *kind;
     }
     if (j.contains("light_paths")) {
-      const double f = number(j["light_paths"], "/integrator/light_paths");
-      if (!(f >= 1e-6 && f <= 1.0)) {
+      const Json& v = j["light_paths"];
+      const bool is_auto = v.is_string() && v.get<std::string>() == "auto";
+      const double f = v.is_number() ? v.get<double>() : 0.0;
+      if (is_auto) {
+        spec.light_paths = 1.0f;
+        spec.light_paths_auto = true;
+      } else if (!(f >= 1e-6 && f <= 1.0)) {
         fail("/integrator/light_paths",
-             "must be the share of samples that trace a light subpath (bdpt), greater than 0 (at "
-             "least 1e-6) and at most 1, got " +
-                 describe(j["light_paths"]));
+             "must be \"auto\" or the share of samples that trace a light subpath (bdpt), "
+             "greater than 0 (at least 1e-6) and at most 1, got " +
+                 describe(v));
+      } else {
+        spec.light_paths = static_cast<float>(f);
       }
-      spec.light_paths = static_cast<float>(f);
     }
   }
 

@@ -1,0 +1,145 @@
+// `--light-paths auto`'s pilot (render/bdpt_pilot.h): the weights it gives each candidate share,
+// against the power heuristic with counts worked by hand; its choice on a scene lit only through
+// light subpaths (F = 1, by the argument below) and on a diffuse box (a small share: the light
+// subpath's strategies there add little that the camera's do not, measured in
+// docs/PERFORMANCE.md, so the cost decides); and its determinism.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <numbers>
+#include <utility>
+#include <vector>
+
+#include "tritrace/accel/make_accel.h"
+#include "tritrace/render/bdpt_pilot.h"
+#include "tritrace/scene/cornell_box.h"
+
+namespace tritrace {
+namespace {
+
+// kPilotShares: 1, 1/2, 1/4, 1/8, 1/16.
+TEST(BdptPilot, WeighsEachShareByThePowerHeuristicWithCounts) {
+  // A camera-side strategy (s <= 1) that sampled the path, and one light strategy whose density
+  // is twice its own: r = (p_k / p_i)^2 = 4. With n_k = F: w_i = 1 / (1 + F^2 4).
+  LightPathsTally::Sample a;
+  const std::vector<std::pair<float, bool>> camera_first = {{1.0f, false}, {4.0f, true}};
+  add_pilot_contribution(a, 2.0, false, camera_first);
+  EXPECT_DOUBLE_EQ(a.always[0], 2.0 * 0.2);             // 1 / 5
+  EXPECT_DOUBLE_EQ(a.always[1], 2.0 * 0.5);             // 1 / (1 + 1)
+  EXPECT_DOUBLE_EQ(a.always[4], 2.0 * 1.0 / 1.015625);  // 1 / (1 + 4 / 256)
+  EXPECT_EQ(a.light[0], 0.0);
+  EXPECT_EQ(a.splat2[0], 0.0);
+  // The light strategy's own view of the same path: r = 1/4 for the camera's. w = F^2 / (F^2 +
+  // 1/4): 0.8 at F = 1, 0.5 at 1/2.
+  LightPathsTally::Sample b;
+  const std::vector<std::pair<float, bool>> light_first = {{1.0f, true}, {0.25f, false}};
+  add_pilot_contribution(b, 3.0, false, light_first);
+  EXPECT_DOUBLE_EQ(b.light[0], 3.0 * 0.8);
+  EXPECT_DOUBLE_EQ(b.light[1], 3.0 * 0.5);
+  EXPECT_DOUBLE_EQ(b.light[2], 3.0 * 0.0625 / (0.0625 + 0.25));
+  // A light-tracing splat: its square.
+  LightPathsTally::Sample c;
+  add_pilot_contribution(c, 3.0, true, light_first);
+  EXPECT_DOUBLE_EQ(c.splat2[0], (3.0 * 0.8) * (3.0 * 0.8));
+  EXPECT_DOUBLE_EQ(c.splat2[1], 1.5 * 1.5);
+  // The two weights of the path at each share sum to one (a partition of unity for any counts).
+  for (size_t j = 0; j < kPilotCandidates; ++j) {
+    EXPECT_NEAR(a.always[j] / 2.0 + b.light[j] / 3.0, 1.0, 1e-12) << j;
+  }
+}
+
+// A point light over a glass ball on a diffuse disk in its shadow, the camera looking at the disk
+// and the ball: no camera subpath reaches a point light (s = 0) and next-event estimation (s = 1)
+// is blocked by the ball, so every contribution comes from the light subpath past its first
+// vertex. At share F the estimate is then (I / F) b: its variance E[b^2] / F - mu^2 and its cost
+// A + F B, whose product A E[b^2] / F + B E[b^2] - mu^2 A - mu^2 B F falls as F grows: F = 1.
+Scene point_light_caustic(int side) {
+  Scene scene;
+  scene.materials.push_back(Material{.albedo = glm::vec3(1.0f),
+                                     .type = MaterialType::kDielectric,
+                                     .roughness = 0.0f,
+                                     .ior = 1.5f});
+  scene.materials.push_back(Material{.albedo = glm::vec3(0.5f)});
+  const int n_lat = 24, n_lon = 48;
+  const auto at = [&](int i, int j) {
+    const double th = std::numbers::pi * i / n_lat, ph = 2.0 * std::numbers::pi * j / n_lon;
+    return glm::vec3(static_cast<float>(std::sin(th) * std::cos(ph)),
+                     static_cast<float>(std::cos(th)),
+                     static_cast<float>(std::sin(th) * std::sin(ph)));
+  };
+  const auto add = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    if (glm::dot(glm::cross(c - a, b - a), a + b + c) < 0.0f) std::swap(b, c);  // outward
+    if (glm::length(glm::cross(c - a, b - a)) == 0.0f) return;
+    scene.mesh.add(a, b, c, 0);
+  };
+  for (int i = 0; i < n_lat; ++i) {
+    for (int j = 0; j < n_lon; ++j) {
+      const glm::vec3 a = at(i, j), b = at(i + 1, j), c = at(i + 1, j + 1), d = at(i, j + 1);
+      if (i > 0) add(a, b, d);
+      if (i + 1 < n_lat) add(b, c, d);
+    }
+  }
+  // The disk (a 32-gon of radius 0.9) at y = -2, facing up.
+  const glm::vec3 centre(0.0f, -2.0f, 0.0f);
+  for (int k = 0; k < 32; ++k) {
+    const auto rim = [&](int m) {
+      const double a = 2.0 * std::numbers::pi * m / 32;
+      return glm::vec3(static_cast<float>(0.9 * std::cos(a)), -2.0f,
+                       static_cast<float>(0.9 * std::sin(a)));
+    };
+    glm::vec3 b = rim(k), c = rim(k + 1);
+    if (glm::cross(c - centre, b - centre).y < 0.0f) std::swap(b, c);
+    scene.mesh.add(centre, b, c, 1);
+  }
+  scene.lights.push_back({glm::vec3(0.0f, 4.0f, 0.0f), glm::vec3(400.0f)});
+  scene.camera =
+      Camera::look_at(side, side, glm::vec3(0.0f, 0.0f, 3.5f), centre, glm::vec3(0.0f, 1.0f, 0.0f),
+                      Camera::focal_for_vertical_fov(side, 34.0));
+  return scene;
+}
+
+TEST(BdptPilot, ChoosesEveryLightSubpathWhereOnlyLightSubpathsLightTheImage) {
+  const Scene scene = point_light_caustic(16);
+  const auto accel = make_accel(AccelKind::kBvh, scene, Kernel::kWatertight);
+  BdptSettings settings;
+  settings.max_depth = 3;
+  for (uint64_t seed : {1u, 2u}) {
+    const LightPathsChoice c =
+        choose_light_paths(scene, *accel, settings, seed, SamplerKind::kSobol);
+    EXPECT_EQ(c.light_paths, 1.0f) << seed;
+    EXPECT_GT(c.variance[0], 0.0) << seed;  // the caustic is there
+    // The variance grows as the share falls, the cost falls.
+    for (size_t j = 1; j < kPilotCandidates; ++j) {
+      EXPECT_GT(c.variance[j], c.variance[j - 1]) << seed << " " << j;
+      EXPECT_LT(c.cost[j], c.cost[j - 1]) << seed << " " << j;
+    }
+  }
+}
+
+TEST(BdptPilot, ChoosesASmallShareInADiffuseBox) {
+  const Scene scene = make_cornell_area({.width = 24, .height = 16});
+  const auto accel = make_accel(AccelKind::kBvh, scene, Kernel::kWatertight);
+  for (uint64_t seed : {1u, 2u}) {
+    const LightPathsChoice c = choose_light_paths(scene, *accel, {}, seed, SamplerKind::kSobol);
+    EXPECT_LE(c.light_paths, 0.125f) << seed;
+    // Counted work: 24 x 16 pixels, kPilotSpp samples each.
+    EXPECT_EQ(c.samples, 24u * 16u * kPilotSpp);
+    EXPECT_GT(c.rays, c.samples);
+  }
+}
+
+// The same scene, seed and sampler make the same choice with the same numbers (one thread, sums in
+// sample order); the render job's tests check it across thread counts and parts.
+TEST(BdptPilot, IsDeterministic) {
+  const Scene scene = make_cornell_area({.width = 20, .height = 12});
+  const auto bvh = make_accel(AccelKind::kBvh, scene, Kernel::kWatertight);
+  const LightPathsChoice a = choose_light_paths(scene, *bvh, {}, 7, SamplerKind::kSobol);
+  const LightPathsChoice b = choose_light_paths(scene, *bvh, {}, 7, SamplerKind::kSobol);
+  EXPECT_EQ(a.light_paths, b.light_paths);
+  EXPECT_EQ(a.variance, b.variance);
+  EXPECT_EQ(a.cost, b.cost);
+  EXPECT_EQ(a.rays, b.rays);
+}
+
+}  // namespace
+}  // namespace tritrace
