@@ -185,6 +185,52 @@ TEST(BvhSingleRayTraversal, UntraceableRaysInsideABatch) {
   EXPECT_GT(hits, 100);
 }
 
+// A small mesh built with fine leaves (default_build_config below 16,384 triangles) keeps a
+// second tree with bigger leaves for intersect_incoherent: fewer blocks holding the same
+// triangles, and the closest hits still brute force's bit for bit, through single rays and
+// through incoherent packets. A build priced per block of eight keeps one tree.
+TEST(BvhSingleRayTraversal, SmallMeshClosestHitsOnTheirOwnTree) {
+  const TriangleMesh mesh = make_terrain_scene(3000).mesh;
+  ASSERT_LT(mesh.size(), bvh::kFineLeavesBelow);
+  const bvh::BuildConfig config = bvh::default_build_config(mesh.size());
+  const BruteForceAccel brute(mesh, Kernel::kWatertight);
+  const std::vector<Ray> rays = awkward_rays(mesh, 3000, 23);
+  std::vector<Hit> want(rays.size());
+  brute.intersect(rays, want);
+  for (const BvhTraversal traversal : {BvhTraversal::kAuto, BvhTraversal::kSingle}) {
+    const BvhAccel accel(mesh, Kernel::kWatertight, config, traversal);
+    const WideBvh& fine = accel.tree();
+    const WideBvh& coarse = accel.closest_tree();
+    ASSERT_NE(&fine, &coarse);
+    EXPECT_EQ(coarse.triangles, mesh.size());
+    EXPECT_LT(coarse.blocks.size(), fine.blocks.size());
+    std::set<uint32_t> prims;  // every triangle in exactly one block of the second tree
+    size_t lanes = 0;
+    for (const bvh::TriangleBlock& b : coarse.blocks) {
+      for (uint32_t p : b.prim) {
+        if (p == kNoHit) continue;
+        prims.insert(p);
+        ++lanes;
+      }
+    }
+    EXPECT_EQ(lanes, mesh.size());
+    EXPECT_EQ(prims.size(), mesh.size());
+    std::vector<Hit> got(rays.size());
+    accel.intersect_incoherent(rays, got);
+    int mismatches = 0, hits = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+      hits += want[i].found();
+      mismatches += std::memcmp(&want[i], &got[i], sizeof(Hit)) != 0;
+    }
+    EXPECT_EQ(mismatches, 0);
+    EXPECT_GT(hits, 600);
+  }
+  bvh::BuildConfig blocks_of_eight = config;
+  blocks_of_eight.block_size = 8;
+  const BvhAccel one_tree(mesh, Kernel::kWatertight, blocks_of_eight);
+  EXPECT_EQ(&one_tree.closest_tree(), &one_tree.tree());
+}
+
 INSTANTIATE_TEST_SUITE_P(AllKernels, BvhVsBrute,
                          ::testing::Combine(::testing::ValuesIn(kAllKernels),
                                             ::testing::Values(bvh::BuildMethod::kBinnedSah,

@@ -118,6 +118,10 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const TriangleMesh& mesh, Kern
           kind == AccelKind::kBvh ? BvhTraversal::kAuto : BvhTraversal::kSingle);
       local.structure_bytes = bvh->tree().node_bytes();
       local.triangle_copy_bytes = bvh->tree().block_bytes();
+      if (&bvh->closest_tree() != &bvh->tree()) {  // a small mesh's second tree
+        local.structure_bytes += bvh->closest_tree().node_bytes();
+        local.triangle_copy_bytes += bvh->closest_tree().block_bytes();
+      }
       accel = std::move(bvh);
       break;
     }

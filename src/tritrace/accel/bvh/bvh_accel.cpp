@@ -552,7 +552,18 @@ void for_each_packet(std::span<const Ray> rays, std::span<Out> out, Fn&& fn) {
 
 BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConfig& config,
                    BvhTraversal traversal)
-    : BvhAccel(mesh, bvh::build_wide_bvh(mesh, config), kernel, traversal) {}
+    : BvhAccel(mesh, bvh::build_wide_bvh(mesh, config), kernel, traversal) {
+  if (bvh::wants_incoherent_closest_tree(config) && !bvh_.nodes.empty()) {
+    closest_ = bvh::build_wide_bvh(mesh, bvh::incoherent_closest_config(config));
+    closest_packets_ =
+        packets_ && closest_.node_bytes() + closest_.block_bytes() <= kIncoherentPacketBytes;
+#if defined(__AVX2__)
+    closest_interleave_ = kernel_ == Kernel::kWatertight &&
+                          (traversal == BvhTraversal::kSingleInterleaved ||
+                           closest_.node_bytes() + closest_.block_bytes() >= kInterleaveBytes);
+#endif
+  }
+}
 
 BvhAccel::BvhAccel(const TriangleMesh& mesh, bvh::WideBvh tree, Kernel kernel,
                    BvhTraversal traversal)
@@ -570,6 +581,8 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, bvh::WideBvh tree, Kernel kernel,
                 (traversal == BvhTraversal::kSingleInterleaved ||
                  bvh_.node_bytes() + bvh_.block_bytes() >= kInterleaveBytes);
 #endif
+  closest_packets_ = incoherent_packets_;
+  closest_interleave_ = interleave_;
 }
 
 void BvhAccel::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
@@ -597,25 +610,29 @@ void BvhAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) 
 }
 
 void BvhAccel::intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const {
+  // On closest_tree(), whose flags closest_packets_ and closest_interleave_ are.
+  const bvh::WideBvh& tree = closest_tree();
   // A tree this small stays in L1, and packets of even unrelated rays share its few nodes and
   // leaves: on cornell-area the path tracer's bounce and shadow rays as packets took 5-8% less of
   // a frame's CPU time (docs/PERFORMANCE.md, issue 27); either kind alone, 0-1%. Packets are
-  // incoherent_packets_ only when packets_ is set, so intersect does not come back here.
+  // closest_packets_ only when packets_ is set.
   if constexpr (bvh::kPacketSize > 0) {
-    if (incoherent_packets_) {
-      intersect(rays, hits);
+    if (closest_packets_) {
+      for_each_packet(rays, hits, [&](auto packet, auto out) {
+        bvh::intersect_packet(tree, kernel_, packet, out);
+      });
       return;
     }
   }
 #if defined(__AVX2__)
-  if (interleave_ && rays.size() > 1) {
-    closest_hits_interleaved(bvh_, rays, hits);
+  if (closest_interleave_ && rays.size() > 1) {
+    closest_hits_interleaved(tree, rays, hits);
     return;
   }
 #endif
   with_kernel(kernel_, [&]<Kernel K>() {
     const TriangleArrays tris = mesh_.arrays();
-    for (size_t i = 0; i < rays.size(); ++i) hits[i] = closest_hit<K>(bvh_, tris, rays[i]);
+    for (size_t i = 0; i < rays.size(); ++i) hits[i] = closest_hit<K>(tree, tris, rays[i]);
   });
 }
 

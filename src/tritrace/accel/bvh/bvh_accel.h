@@ -40,6 +40,10 @@ class BvhAccel final : public Accel {
   void occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
 
   const bvh::WideBvh& tree() const { return bvh_; }
+  // The tree of intersect_incoherent: tree() itself, or for a small mesh built with fine leaves a
+  // second tree with bigger ones (bvh::incoherent_closest_config), on which single rays and
+  // incoherent packets take fewer steps to their closest hit.
+  const bvh::WideBvh& closest_tree() const { return closest_.nodes.empty() ? bvh_ : closest_; }
   Kernel kernel() const { return kernel_; }
 
  private:
@@ -49,6 +53,10 @@ class BvhAccel final : public Accel {
   bool packets_;
   bool incoherent_packets_ = false;  // intersect_incoherent as packets: packets_ on a tiny tree
   [[maybe_unused]] bool interleave_ = false;  // incoherent rays several at a time (AVX2 builds)
+  bvh::WideBvh closest_;                      // empty, or closest_tree()'s own
+  // incoherent_packets_ and interleave_ for closest_tree()
+  bool closest_packets_ = false;
+  [[maybe_unused]] bool closest_interleave_ = false;
 };
 
 }  // namespace tritrace
