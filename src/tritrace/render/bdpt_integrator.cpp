@@ -571,6 +571,27 @@ class BdptTracer {
   // Sample k's connections (s, t), t >= 2, queued; then its light tracing (sampler: the splats'
   // rounding number and an orthographic lens's offset, drawn after the subpaths').
   void connect(size_t k, Sampler& sampler);
+  // connect for a sample whose light subpath is its first vertex only (nl <= 1; with
+  // BdptSettings::light_paths < 1 most samples): its strategies are s = 0 and s = 1 at each camera
+  // vertex, each connection weighted as it is made (the weight does not depend on the shadow ray),
+  // the camera side's partial sums carried along the walk rather than prepared in a pass of their
+  // own, and the weighted term queued for its shadow ray. The same numbers, in the same order, as
+  // connect's: the image is the same bits.
+  void connect_camera_only(size_t k);
+  // connect_camera_only's connection s = 1 at camera vertex t - 1 of sample k, where that vertex
+  // is a flat Lambert surface and the light vertex a point of an emissive triangle without an
+  // emission texture, for pending_[pending] whose shadow ray has slot rays_[pending.ray]: kept
+  // (lane_jobs_) and computed eight to a SIMD operation (lanes.h) when eight are kept or before
+  // the queue is flushed, bit for bit connect_camera_only's scalar code.
+  struct LaneJob {
+    uint32_t sample = 0;
+    int t = 0;
+    int pending = 0;
+  };
+  std::array<LaneJob, 8> lane_jobs_{};
+  size_t lane_job_count_ = 0;
+  int ray_holes_ = 0;  // lane jobs' reserved rays_ slots that their connections did not use
+  void run_lane_jobs();
   // The shadow ray of the connection between camera-side vertex c and light-side vertex l, whose
   // direction from c is w (direction(c, l)); false where nothing fits between its two ends (then
   // nothing can block it).
@@ -672,6 +693,8 @@ class BdptTracer {
     float count_ratio = 1.0f;  // t = 1: the splat's pixel's (SplatPass::count_ratio)
     uint32_t sample = 0;       // the wavefront sample's index
     glm::vec3 dir{0.0f};       // t >= 2, s >= 1: the connection's direction (connection_weight)
+    bool weighted = false;     // `contribution` is the weighted term (connect_camera_only)
+    bool skip = false;         // a lane job's connection that carries nothing
   };
   static constexpr int kMaxPending = 256;
   std::array<Pending, kMaxPending> pending_{};
@@ -1266,6 +1289,8 @@ void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const
   p.count_ratio = count_ratio;
   p.dir = dir;
   p.sample = static_cast<uint32_t>(current_ - state_.data());
+  p.weighted = false;
+  p.skip = false;
   p.ray = -1;
   if (has_ray) {
     p.ray = ray_count_;
@@ -1274,6 +1299,19 @@ void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const
 }
 
 void BdptTracer::flush() {
+  run_lane_jobs();
+  if (ray_holes_ > 0) {
+    // Close the slots that lane jobs reserved and left unused (their order is the queue's).
+    int r = 0;
+    for (int k = 0; k < pending_count_; ++k) {
+      Pending& p = pending_[static_cast<size_t>(k)];
+      if (p.ray < 0) continue;
+      rays_[static_cast<size_t>(r)] = rays_[static_cast<size_t>(p.ray)];
+      p.ray = r++;
+    }
+    ray_count_ = r;
+    ray_holes_ = 0;
+  }
   const auto n = static_cast<size_t>(ray_count_);
   if (n > 0) {
     accel_.occluded_incoherent(std::span<const Ray>(rays_.data(), n),
@@ -1283,10 +1321,10 @@ void BdptTracer::flush() {
   const bool unweighted = it_.settings_.unweighted;
   for (int k = 0; k < pending_count_; ++k) {
     const Pending& p = pending_[static_cast<size_t>(k)];
-    if (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)]) continue;
+    if (p.skip || (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)])) continue;
     select(p.sample);
-    const float weight = unweighted ? 1.0f : weight_of(p);
-    const glm::vec3 term = p.contribution * weight;
+    const glm::vec3 term =
+        p.weighted ? p.contribution : p.contribution * (unweighted ? 1.0f : weight_of(p));
     // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
     // dropped rather than let a NaN or infinity into the pixel.
     if (!std::isfinite(term.x + term.y + term.z)) continue;
@@ -1723,8 +1761,253 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
   }
 }
 
+void BdptTracer::connect_camera_only(size_t k) {
+  const BdptSettings& settings = it_.settings_;
+  select(k);
+  const int nc = current_->nc, nl = current_->nl;
+  Vertex* camera = camera_;
+  Vertex* light = light_;
+  const bool weighted = !settings.unweighted;
+  const int m = first_camera_strategy();
+  // prepare_weights' camera side (the light side's one vertex has no partial sum that s = 1
+  // reads), a vertex at a time just before the connections that read it.
+  float a = 0.0f;
+  const auto partial_sum = [&](int i) {
+    Vertex& x = camera[i];
+    if (i < m) {
+      x.mis_sum = 0.0f;
+      return;
+    }
+    const float c = !x.delta && !camera[i - 1].delta ? 1.0f : 0.0f;
+    a = a + c > 0.0f ? density_ratio(x.pdf_rev, x.pdf_fwd) * (a + c) : 0.0f;
+    x.mis_sum = a;
+  };
+  if (weighted && nc > 0) partial_sum(0);
+  // Whether the connections s = 1 can go to the lanes (run_lane_jobs): the light vertex is a point
+  // of an emissive triangle without an emission texture.
+  const bool lane_ready = settings.lanes && settings.weight_check == nullptr && nl >= 1 &&
+                          light[0].type == VertexType::kLight && !light[0].point_light &&
+                          !light[0].material->emission_texture.present();
+  // Queues the weighted term of connection (s, t).
+  const auto add = [&](int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray,
+                       const glm::vec3* dir) {
+    const float weight = weighted ? mis_weight(light, camera, s, t, pixel_ratio_, dir) : 1.0f;
+    queue(s, t, contribution * weight, has_ray, ray);
+    pending_[static_cast<size_t>(pending_count_ - 1)].weighted = true;
+  };
+  for (int t = 2; t <= nc; ++t) {
+    if (weighted) partial_sum(t - 1);
+    const Vertex& pt = camera[t - 1];
+    // s = 0 (t <= nc <= max_depth + 2).
+    if (pt.emits) {
+      const glm::vec3 contribution = pt.beta * emission(scene_, pt, pt.wo);
+      if (max_component(contribution) > 0.0f) add(0, t, contribution, false, Ray{}, nullptr);
+    }
+    // s = 1: next-event estimation to the light subpath's first vertex (connect's arithmetic).
+    if (nl < 1 || 1 + t > settings.max_depth + 2) continue;
+    const Vertex& qs = light[0];
+#if defined(TRITRACE_LANES)
+    if (lane_ready && pt.lambert && !pt.smooth && pt.edge) {
+      queue(1, t, glm::vec3(0.0f), true, Ray{});
+      pending_[static_cast<size_t>(pending_count_ - 1)].weighted = true;
+      lane_jobs_[lane_job_count_++] = LaneJob{static_cast<uint32_t>(k), t, pending_count_ - 1};
+      if (lane_job_count_ == lane_jobs_.size()) run_lane_jobs();
+      continue;
+    }
+#endif
+    if (!pt.connectible || !qs.connectible) continue;
+    const glm::vec3 d = infinite(qs) ? qs.w_env : qs.p - pt.p;
+    const float dist2 = infinite(qs) ? 1.0f : glm::dot(d, d);
+    if (!(dist2 > 0.0f)) continue;
+    const glm::vec3 w = d * (1.0f / std::sqrt(dist2));
+    const glm::vec3 f_camera = surface_f(pt, pt.wo, w);
+    if (!(max_component(f_camera) > 0.0f)) continue;
+    const glm::vec3 f_light = emission(scene_, qs, -w);
+    if (!(max_component(f_light) > 0.0f)) continue;
+    const float cos_light = qs.point_light || infinite(qs) ? 1.0f : std::abs(glm::dot(qs.ng, w));
+    const float g = std::abs(glm::dot(pt.ng, w)) * cos_light / dist2;
+    const glm::vec3 contribution = pt.beta * f_camera * (g * f_light) * qs.beta;
+    if (!(max_component(contribution) > 0.0f)) continue;
+    Ray ray;
+    const bool has_ray = shadow_ray(pt, qs, w, ray);
+    add(1, t, contribution, has_ray, ray, &w);
+  }
+}
+
+#if defined(TRITRACE_LANES)
+void BdptTracer::run_lane_jobs() {
+  const size_t n = lane_job_count_;
+  if (n == 0) return;
+  lane_job_count_ = 0;
+  using lanes::F;
+  using lanes::I;
+  using lanes::V3;
+  constexpr size_t W = lanes::kWidth;
+  const BdptSettings& settings = it_.settings_;
+  const int m = first_camera_strategy();
+  // Gathered per lane (lanes past n repeat lane 0 and are not written back).
+  alignas(32) float p[3][W], ng[3][W], fz[3][W], wo[3][W], albedo[3][W], beta[3][W], to_prev[3][W],
+      v0[3][W], e1[3][W], e2[3][W], q_p[3][W], q_ng[3][W], q_e1[3][W], q_e2[3][W], q_beta[3][W],
+      q_le[3][W];
+  alignas(32) float pt_fwd[W], edge_dist2[W], prev_factor[W], minus_fwd[W], inner_terms[W],
+      outer_add[W], q_fwd[W];
+  alignas(32) int32_t has_outer[W], has_inner[W], two_sided[W];
+  for (size_t l = 0; l < W; ++l) {
+    const LaneJob& job = lane_jobs_[l < n ? l : 0];
+    const Subpaths& sub = thread_subpaths()[job.sample];
+    const Vertex* camera = sub.camera.data();
+    const Vertex& pt = camera[job.t - 1];
+    const Vertex& pt_minus = camera[job.t - 2];
+    const Vertex& qs = sub.light[0];
+    for (int c = 0; c < 3; ++c) {
+      p[c][l] = pt.p[c];
+      ng[c][l] = pt.ng[c];
+      fz[c][l] = pt.frame.z[c];
+      wo[c][l] = pt.wo[c];
+      albedo[c][l] = pt.albedo[c];
+      beta[c][l] = pt.beta[c];
+      to_prev[c][l] = pt.to_prev[c];
+      v0[c][l] = pt.tri.v0[c];
+      e1[c][l] = pt.tri.e1[c];
+      e2[c][l] = pt.tri.e2[c];
+      q_p[c][l] = qs.p[c];
+      q_ng[c][l] = qs.ng[c];
+      q_e1[c][l] = qs.tri.e1[c];
+      q_e2[c][l] = qs.tri.e2[c];
+      q_beta[c][l] = qs.beta[c];
+      q_le[c][l] = qs.material->emission[c];
+    }
+    pt_fwd[l] = pt.pdf_fwd;
+    edge_dist2[l] = pt.edge_dist2;
+    prev_factor[l] = pt.prev_factor;
+    minus_fwd[l] = pt_minus.pdf_fwd;
+    q_fwd[l] = qs.pdf_fwd;
+    two_sided[l] = qs.two_sided ? -1 : 0;
+    // mis_weight_recursive's camera side for s = 1, its terms that do not depend on the
+    // connection.
+    const int t = job.t;
+    has_outer[l] = t - 1 >= m ? -1 : 0;
+    has_inner[l] = t - 2 >= m ? -1 : 0;
+    inner_terms[l] = 0.0f;
+    if (t - 2 >= m) {
+      const float before = t - 3 >= m ? camera[t - 3].mis_sum : 0.0f;
+      const float c = !pt_minus.delta && !camera[t - 3].delta ? 1.0f : 0.0f;
+      inner_terms[l] = before + c;
+    }
+    outer_add[l] = pt_minus.delta ? 0.0f : 1.0f;
+  }
+  const V3 pt_p = lanes::load3(p), pt_ng = lanes::load3(ng), frame_z = lanes::load3(fz);
+  const V3 qs_p = lanes::load3(q_p), qs_ng = lanes::load3(q_ng);
+  // connect_camera_only's scalar s = 1, term by term.
+  const V3 d = qs_p - pt_p;
+  const F dist2 = lanes::dot(d, d);
+  I keep = dist2 > 0.0f;
+  const V3 w = d * (1.0f / lanes::sqrt(dist2));
+  const V3 minus_w = -w;
+  // surface_f (flat: no shading factor) with lambert_eval.
+  const F cos_g = lanes::abs(lanes::dot(pt_ng, w));
+  F wo_z = lanes::dot(lanes::load3(wo), frame_z), wi_z = lanes::dot(w, frame_z);
+  {
+    const I flip = wo_z < 0.0f;
+    wo_z = flip ? -wo_z : wo_z;
+    wi_z = flip ? -wi_z : wi_z;
+  }
+  const I f_nonzero = (cos_g > 0.0f) & ~((wo_z <= 0.0f) | (wi_z <= 0.0f));
+  const V3 f_camera = lanes::select(f_nonzero, lanes::load3(albedo) * lanes::splat(kInvPi), V3{});
+  keep &= lanes::max_component(f_camera) > 0.0f;
+  // emission: emitted_radiance of the light's material towards -w.
+  const F c_light = lanes::dot(qs_ng, minus_w);
+  const I sided = lanes::load_mask(two_sided);
+  const V3 f_light = lanes::select(sided | (c_light > 0.0f), lanes::load3(q_le), V3{});
+  keep &= lanes::max_component(f_light) > 0.0f;
+  const F cos_light = lanes::abs(lanes::dot(qs_ng, w));
+  const F g = cos_g * cos_light / dist2;
+  const V3 contribution = lanes::load3(beta) * f_camera * (g * f_light) * lanes::load3(q_beta);
+  keep &= lanes::max_component(contribution) > 0.0f;
+  // shadow_ray: ray_start at pt (leave_surface on w's side), the light's end moved off its
+  // surface towards pt and stopped short.
+  const I front = lanes::dot(pt_ng, w) >= 0.0f;
+  const V3 side = lanes::select(front, pt_ng, -pt_ng);
+  const V3 e1v = lanes::load3(e1), e2v = lanes::load3(e2);
+  const V3 from = lanes::leave_surface(lanes::load3(v0), e1v, e2v, lanes::triangle_extent(e1v, e2v),
+                                       pt_p, side, it_.offset_);
+  const V3 side_l = lanes::select(lanes::dot(qs_ng, w) <= 0.0f, qs_ng, -qs_ng);
+  const V3 end = lanes::offset_ray_origin(
+      qs_p, side_l, lanes::triangle_extent(lanes::load3(q_e1), lanes::load3(q_e2)), it_.offset_);
+  const V3 end_segment = end - from;
+  const V3 to = end + side_l * (kRayEndScale * lanes::sqrt(lanes::dot(end_segment, end_segment)));
+  const V3 segment = to - from;
+  const F length = lanes::sqrt(lanes::dot(segment, segment));
+  const I has_ray = (length > 0.0f) & (lanes::dot(segment, w) > 0.0f);
+  const V3 ray_dir = segment * (1.0f / length);
+  // mis_weight_recursive for s = 1.
+  F weight = lanes::splat(1.0f);
+  if (!settings.unweighted) {
+    const bool balance = settings.balance;
+    const auto remap = [balance](F f) { return f != 0.0f ? (balance ? f : f * f) : 1.0f; };
+    const auto ratio = [&](F rev, F fwd) { return remap(rev) / remap(fwd); };
+    const auto scaled = [](F r, F terms) { return terms > 0.0f ? r * terms : F{}; };
+    const auto lambert_pdf = [](F given_z, F sampled_z) {
+      const I flip = given_z < 0.0f;
+      const F o = flip ? -given_z : given_z, i = flip ? -sampled_z : sampled_z;
+      return o <= 0.0f ? F{} : (i > 0.0f ? i * kInvPi : F{});
+    };
+    const V3 w_pt_minus = lanes::load3(to_prev);
+    const F qs_dir =
+        sided ? 0.5f * lanes::abs(c_light) * kInvPi : (c_light > 0.0f ? c_light * kInvPi : F{});
+    const F minus_z = lanes::dot(w_pt_minus, frame_z), w_z = lanes::dot(w, frame_z);
+    const F pt_dir = lambert_pdf(minus_z, w_z);
+    const V3 d2 = pt_p - qs_p;
+    const F dist2b = lanes::dot(d2, d2);
+    const I apart = dist2b > 0.0f;
+    const F len2 = lanes::sqrt(dist2b);
+    F pt_rev = apart ? qs_dir / dist2b * (lanes::abs(lanes::dot(pt_ng, d2)) / len2) : F{};
+    F qs_rev = apart ? pt_dir / dist2b : F{};
+    qs_rev = apart ? qs_rev * (lanes::abs(lanes::dot(qs_ng, d2)) / len2) : qs_rev;
+    pt_rev *= settings.light_paths;
+    const F pt_minus_rev =
+        lambert_pdf(w_z, minus_z) / lanes::load(edge_dist2) * lanes::load(prev_factor);
+    const F inner =
+        lanes::load_mask(has_inner)
+            ? scaled(ratio(pt_minus_rev, lanes::load(minus_fwd)), lanes::load(inner_terms))
+            : F{};
+    const F outer = lanes::load_mask(has_outer)
+                        ? scaled(ratio(pt_rev, lanes::load(pt_fwd)), inner + lanes::load(outer_add))
+                        : F{};
+    F sum = F{} + outer;
+    sum = sum + scaled(ratio(qs_rev, lanes::load(q_fwd)), F{} + 1.0f);
+    weight = 1.0f / (1.0f + sum);
+  }
+  const V3 term = contribution * weight;
+  for (size_t l = 0; l < n; ++l) {
+    Pending& pending = pending_[static_cast<size_t>(lane_jobs_[l].pending)];
+    if (!keep[l]) {
+      pending.skip = true;
+    } else {
+      pending.contribution = glm::vec3(term.x[l], term.y[l], term.z[l]);
+      if (has_ray[l]) {
+        Ray& r = rays_[static_cast<size_t>(pending.ray)];
+        r.origin = glm::vec3(from.x[l], from.y[l], from.z[l]);
+        r.dir = glm::vec3(ray_dir.x[l], ray_dir.y[l], ray_dir.z[l]);
+        r.tmin = 0.0f;
+        r.tmax = length[l];
+        continue;
+      }
+    }
+    pending.ray = -1;
+    ++ray_holes_;
+  }
+}
+#else
+void BdptTracer::run_lane_jobs() {}
+#endif
+
 void BdptTracer::connect(size_t k, Sampler& sampler) {
   const BdptSettings& settings = it_.settings_;
+  if (settings.camera_only_connect && state_[k].nl <= 1 &&
+      !(settings.only_s >= 0 && settings.only_t >= 0)) {
+    return connect_camera_only(k);
+  }
   select(k);
   const int nc = current_->nc, nl = current_->nl;
   Vertex* camera = camera_;

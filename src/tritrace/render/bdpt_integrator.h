@@ -66,6 +66,10 @@ struct BdptSettings {
   // For tests: false walks every camera vertex with the scalar code, which the SIMD lanes for flat
   // Lambert vertices (where the build has AVX2) must match bit for bit.
   bool lanes = true;
+  // For tests: false connects the samples whose light subpath is its first vertex only (most of
+  // them where light_paths < 1) with the general code too, whose image the dedicated one
+  // (s = 0 and s = 1 only, each connection weighted as it is made) must match bit for bit.
+  bool camera_only_connect = true;
 };
 
 // The smallest BdptSettings::light_paths accepted (smaller shares divide contributions by
