@@ -584,9 +584,14 @@ class BdptTracer {
   // (lane_jobs_) and computed eight to a SIMD operation (lanes.h) when eight are kept or before
   // the queue is flushed, bit for bit connect_camera_only's scalar code.
   struct LaneJob {
-    uint32_t sample = 0;
-    int t = 0;
+    const Vertex* pt = nullptr;     // camera vertex t - 1 (its predecessor is pt - 1)
+    const Vertex* light = nullptr;  // light vertex 0
     int pending = 0;
+    // mis_weight_recursive's camera-side terms for s = 1 that do not depend on the connection:
+    // whether its outer (t - 1 >= m) and inner (t - 2 >= m) terms exist, the inner one's sum
+    // (before + c) and what the outer one adds (pt_minus not delta).
+    bool has_outer = false, has_inner = false;
+    float inner_terms = 0.0f, outer_add = 0.0f;
   };
   std::array<LaneJob, 8> lane_jobs_{};
   size_t lane_job_count_ = 0;
@@ -1810,7 +1815,20 @@ void BdptTracer::connect_camera_only(size_t k) {
     if (lane_ready && pt.lambert && !pt.smooth && pt.edge) {
       queue(1, t, glm::vec3(0.0f), true, Ray{});
       pending_[static_cast<size_t>(pending_count_ - 1)].weighted = true;
-      lane_jobs_[lane_job_count_++] = LaneJob{static_cast<uint32_t>(k), t, pending_count_ - 1};
+      LaneJob& job = lane_jobs_[lane_job_count_++];
+      job.pt = &pt;
+      job.light = &qs;
+      job.pending = pending_count_ - 1;
+      const Vertex& pt_minus = camera[t - 2];
+      job.has_outer = t - 1 >= m;
+      job.has_inner = t - 2 >= m;
+      job.inner_terms = 0.0f;
+      if (t - 2 >= m) {
+        const float before = t - 3 >= m ? camera[t - 3].mis_sum : 0.0f;
+        const float c = !pt_minus.delta && !camera[t - 3].delta ? 1.0f : 0.0f;
+        job.inner_terms = before + c;
+      }
+      job.outer_add = pt_minus.delta ? 0.0f : 1.0f;
       if (lane_job_count_ == lane_jobs_.size()) run_lane_jobs();
       continue;
     }
@@ -1837,41 +1855,29 @@ void BdptTracer::connect_camera_only(size_t k) {
 #if defined(TRITRACE_LANES)
 void BdptTracer::run_lane_jobs() {
   const size_t n = lane_job_count_;
-  if (n == 0)
-    return;
+  if (n == 0) return;
   lane_job_count_ = 0;
   using lanes::F;
   using lanes::I;
   using lanes::V3;
   constexpr size_t W = lanes::kWidth;
-  const BdptSettings &settings = it_.settings_;
-  const int m = first_camera_strategy();
+  const BdptSettings& settings = it_.settings_;
   // Per lane (lanes past n repeat lane 0 and are not written back) its
   // vertices, and each number gathered into a register lane by lane: stored to
   // memory one float at a time and loaded as a vector, the loads waited for the
   // stores (store forwarding fails on such loads).
-  std::array<const Vertex *, W> pts, minus, lights;
-  std::array<float, W> inner_terms{}, outer_add{};
-  std::array<int32_t, W> has_outer{}, has_inner{};
+  std::array<const Vertex*, W> pts, minus, lights;
+  std::array<float, W> inner_terms, outer_add;
+  std::array<int32_t, W> has_outer, has_inner;
   for (size_t l = 0; l < W; ++l) {
-    const LaneJob &job = lane_jobs_[l < n ? l : 0];
-    const Subpaths &sub = thread_subpaths()[job.sample];
-    const Vertex *camera = sub.camera.data();
-    const int t = job.t;
-    pts[l] = &camera[t - 1];
-    minus[l] = &camera[t - 2];
-    lights[l] = &sub.light[0];
-    // mis_weight_recursive's camera side for s = 1, its terms that do not
-    // depend on the connection.
-    const Vertex &pt_minus = camera[t - 2];
-    has_outer[l] = t - 1 >= m ? -1 : 0;
-    has_inner[l] = t - 2 >= m ? -1 : 0;
-    if (t - 2 >= m) {
-      const float before = t - 3 >= m ? camera[t - 3].mis_sum : 0.0f;
-      const float c = !pt_minus.delta && !camera[t - 3].delta ? 1.0f : 0.0f;
-      inner_terms[l] = before + c;
-    }
-    outer_add[l] = pt_minus.delta ? 0.0f : 1.0f;
+    const LaneJob& job = lane_jobs_[l < n ? l : 0];
+    pts[l] = job.pt;
+    minus[l] = job.pt - 1;
+    lights[l] = job.light;
+    has_outer[l] = job.has_outer ? -1 : 0;
+    has_inner[l] = job.has_inner ? -1 : 0;
+    inner_terms[l] = job.inner_terms;
+    outer_add[l] = job.outer_add;
   }
   const auto lane = [](auto get) {
     return F{get(0), get(1), get(2), get(3), get(4), get(5), get(6), get(7)};
@@ -1879,19 +1885,18 @@ void BdptTracer::run_lane_jobs() {
   const auto lane_mask = [](auto get) {
     return I{get(0), get(1), get(2), get(3), get(4), get(5), get(6), get(7)};
   };
-  const auto lane3 = [&](const std::array<const Vertex *, W> &v, auto member) {
+  const auto lane3 = [&](const std::array<const Vertex*, W>& v, auto member) {
     return V3{lane([&](size_t l) { return (v[l]->*member).x; }),
               lane([&](size_t l) { return (v[l]->*member).y; }),
               lane([&](size_t l) { return (v[l]->*member).z; })};
   };
-  const auto lane_tri3 = [&](const std::array<const Vertex *, W> &v,
+  const auto lane_tri3 = [&](const std::array<const Vertex*, W>& v,
                              glm::vec3 SurfaceTriangle::*member) {
     return V3{lane([&](size_t l) { return (v[l]->tri.*member).x; }),
               lane([&](size_t l) { return (v[l]->tri.*member).y; }),
               lane([&](size_t l) { return (v[l]->tri.*member).z; })};
   };
-  const auto lane1 = [&](const std::array<const Vertex *, W> &v,
-                         float Vertex::*member) {
+  const auto lane1 = [&](const std::array<const Vertex*, W>& v, float Vertex::*member) {
     return lane([&](size_t l) { return v[l]->*member; });
   };
   const V3 pt_p = lane3(pts, &Vertex::p), pt_ng = lane3(pts, &Vertex::ng);
@@ -1899,27 +1904,20 @@ void BdptTracer::run_lane_jobs() {
                    lane([&](size_t l) { return pts[l]->frame.z.y; }),
                    lane([&](size_t l) { return pts[l]->frame.z.z; })};
   const V3 qs_p = lane3(lights, &Vertex::p), qs_ng = lane3(lights, &Vertex::ng);
-  const V3 pt_wo = lane3(pts, &Vertex::wo),
-           pt_albedo = lane3(pts, &Vertex::albedo),
-           pt_beta = lane3(pts, &Vertex::beta),
-           pt_to_prev = lane3(pts, &Vertex::to_prev);
+  const V3 pt_wo = lane3(pts, &Vertex::wo), pt_albedo = lane3(pts, &Vertex::albedo),
+           pt_beta = lane3(pts, &Vertex::beta), pt_to_prev = lane3(pts, &Vertex::to_prev);
   const V3 pt_v0 = lane_tri3(pts, &SurfaceTriangle::v0),
            pt_e1 = lane_tri3(pts, &SurfaceTriangle::e1),
            pt_e2 = lane_tri3(pts, &SurfaceTriangle::e2);
   const V3 qs_e1 = lane_tri3(lights, &SurfaceTriangle::e1),
-           qs_e2 = lane_tri3(lights, &SurfaceTriangle::e2),
-           qs_beta = lane3(lights, &Vertex::beta);
-  const V3 qs_le{
-      lane([&](size_t l) { return lights[l]->material->emission.x; }),
-      lane([&](size_t l) { return lights[l]->material->emission.y; }),
-      lane([&](size_t l) { return lights[l]->material->emission.z; })};
-  const F pt_fwd = lane1(pts, &Vertex::pdf_fwd),
-          edge_dist2 = lane1(pts, &Vertex::edge_dist2),
+           qs_e2 = lane_tri3(lights, &SurfaceTriangle::e2), qs_beta = lane3(lights, &Vertex::beta);
+  const V3 qs_le{lane([&](size_t l) { return lights[l]->material->emission.x; }),
+                 lane([&](size_t l) { return lights[l]->material->emission.y; }),
+                 lane([&](size_t l) { return lights[l]->material->emission.z; })};
+  const F pt_fwd = lane1(pts, &Vertex::pdf_fwd), edge_dist2 = lane1(pts, &Vertex::edge_dist2),
           prev_factor = lane1(pts, &Vertex::prev_factor),
-          minus_fwd = lane1(minus, &Vertex::pdf_fwd),
-          q_fwd = lane1(lights, &Vertex::pdf_fwd);
-  const I sided =
-      lane_mask([&](size_t l) { return lights[l]->two_sided ? -1 : 0; });
+          minus_fwd = lane1(minus, &Vertex::pdf_fwd), q_fwd = lane1(lights, &Vertex::pdf_fwd);
+  const I sided = lane_mask([&](size_t l) { return lights[l]->two_sided ? -1 : 0; });
   // connect_camera_only's scalar s = 1, term by term.
   const V3 d = qs_p - pt_p;
   const F dist2 = lanes::dot(d, d);
@@ -1935,8 +1933,7 @@ void BdptTracer::run_lane_jobs() {
     wi_z = flip ? -wi_z : wi_z;
   }
   const I f_nonzero = (cos_g > 0.0f) & ~((wo_z <= 0.0f) | (wi_z <= 0.0f));
-  const V3 f_camera =
-      lanes::select(f_nonzero, pt_albedo * lanes::splat(kInvPi), V3{});
+  const V3 f_camera = lanes::select(f_nonzero, pt_albedo * lanes::splat(kInvPi), V3{});
   keep &= lanes::max_component(f_camera) > 0.0f;
   // emission: emitted_radiance of the light's material towards -w.
   const F c_light = lanes::dot(qs_ng, minus_w);
@@ -1950,16 +1947,13 @@ void BdptTracer::run_lane_jobs() {
   // moved off its surface towards pt and stopped short.
   const I front = lanes::dot(pt_ng, w) >= 0.0f;
   const V3 side = lanes::select(front, pt_ng, -pt_ng);
-  const V3 from = lanes::leave_surface(pt_v0, pt_e1, pt_e2,
-                                       lanes::triangle_extent(pt_e1, pt_e2),
+  const V3 from = lanes::leave_surface(pt_v0, pt_e1, pt_e2, lanes::triangle_extent(pt_e1, pt_e2),
                                        pt_p, side, it_.offset_);
   const V3 side_l = lanes::select(lanes::dot(qs_ng, w) <= 0.0f, qs_ng, -qs_ng);
-  const V3 end = lanes::offset_ray_origin(
-      qs_p, side_l, lanes::triangle_extent(qs_e1, qs_e2), it_.offset_);
+  const V3 end =
+      lanes::offset_ray_origin(qs_p, side_l, lanes::triangle_extent(qs_e1, qs_e2), it_.offset_);
   const V3 end_segment = end - from;
-  const V3 to =
-      end + side_l * (kRayEndScale *
-                      lanes::sqrt(lanes::dot(end_segment, end_segment)));
+  const V3 to = end + side_l * (kRayEndScale * lanes::sqrt(lanes::dot(end_segment, end_segment)));
   const V3 segment = to - from;
   const F length = lanes::sqrt(lanes::dot(segment, segment));
   const I has_ray = (length > 0.0f) & (lanes::dot(segment, w) > 0.0f);
@@ -1968,43 +1962,33 @@ void BdptTracer::run_lane_jobs() {
   F weight = lanes::splat(1.0f);
   if (!settings.unweighted) {
     const bool balance = settings.balance;
-    const auto remap = [balance](F f) {
-      return f != 0.0f ? (balance ? f : f * f) : 1.0f;
-    };
+    const auto remap = [balance](F f) { return f != 0.0f ? (balance ? f : f * f) : 1.0f; };
     const auto ratio = [&](F rev, F fwd) { return remap(rev) / remap(fwd); };
-    const auto scaled = [](F r, F terms) {
-      return terms > 0.0f ? r * terms : F{};
-    };
+    const auto scaled = [](F r, F terms) { return terms > 0.0f ? r * terms : F{}; };
     const auto lambert_pdf = [](F given_z, F sampled_z) {
       const I flip = given_z < 0.0f;
       const F o = flip ? -given_z : given_z, i = flip ? -sampled_z : sampled_z;
       return o <= 0.0f ? F{} : (i > 0.0f ? i * kInvPi : F{});
     };
     const V3 w_pt_minus = pt_to_prev;
-    const F qs_dir = sided ? 0.5f * lanes::abs(c_light) * kInvPi
-                           : (c_light > 0.0f ? c_light * kInvPi : F{});
-    const F minus_z = lanes::dot(w_pt_minus, frame_z),
-            w_z = lanes::dot(w, frame_z);
+    const F qs_dir =
+        sided ? 0.5f * lanes::abs(c_light) * kInvPi : (c_light > 0.0f ? c_light * kInvPi : F{});
+    const F minus_z = lanes::dot(w_pt_minus, frame_z), w_z = lanes::dot(w, frame_z);
     const F pt_dir = lambert_pdf(minus_z, w_z);
     const V3 d2 = pt_p - qs_p;
     const F dist2b = lanes::dot(d2, d2);
     const I apart = dist2b > 0.0f;
     const F len2 = lanes::sqrt(dist2b);
-    F pt_rev =
-        apart ? qs_dir / dist2b * (lanes::abs(lanes::dot(pt_ng, d2)) / len2)
-              : F{};
+    F pt_rev = apart ? qs_dir / dist2b * (lanes::abs(lanes::dot(pt_ng, d2)) / len2) : F{};
     F qs_rev = apart ? pt_dir / dist2b : F{};
-    qs_rev =
-        apart ? qs_rev * (lanes::abs(lanes::dot(qs_ng, d2)) / len2) : qs_rev;
+    qs_rev = apart ? qs_rev * (lanes::abs(lanes::dot(qs_ng, d2)) / len2) : qs_rev;
     pt_rev *= settings.light_paths;
     const F pt_minus_rev = lambert_pdf(w_z, minus_z) / edge_dist2 * prev_factor;
     const F inner = lanes::load_mask(has_inner.data())
-                        ? scaled(ratio(pt_minus_rev, minus_fwd),
-                                 lanes::load(inner_terms.data()))
+                        ? scaled(ratio(pt_minus_rev, minus_fwd), lanes::load(inner_terms.data()))
                         : F{};
     const F outer = lanes::load_mask(has_outer.data())
-                        ? scaled(ratio(pt_rev, pt_fwd),
-                                 inner + lanes::load(outer_add.data()))
+                        ? scaled(ratio(pt_rev, pt_fwd), inner + lanes::load(outer_add.data()))
                         : F{};
     F sum = F{} + outer;
     sum = sum + scaled(ratio(qs_rev, q_fwd), F{} + 1.0f);
@@ -2012,13 +1996,13 @@ void BdptTracer::run_lane_jobs() {
   }
   const V3 term = contribution * weight;
   for (size_t l = 0; l < n; ++l) {
-    Pending &pending = pending_[static_cast<size_t>(lane_jobs_[l].pending)];
+    Pending& pending = pending_[static_cast<size_t>(lane_jobs_[l].pending)];
     if (!keep[l]) {
       pending.skip = true;
     } else {
       pending.contribution = glm::vec3(term.x[l], term.y[l], term.z[l]);
       if (has_ray[l]) {
-        Ray &r = rays_[static_cast<size_t>(pending.ray)];
+        Ray& r = rays_[static_cast<size_t>(pending.ray)];
         r.origin = glm::vec3(from.x[l], from.y[l], from.z[l]);
         r.dir = glm::vec3(ray_dir.x[l], ray_dir.y[l], ray_dir.z[l]);
         r.tmin = 0.0f;
