@@ -540,8 +540,8 @@ class BdptTracer {
   // walk_scatter for n <= 8 camera walks (walks[index[i]] on paths[index[i]], numbers *u[i]) whose
   // last vertex is a flat Lambert surface, eight to a SIMD operation (lanes.h), bit for bit.
   void walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState* walks,
-                          const uint32_t* index, const std::array<glm::vec2, 2>* const* u,
-                          size_t n) const;
+                          const uint32_t* index, const Vertex* const* vertices,
+                          const std::array<glm::vec2, 2>* const* u, size_t n) const;
   // One bounce of the walks index[0, n) at hits[0, n): walk_hit and walk_scatter for each, u
   // holding the numbers of those that draw (will_draw), in order; the camera walks' flat Lambert
   // vertices scatter in lanes after the others.
@@ -934,6 +934,7 @@ void BdptTracer::step_bounce(std::vector<Vertex>* const* paths, WalkState* walks
                              const uint32_t* index, const Hit* hits, size_t n,
                              const std::array<glm::vec2, 2>* u, bool* escaped) const {
   std::array<uint32_t, 8> lane_index;
+  std::array<const Vertex*, 8> lane_vertex;
   std::array<const std::array<glm::vec2, 2>*, 8> lane_u;
   size_t lanes_used = 0;
   size_t m = 0;
@@ -946,10 +947,12 @@ void BdptTracer::step_bounce(std::vector<Vertex>* const* paths, WalkState* walks
     const Vertex& x = (*paths[k])[static_cast<size_t>(walks[k].count - 1)];
     if (it_.settings_.lanes && !walks[k].light && x.lambert && !x.smooth) {
       lane_index[lanes_used] = k;
+      lane_vertex[lanes_used] = &x;
       lane_u[lanes_used++] = &uj;
       // Eight at a time, while their vertices are still in the first-level cache.
       if (lanes_used == lanes::kWidth) {
-        walk_scatter_lanes(paths, walks, lane_index.data(), lane_u.data(), lanes_used);
+        walk_scatter_lanes(paths, walks, lane_index.data(), lane_vertex.data(), lane_u.data(),
+                           lanes_used);
         lanes_used = 0;
       }
       continue;
@@ -958,59 +961,53 @@ void BdptTracer::step_bounce(std::vector<Vertex>* const* paths, WalkState* walks
     walk_scatter(*paths[k], walks[k], uj);
   }
   if (lanes_used > 0) {
-    walk_scatter_lanes(paths, walks, lane_index.data(), lane_u.data(), lanes_used);
+    walk_scatter_lanes(paths, walks, lane_index.data(), lane_vertex.data(), lane_u.data(),
+                       lanes_used);
   }
 }
 
 #if defined(TRITRACE_LANES)
 void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState* walks,
-                                    const uint32_t* index, const std::array<glm::vec2, 2>* const* u,
-                                    size_t n) const {
+                                    const uint32_t* index, const Vertex* const* vertices,
+                                    const std::array<glm::vec2, 2>* const* u, size_t n) const {
   using lanes::F;
   using lanes::I;
   using lanes::V3;
   constexpr size_t W = lanes::kWidth;
-  // Gathered per lane (lanes past n repeat lane 0 and are not written back).
-  alignas(32) float frame_x[3][W], frame_y[3][W], frame_z[3][W], wo[3][W], albedo[3][W], beta[3][W],
-      rr_beta[3][W], ng[3][W], p[3][W], v0[3][W], e1[3][W], e2[3][W];
-  alignas(32) float u_roulette[W], u_x[W], u_y[W], edge_dist2[W], prev_factor[W];
-  alignas(32) int32_t roulette[W], edge[W];
+  // Per lane (lanes past n repeat lane 0 and are not written back) its vertex and walk, each
+  // number gathered into a register lane by lane (stores to memory reloaded as vectors wait for
+  // the stores: store forwarding fails on such loads).
+  std::array<const Vertex*, W> xs;
+  std::array<const WalkState*, W> ws;
   for (size_t l = 0; l < W; ++l) {
     const size_t i = l < n ? l : 0;
-    const WalkState& w = walks[index[i]];
-    const Vertex& x = (*paths[index[i]])[static_cast<size_t>(w.count - 1)];
-    for (int c = 0; c < 3; ++c) {
-      frame_x[c][l] = x.frame.x[c];
-      frame_y[c][l] = x.frame.y[c];
-      frame_z[c][l] = x.frame.z[c];
-      wo[c][l] = x.wo[c];
-      albedo[c][l] = x.albedo[c];
-      beta[c][l] = w.beta[c];
-      rr_beta[c][l] = w.rr_beta[c];
-      ng[c][l] = x.ng[c];
-      p[c][l] = x.p[c];
-      v0[c][l] = x.tri.v0[c];
-      e1[c][l] = x.tri.e1[c];
-      e2[c][l] = x.tri.e2[c];
-    }
-    u_roulette[l] = (*u[i])[0].y;
-    u_x[l] = (*u[i])[1].x;
-    u_y[l] = (*u[i])[1].y;
-    edge_dist2[l] = x.edge_dist2;
-    prev_factor[l] = x.prev_factor;
-    edge[l] = x.edge ? -1 : 0;
-    roulette[l] = w.count - 1 >= it_.settings_.roulette_depth ? -1 : 0;
+    xs[l] = vertices[i];
+    ws[l] = &walks[index[i]];
   }
-  const V3 fx = lanes::load3(frame_x), fy = lanes::load3(frame_y), fz = lanes::load3(frame_z);
+  const auto lane = [](auto get) {
+    return F{get(0), get(1), get(2), get(3), get(4), get(5), get(6), get(7)};
+  };
+  const auto lane3 = [&](auto get) {
+    return V3{lane([&](size_t l) { return get(l).x; }), lane([&](size_t l) { return get(l).y; }),
+              lane([&](size_t l) { return get(l).z; })};
+  };
+  const auto lane_mask = [](auto get) {
+    return I{get(0), get(1), get(2), get(3), get(4), get(5), get(6), get(7)};
+  };
+  const I edge_mask = lane_mask([&](size_t l) { return xs[l]->edge ? -1 : 0; });
+  const V3 fx = lane3([&](size_t l) { return xs[l]->frame.x; });
+  const V3 fy = lane3([&](size_t l) { return xs[l]->frame.y; });
+  const V3 fz = lane3([&](size_t l) { return xs[l]->frame.z; });
   // Frame::to_local(x.wo).
-  const V3 w_prev = lanes::load3(wo);
+  const V3 w_prev = lane3([&](size_t l) { return xs[l]->wo; });
   const V3 wo_local{lanes::dot(w_prev, fx), lanes::dot(w_prev, fy), lanes::dot(w_prev, fz)};
   // bsdf_sample's Lambert branch: wo turned up, sample_cosine_hemisphere (its concentric disk
   // with sincosf lane by lane), the density and the weight, then wi turned back.
   const I below = wo_local.z < 0.0f;
   const F wo_z = below ? -wo_local.z : wo_local.z;
   const I up = ~(wo_z <= 0.0f);
-  const F a = 2.0f * lanes::load(u_x) - 1.0f, b = 2.0f * lanes::load(u_y) - 1.0f;
+  const F a = 2.0f * lane([&](size_t l) { return (*u[l < n ? l : 0])[1].x; }) - 1.0f,
+          b = 2.0f * lane([&](size_t l) { return (*u[l < n ? l : 0])[1].y; }) - 1.0f;
   const I centre = (a == 0.0f) & (b == 0.0f);
   const I wide = lanes::abs(a) > lanes::abs(b);
   const F radius = wide ? a : b;
@@ -1027,8 +1024,9 @@ void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState
   const F z = lanes::sqrt(lanes::max(F{}, 1.0f - dx * dx - dy * dy));
   const F pdf = z > 0.0f ? z * kInvPi : F{};
   const I has_pdf = pdf > 0.0f;
-  const V3 weight =
-      lanes::select(has_pdf, lanes::load3(albedo) * lanes::splat(kInvPi) * (z / pdf), V3{});
+  const V3 weight = lanes::select(
+      has_pdf, lane3([&](size_t l) { return xs[l]->albedo; }) * lanes::splat(kInvPi) * (z / pdf),
+      V3{});
   const I valid = up & has_pdf & ((weight.x > 0.0f) | (weight.y > 0.0f) | (weight.z > 0.0f));
   const V3 wi{dx, dy, below ? -z : z};
   const V3 w_next = fx * wi.x + fy * wi.y + fz * wi.z;  // Frame::to_world
@@ -1036,28 +1034,31 @@ void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState
   const I flip = wi.z < 0.0f;
   const F rev_o = flip ? -wi.z : wi.z, rev_i = flip ? -wo_local.z : wo_local.z;
   const F pdf_rev_dir = rev_o <= 0.0f ? F{} : (rev_i > 0.0f ? rev_i * kInvPi : F{});
-  const F prev_pdf_rev = lanes::load_mask(edge)
-                             ? pdf_rev_dir / lanes::load(edge_dist2) * lanes::load(prev_factor)
+  const F prev_pdf_rev = edge_mask
+                             ? pdf_rev_dir / lane([&](size_t l) { return xs[l]->edge_dist2; }) *
+                                   lane([&](size_t l) { return xs[l]->prev_factor; })
                              : F{};
   // The throughput, Russian roulette, and the walk's test of what is left.
-  V3 beta_next = lanes::load3(beta) * weight;
-  V3 rr_next = lanes::load3(rr_beta) * weight;
-  const I rr = lanes::load_mask(roulette);
+  V3 beta_next = lane3([&](size_t l) { return ws[l]->beta; }) * weight;
+  V3 rr_next = lane3([&](size_t l) { return ws[l]->rr_beta; }) * weight;
+  const I rr = lane_mask(
+      [&](size_t l) { return ws[l]->count - 1 >= it_.settings_.roulette_depth ? -1 : 0; });
   const F survive = lanes::min(lanes::splat(1.0f), lanes::sqrt(lanes::max_component(rr_next)));
-  I alive = valid & (~rr | (lanes::load(u_roulette) < survive));
+  I alive = valid & (~rr | (lane([&](size_t l) { return (*u[l < n ? l : 0])[0].y; }) < survive));
   const F inverse = 1.0f / survive;
   beta_next = lanes::select(rr, beta_next * inverse, beta_next);
   rr_next = lanes::select(rr, rr_next * inverse, rr_next);
   const F largest = lanes::max_component(beta_next);
   alive &= (largest > 0.0f) & (lanes::abs(largest) <= std::numeric_limits<float>::max());
   // ray_start: leave_surface on the side w_next leaves to.
-  const V3 n_lab = lanes::load3(ng);
+  const V3 n_lab = lane3([&](size_t l) { return xs[l]->ng; });
   const I front = lanes::dot(n_lab, w_next) >= 0.0f;
   const V3 side = lanes::select(front, n_lab, -n_lab);
-  const V3 e1v = lanes::load3(e1), e2v = lanes::load3(e2);
-  const V3 start =
-      lanes::leave_surface(lanes::load3(v0), e1v, e2v, lanes::triangle_extent(e1v, e2v),
-                           lanes::load3(p), side, it_.offset_);
+  const V3 e1v = lane3([&](size_t l) { return xs[l]->tri.e1; }),
+           e2v = lane3([&](size_t l) { return xs[l]->tri.e2; });
+  const V3 start = lanes::leave_surface(
+      lane3([&](size_t l) { return xs[l]->tri.v0; }), e1v, e2v, lanes::triangle_extent(e1v, e2v),
+      lane3([&](size_t l) { return xs[l]->p; }), side, it_.offset_);
   for (size_t l = 0; l < n; ++l) {
     if (!valid[l]) continue;
     WalkState& w = walks[index[l]];
@@ -1083,7 +1084,8 @@ void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState
 }
 #else
 void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const*, WalkState*, const uint32_t*,
-                                    const std::array<glm::vec2, 2>* const*, size_t) const {}
+                                    const Vertex* const*, const std::array<glm::vec2, 2>* const*,
+                                    size_t) const {}
 #endif
 
 void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
