@@ -1868,18 +1868,13 @@ void BdptTracer::run_lane_jobs() {
   // vertices, and each number gathered into a register lane by lane: stored to
   // memory one float at a time and loaded as a vector, the loads waited for the
   // stores (store forwarding fails on such loads).
+  std::array<const LaneJob*, W> jobs;
   std::array<const Vertex*, W> pts, minus, lights;
-  std::array<float, W> inner_terms, outer_add;
-  std::array<int32_t, W> has_outer, has_inner;
   for (size_t l = 0; l < W; ++l) {
-    const LaneJob& job = lane_jobs_[l < n ? l : 0];
-    pts[l] = job.pt;
-    minus[l] = job.pt - 1;
-    lights[l] = job.light;
-    has_outer[l] = job.has_outer ? -1 : 0;
-    has_inner[l] = job.has_inner ? -1 : 0;
-    inner_terms[l] = job.inner_terms;
-    outer_add[l] = job.outer_add;
+    jobs[l] = &lane_jobs_[l < n ? l : 0];
+    pts[l] = jobs[l]->pt;
+    minus[l] = jobs[l]->pt - 1;
+    lights[l] = jobs[l]->light;
   }
   const auto lane = [](auto get) {
     return F{get(0), get(1), get(2), get(3), get(4), get(5), get(6), get(7)};
@@ -1901,6 +1896,10 @@ void BdptTracer::run_lane_jobs() {
   const auto lane1 = [&](const std::array<const Vertex*, W>& v, float Vertex::*member) {
     return lane([&](size_t l) { return v[l]->*member; });
   };
+  const I has_outer = lane_mask([&](size_t l) { return jobs[l]->has_outer ? -1 : 0; });
+  const I has_inner = lane_mask([&](size_t l) { return jobs[l]->has_inner ? -1 : 0; });
+  const F inner_terms = lane([&](size_t l) { return jobs[l]->inner_terms; });
+  const F outer_add = lane([&](size_t l) { return jobs[l]->outer_add; });
   const V3 pt_p = lane3(pts, &Vertex::p), pt_ng = lane3(pts, &Vertex::ng);
   const V3 frame_z{lane([&](size_t l) { return pts[l]->frame.z.x; }),
                    lane([&](size_t l) { return pts[l]->frame.z.y; }),
@@ -1986,12 +1985,8 @@ void BdptTracer::run_lane_jobs() {
     qs_rev = apart ? qs_rev * (lanes::abs(lanes::dot(qs_ng, d2)) / len2) : qs_rev;
     pt_rev *= settings.light_paths;
     const F pt_minus_rev = lambert_pdf(w_z, minus_z) / edge_dist2 * prev_factor;
-    const F inner = lanes::load_mask(has_inner.data())
-                        ? scaled(ratio(pt_minus_rev, minus_fwd), lanes::load(inner_terms.data()))
-                        : F{};
-    const F outer = lanes::load_mask(has_outer.data())
-                        ? scaled(ratio(pt_rev, pt_fwd), inner + lanes::load(outer_add.data()))
-                        : F{};
+    const F inner = has_inner ? scaled(ratio(pt_minus_rev, minus_fwd), inner_terms) : F{};
+    const F outer = has_outer ? scaled(ratio(pt_rev, pt_fwd), inner + outer_add) : F{};
     F sum = F{} + outer;
     sum = sum + scaled(ratio(qs_rev, q_fwd), F{} + 1.0f);
     weight = 1.0f / (1.0f + sum);
