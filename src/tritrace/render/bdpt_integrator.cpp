@@ -1790,11 +1790,13 @@ void BdptTracer::connect_camera_only(size_t k) {
     x.mis_sum = a;
   };
   if (weighted && nc > 0) partial_sum(0);
+#if defined(TRITRACE_LANES)
   // Whether the connections s = 1 can go to the lanes (run_lane_jobs): the light vertex is a point
   // of an emissive triangle without an emission texture.
   const bool lane_ready = settings.lanes && settings.weight_check == nullptr && nl >= 1 &&
                           light[0].type == VertexType::kLight && !light[0].point_light &&
                           !light[0].material->emission_texture.present();
+#endif
   // Queues the weighted term of connection (s, t).
   const auto add = [&](int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray,
                        const glm::vec3* dir) {
