@@ -1329,9 +1329,14 @@ void BdptTracer::flush() {
   for (int k = 0; k < pending_count_; ++k) {
     const Pending& p = pending_[static_cast<size_t>(k)];
     if (p.skip || (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)])) continue;
+    if (p.weighted) {
+      // connect_camera_only's term (t >= 2), weighted already: only its sample's total.
+      const glm::vec3 term = p.contribution;
+      if (std::isfinite(term.x + term.y + term.z)) state_[p.sample].total += term;
+      continue;
+    }
     select(p.sample);
-    const glm::vec3 term =
-        p.weighted ? p.contribution : p.contribution * (unweighted ? 1.0f : weight_of(p));
+    const glm::vec3 term = p.contribution * (unweighted ? 1.0f : weight_of(p));
     // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
     // dropped rather than let a NaN or infinity into the pixel.
     if (!std::isfinite(term.x + term.y + term.z)) continue;
