@@ -186,6 +186,37 @@ TEST(Bdpt, WalkLanesGiveTheScalarWalksImage) {
                         render_bdpt(box, box_accel, {.lanes = false}, {.threads = 1, .spp = 4})));
 }
 
+// Samples whose light subpath is its first vertex only (at light_paths 1/8 most of them; at 1
+// those whose light subpath ends there) connect s = 0 and s = 1 by their own code, each weighted as
+// it is made and s = 1 at flat Lambert vertices eight to a SIMD operation: the image is the
+// general code's bit for bit, with the scalar walk too (lanes off: the dedicated code's scalar
+// connections), with the balance heuristic, without weights, and in the furnace (long paths).
+TEST(Bdpt, CameraOnlyConnectionsGiveTheGeneralCodesImage) {
+  const Scene cornell = make_cornell_area({.width = 24, .height = 20});
+  const BvhAccel cornell_accel(cornell.mesh, kDefaultKernel);
+  const RenderOptions options{.threads = 1, .spp = 8};
+  for (const float share : {1.0f, 0.125f}) {
+    for (const bool lanes : {true, false}) {
+      for (const int variant : {0, 1, 2}) {
+        BdptSettings fast{.light_paths = share, .lanes = lanes};
+        fast.balance = variant == 1;
+        fast.unweighted = variant == 2;
+        BdptSettings general = fast;
+        general.camera_only_connect = false;
+        EXPECT_TRUE(same_bits(render_bdpt(cornell, cornell_accel, fast, options),
+                              render_bdpt(cornell, cornell_accel, general, options)))
+            << "light_paths " << share << " lanes " << lanes << " variant " << variant;
+      }
+    }
+  }
+  const Scene box = furnace(0.9f, 0.5f, 12);
+  const BvhAccel box_accel(box.mesh, kDefaultKernel);
+  EXPECT_TRUE(
+      same_bits(render_bdpt(box, box_accel, {.light_paths = 0.125f}, {.threads = 1, .spp = 4}),
+                render_bdpt(box, box_accel, {.light_paths = 0.125f, .camera_only_connect = false},
+                            {.threads = 1, .spp = 4})));
+}
+
 using testing_mc::expect_same_mean;
 using testing_mc::MeanAndError;
 

@@ -541,8 +541,8 @@ class BdptTracer {
   // walk_scatter for n <= 8 camera walks (walks[index[i]] on paths[index[i]], numbers *u[i]) whose
   // last vertex is a flat Lambert surface, eight to a SIMD operation (lanes.h), bit for bit.
   void walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState* walks,
-                          const uint32_t* index, const std::array<glm::vec2, 2>* const* u,
-                          size_t n) const;
+                          const uint32_t* index, const Vertex* const* vertices,
+                          const std::array<glm::vec2, 2>* const* u, size_t n) const;
   // One bounce of the walks index[0, n) at hits[0, n): walk_hit and walk_scatter for each, u
   // holding the numbers of those that draw (will_draw), in order; the camera walks' flat Lambert
   // vertices scatter in lanes after the others.
@@ -572,6 +572,32 @@ class BdptTracer {
   // Sample k's connections (s, t), t >= 2, queued; then its light tracing (sampler: the splats'
   // rounding number and an orthographic lens's offset, drawn after the subpaths').
   void connect(size_t k, Sampler& sampler);
+  // connect for a sample whose light subpath is its first vertex only (nl <= 1; with
+  // BdptSettings::light_paths < 1 most samples): its strategies are s = 0 and s = 1 at each camera
+  // vertex, each connection weighted as it is made (the weight does not depend on the shadow ray),
+  // the camera side's partial sums carried along the walk rather than prepared in a pass of their
+  // own, and the weighted term queued for its shadow ray. The same numbers, in the same order, as
+  // connect's: the image is the same bits.
+  void connect_camera_only(size_t k);
+  // connect_camera_only's connection s = 1 at camera vertex t - 1 of sample k, where that vertex
+  // is a flat Lambert surface and the light vertex a point of an emissive triangle without an
+  // emission texture, for pending_[pending] whose shadow ray has slot rays_[pending.ray]: kept
+  // (lane_jobs_) and computed eight to a SIMD operation (lanes.h) when eight are kept or before
+  // the queue is flushed, bit for bit connect_camera_only's scalar code.
+  struct LaneJob {
+    const Vertex* pt = nullptr;     // camera vertex t - 1 (its predecessor is pt - 1)
+    const Vertex* light = nullptr;  // light vertex 0
+    int pending = 0;
+    // mis_weight_recursive's camera-side terms for s = 1 that do not depend on the connection:
+    // whether its outer (t - 1 >= m) and inner (t - 2 >= m) terms exist, the inner one's sum
+    // (before + c) and what the outer one adds (pt_minus not delta).
+    bool has_outer = false, has_inner = false;
+    float inner_terms = 0.0f, outer_add = 0.0f;
+  };
+  std::array<LaneJob, 8> lane_jobs_{};
+  size_t lane_job_count_ = 0;
+  int ray_holes_ = 0;  // lane jobs' reserved rays_ slots that their connections did not use
+  void run_lane_jobs();
   // The shadow ray of the connection between camera-side vertex c and light-side vertex l, whose
   // direction from c is w (direction(c, l)); false where nothing fits between its two ends (then
   // nothing can block it).
@@ -679,6 +705,8 @@ class BdptTracer {
     float count_ratio = 1.0f;  // t = 1: the splat's pixel's (SplatPass::count_ratio)
     uint32_t sample = 0;       // the wavefront sample's index
     glm::vec3 dir{0.0f};       // t >= 2, s >= 1: the connection's direction (connection_weight)
+    bool weighted = false;     // `contribution` is the weighted term (connect_camera_only)
+    bool skip = false;         // a lane job's connection that carries nothing
   };
   static constexpr int kMaxPending = 256;
   std::array<Pending, kMaxPending> pending_{};
@@ -917,6 +945,7 @@ void BdptTracer::step_bounce(std::vector<Vertex>* const* paths, WalkState* walks
                              const uint32_t* index, const Hit* hits, size_t n,
                              const std::array<glm::vec2, 2>* u, bool* escaped) const {
   std::array<uint32_t, 8> lane_index;
+  std::array<const Vertex*, 8> lane_vertex;
   std::array<const std::array<glm::vec2, 2>*, 8> lane_u;
   size_t lanes_used = 0;
   size_t m = 0;
@@ -929,10 +958,12 @@ void BdptTracer::step_bounce(std::vector<Vertex>* const* paths, WalkState* walks
     const Vertex& x = (*paths[k])[static_cast<size_t>(walks[k].count - 1)];
     if (it_.settings_.lanes && !walks[k].light && x.lambert && !x.smooth) {
       lane_index[lanes_used] = k;
+      lane_vertex[lanes_used] = &x;
       lane_u[lanes_used++] = &uj;
       // Eight at a time, while their vertices are still in the first-level cache.
       if (lanes_used == lanes::kWidth) {
-        walk_scatter_lanes(paths, walks, lane_index.data(), lane_u.data(), lanes_used);
+        walk_scatter_lanes(paths, walks, lane_index.data(), lane_vertex.data(), lane_u.data(),
+                           lanes_used);
         lanes_used = 0;
       }
       continue;
@@ -941,59 +972,53 @@ void BdptTracer::step_bounce(std::vector<Vertex>* const* paths, WalkState* walks
     walk_scatter(*paths[k], walks[k], uj);
   }
   if (lanes_used > 0) {
-    walk_scatter_lanes(paths, walks, lane_index.data(), lane_u.data(), lanes_used);
+    walk_scatter_lanes(paths, walks, lane_index.data(), lane_vertex.data(), lane_u.data(),
+                       lanes_used);
   }
 }
 
 #if defined(TRITRACE_LANES)
 void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState* walks,
-                                    const uint32_t* index, const std::array<glm::vec2, 2>* const* u,
-                                    size_t n) const {
+                                    const uint32_t* index, const Vertex* const* vertices,
+                                    const std::array<glm::vec2, 2>* const* u, size_t n) const {
   using lanes::F;
   using lanes::I;
   using lanes::V3;
   constexpr size_t W = lanes::kWidth;
-  // Gathered per lane (lanes past n repeat lane 0 and are not written back).
-  alignas(32) float frame_x[3][W], frame_y[3][W], frame_z[3][W], wo[3][W], albedo[3][W], beta[3][W],
-      rr_beta[3][W], ng[3][W], p[3][W], v0[3][W], e1[3][W], e2[3][W];
-  alignas(32) float u_roulette[W], u_x[W], u_y[W], edge_dist2[W], prev_factor[W];
-  alignas(32) int32_t roulette[W], edge[W];
+  // Per lane (lanes past n repeat lane 0 and are not written back) its vertex and walk, each
+  // number gathered into a register lane by lane (stores to memory reloaded as vectors wait for
+  // the stores: store forwarding fails on such loads).
+  std::array<const Vertex*, W> xs;
+  std::array<const WalkState*, W> ws;
   for (size_t l = 0; l < W; ++l) {
     const size_t i = l < n ? l : 0;
-    const WalkState& w = walks[index[i]];
-    const Vertex& x = (*paths[index[i]])[static_cast<size_t>(w.count - 1)];
-    for (int c = 0; c < 3; ++c) {
-      frame_x[c][l] = x.frame.x[c];
-      frame_y[c][l] = x.frame.y[c];
-      frame_z[c][l] = x.frame.z[c];
-      wo[c][l] = x.wo[c];
-      albedo[c][l] = x.albedo[c];
-      beta[c][l] = w.beta[c];
-      rr_beta[c][l] = w.rr_beta[c];
-      ng[c][l] = x.ng[c];
-      p[c][l] = x.p[c];
-      v0[c][l] = x.tri.v0[c];
-      e1[c][l] = x.tri.e1[c];
-      e2[c][l] = x.tri.e2[c];
-    }
-    u_roulette[l] = (*u[i])[0].y;
-    u_x[l] = (*u[i])[1].x;
-    u_y[l] = (*u[i])[1].y;
-    edge_dist2[l] = x.edge_dist2;
-    prev_factor[l] = x.prev_factor;
-    edge[l] = x.edge ? -1 : 0;
-    roulette[l] = w.count - 1 >= it_.settings_.roulette_depth ? -1 : 0;
+    xs[l] = vertices[i];
+    ws[l] = &walks[index[i]];
   }
-  const V3 fx = lanes::load3(frame_x), fy = lanes::load3(frame_y), fz = lanes::load3(frame_z);
+  const auto lane = [](auto get) {
+    return F{get(0), get(1), get(2), get(3), get(4), get(5), get(6), get(7)};
+  };
+  const auto lane3 = [&](auto get) {
+    return V3{lane([&](size_t l) { return get(l).x; }), lane([&](size_t l) { return get(l).y; }),
+              lane([&](size_t l) { return get(l).z; })};
+  };
+  const auto lane_mask = [](auto get) {
+    return I{get(0), get(1), get(2), get(3), get(4), get(5), get(6), get(7)};
+  };
+  const I edge_mask = lane_mask([&](size_t l) { return xs[l]->edge ? -1 : 0; });
+  const V3 fx = lane3([&](size_t l) { return xs[l]->frame.x; });
+  const V3 fy = lane3([&](size_t l) { return xs[l]->frame.y; });
+  const V3 fz = lane3([&](size_t l) { return xs[l]->frame.z; });
   // Frame::to_local(x.wo).
-  const V3 w_prev = lanes::load3(wo);
+  const V3 w_prev = lane3([&](size_t l) { return xs[l]->wo; });
   const V3 wo_local{lanes::dot(w_prev, fx), lanes::dot(w_prev, fy), lanes::dot(w_prev, fz)};
   // bsdf_sample's Lambert branch: wo turned up, sample_cosine_hemisphere (its concentric disk
   // with sincosf lane by lane), the density and the weight, then wi turned back.
   const I below = wo_local.z < 0.0f;
   const F wo_z = below ? -wo_local.z : wo_local.z;
   const I up = ~(wo_z <= 0.0f);
-  const F a = 2.0f * lanes::load(u_x) - 1.0f, b = 2.0f * lanes::load(u_y) - 1.0f;
+  const F a = 2.0f * lane([&](size_t l) { return (*u[l < n ? l : 0])[1].x; }) - 1.0f,
+          b = 2.0f * lane([&](size_t l) { return (*u[l < n ? l : 0])[1].y; }) - 1.0f;
   const I centre = (a == 0.0f) & (b == 0.0f);
   const I wide = lanes::abs(a) > lanes::abs(b);
   const F radius = wide ? a : b;
@@ -1010,8 +1035,9 @@ void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState
   const F z = lanes::sqrt(lanes::max(F{}, 1.0f - dx * dx - dy * dy));
   const F pdf = z > 0.0f ? z * kInvPi : F{};
   const I has_pdf = pdf > 0.0f;
-  const V3 weight =
-      lanes::select(has_pdf, lanes::load3(albedo) * lanes::splat(kInvPi) * (z / pdf), V3{});
+  const V3 weight = lanes::select(
+      has_pdf, lane3([&](size_t l) { return xs[l]->albedo; }) * lanes::splat(kInvPi) * (z / pdf),
+      V3{});
   const I valid = up & has_pdf & ((weight.x > 0.0f) | (weight.y > 0.0f) | (weight.z > 0.0f));
   const V3 wi{dx, dy, below ? -z : z};
   const V3 w_next = fx * wi.x + fy * wi.y + fz * wi.z;  // Frame::to_world
@@ -1019,28 +1045,31 @@ void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState
   const I flip = wi.z < 0.0f;
   const F rev_o = flip ? -wi.z : wi.z, rev_i = flip ? -wo_local.z : wo_local.z;
   const F pdf_rev_dir = rev_o <= 0.0f ? F{} : (rev_i > 0.0f ? rev_i * kInvPi : F{});
-  const F prev_pdf_rev = lanes::load_mask(edge)
-                             ? pdf_rev_dir / lanes::load(edge_dist2) * lanes::load(prev_factor)
+  const F prev_pdf_rev = edge_mask
+                             ? pdf_rev_dir / lane([&](size_t l) { return xs[l]->edge_dist2; }) *
+                                   lane([&](size_t l) { return xs[l]->prev_factor; })
                              : F{};
   // The throughput, Russian roulette, and the walk's test of what is left.
-  V3 beta_next = lanes::load3(beta) * weight;
-  V3 rr_next = lanes::load3(rr_beta) * weight;
-  const I rr = lanes::load_mask(roulette);
+  V3 beta_next = lane3([&](size_t l) { return ws[l]->beta; }) * weight;
+  V3 rr_next = lane3([&](size_t l) { return ws[l]->rr_beta; }) * weight;
+  const I rr = lane_mask(
+      [&](size_t l) { return ws[l]->count - 1 >= it_.settings_.roulette_depth ? -1 : 0; });
   const F survive = lanes::min(lanes::splat(1.0f), lanes::sqrt(lanes::max_component(rr_next)));
-  I alive = valid & (~rr | (lanes::load(u_roulette) < survive));
+  I alive = valid & (~rr | (lane([&](size_t l) { return (*u[l < n ? l : 0])[0].y; }) < survive));
   const F inverse = 1.0f / survive;
   beta_next = lanes::select(rr, beta_next * inverse, beta_next);
   rr_next = lanes::select(rr, rr_next * inverse, rr_next);
   const F largest = lanes::max_component(beta_next);
   alive &= (largest > 0.0f) & (lanes::abs(largest) <= std::numeric_limits<float>::max());
   // ray_start: leave_surface on the side w_next leaves to.
-  const V3 n_lab = lanes::load3(ng);
+  const V3 n_lab = lane3([&](size_t l) { return xs[l]->ng; });
   const I front = lanes::dot(n_lab, w_next) >= 0.0f;
   const V3 side = lanes::select(front, n_lab, -n_lab);
-  const V3 e1v = lanes::load3(e1), e2v = lanes::load3(e2);
-  const V3 start =
-      lanes::leave_surface(lanes::load3(v0), e1v, e2v, lanes::triangle_extent(e1v, e2v),
-                           lanes::load3(p), side, it_.offset_);
+  const V3 e1v = lane3([&](size_t l) { return xs[l]->tri.e1; }),
+           e2v = lane3([&](size_t l) { return xs[l]->tri.e2; });
+  const V3 start = lanes::leave_surface(
+      lane3([&](size_t l) { return xs[l]->tri.v0; }), e1v, e2v, lanes::triangle_extent(e1v, e2v),
+      lane3([&](size_t l) { return xs[l]->p; }), side, it_.offset_);
   for (size_t l = 0; l < n; ++l) {
     if (!valid[l]) continue;
     WalkState& w = walks[index[l]];
@@ -1066,7 +1095,8 @@ void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState
 }
 #else
 void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const*, WalkState*, const uint32_t*,
-                                    const std::array<glm::vec2, 2>* const*, size_t) const {}
+                                    const Vertex* const*, const std::array<glm::vec2, 2>* const*,
+                                    size_t) const {}
 #endif
 
 void BdptTracer::light_subpath(std::vector<Vertex>& path, int max_vertices,
@@ -1277,6 +1307,8 @@ void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const
   p.count_ratio = count_ratio;
   p.dir = dir;
   p.sample = static_cast<uint32_t>(current_ - state_.data());
+  p.weighted = false;
+  p.skip = false;
   p.ray = -1;
   if (has_ray) {
     p.ray = ray_count_;
@@ -1285,6 +1317,19 @@ void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const
 }
 
 void BdptTracer::flush() {
+  run_lane_jobs();
+  if (ray_holes_ > 0) {
+    // Close the slots that lane jobs reserved and left unused (their order is the queue's).
+    int r = 0;
+    for (int k = 0; k < pending_count_; ++k) {
+      Pending& p = pending_[static_cast<size_t>(k)];
+      if (p.ray < 0) continue;
+      rays_[static_cast<size_t>(r)] = rays_[static_cast<size_t>(p.ray)];
+      p.ray = r++;
+    }
+    ray_count_ = r;
+    ray_holes_ = 0;
+  }
   const auto n = static_cast<size_t>(ray_count_);
   if (n > 0) {
     accel_.occluded_incoherent(std::span<const Ray>(rays_.data(), n),
@@ -1295,13 +1340,18 @@ void BdptTracer::flush() {
   for (int k = 0; k < pending_count_; ++k) {
     const Pending& p = pending_[static_cast<size_t>(k)];
     if (it_.settings_.pilot != nullptr) {
-      pilot_record(p);
+      pilot_record(p);  // the pilot connects every sample with the general code
       continue;
     }
-    if (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)]) continue;
+    if (p.skip || (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)])) continue;
+    if (p.weighted) {
+      // connect_camera_only's term (t >= 2), weighted already: only its sample's total.
+      const glm::vec3 term = p.contribution;
+      if (std::isfinite(term.x + term.y + term.z)) state_[p.sample].total += term;
+      continue;
+    }
     select(p.sample);
-    const float weight = unweighted ? 1.0f : weight_of(p);
-    const glm::vec3 term = p.contribution * weight;
+    const glm::vec3 term = p.contribution * (unweighted ? 1.0f : weight_of(p));
     // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
     // dropped rather than let a NaN or infinity into the pixel.
     if (!std::isfinite(term.x + term.y + term.z)) continue;
@@ -1771,8 +1821,261 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
   }
 }
 
+void BdptTracer::connect_camera_only(size_t k) {
+  const BdptSettings& settings = it_.settings_;
+  select(k);
+  const int nc = current_->nc, nl = current_->nl;
+  Vertex* camera = camera_;
+  Vertex* light = light_;
+  const bool weighted = !settings.unweighted;
+  const int m = first_camera_strategy();
+  // prepare_weights' camera side (the light side's one vertex has no partial sum that s = 1
+  // reads), a vertex at a time just before the connections that read it.
+  float a = 0.0f;
+  const auto partial_sum = [&](int i) {
+    Vertex& x = camera[i];
+    if (i < m) {
+      x.mis_sum = 0.0f;
+      return;
+    }
+    const float c = !x.delta && !camera[i - 1].delta ? 1.0f : 0.0f;
+    a = a + c > 0.0f ? density_ratio(x.pdf_rev, x.pdf_fwd) * (a + c) : 0.0f;
+    x.mis_sum = a;
+  };
+  if (weighted && nc > 0) partial_sum(0);
+#if defined(TRITRACE_LANES)
+  // Whether the connections s = 1 can go to the lanes (run_lane_jobs): the light vertex is a point
+  // of an emissive triangle without an emission texture.
+  const bool lane_ready = settings.lanes && settings.weight_check == nullptr && nl >= 1 &&
+                          light[0].type == VertexType::kLight && !light[0].point_light &&
+                          !light[0].material->emission_texture.present();
+#endif
+  // Queues the weighted term of connection (s, t).
+  const auto add = [&](int s, int t, glm::vec3 contribution, bool has_ray, const Ray& ray,
+                       const glm::vec3* dir) {
+    const float weight = weighted ? mis_weight(light, camera, s, t, pixel_ratio_, dir) : 1.0f;
+    queue(s, t, contribution * weight, has_ray, ray);
+    pending_[static_cast<size_t>(pending_count_ - 1)].weighted = true;
+  };
+  for (int t = 2; t <= nc; ++t) {
+    if (weighted) partial_sum(t - 1);
+    const Vertex& pt = camera[t - 1];
+    // s = 0 (t <= nc <= max_depth + 2).
+    if (pt.emits) {
+      const glm::vec3 contribution = pt.beta * emission(scene_, pt, pt.wo);
+      if (max_component(contribution) > 0.0f) add(0, t, contribution, false, Ray{}, nullptr);
+    }
+    // s = 1: next-event estimation to the light subpath's first vertex (connect's arithmetic).
+    if (nl < 1 || 1 + t > settings.max_depth + 2) continue;
+    const Vertex& qs = light[0];
+#if defined(TRITRACE_LANES)
+    if (lane_ready && pt.lambert && !pt.smooth && pt.edge) {
+      queue(1, t, glm::vec3(0.0f), true, Ray{});
+      pending_[static_cast<size_t>(pending_count_ - 1)].weighted = true;
+      LaneJob& job = lane_jobs_[lane_job_count_++];
+      job.pt = &pt;
+      job.light = &qs;
+      job.pending = pending_count_ - 1;
+      const Vertex& pt_minus = camera[t - 2];
+      job.has_outer = t - 1 >= m;
+      job.has_inner = t - 2 >= m;
+      job.inner_terms = 0.0f;
+      if (t - 2 >= m) {
+        const float before = t - 3 >= m ? camera[t - 3].mis_sum : 0.0f;
+        const float c = !pt_minus.delta && !camera[t - 3].delta ? 1.0f : 0.0f;
+        job.inner_terms = before + c;
+      }
+      job.outer_add = pt_minus.delta ? 0.0f : 1.0f;
+      if (lane_job_count_ == lane_jobs_.size()) run_lane_jobs();
+      continue;
+    }
+#endif
+    if (!pt.connectible || !qs.connectible) continue;
+    const glm::vec3 d = infinite(qs) ? qs.w_env : qs.p - pt.p;
+    const float dist2 = infinite(qs) ? 1.0f : glm::dot(d, d);
+    if (!(dist2 > 0.0f)) continue;
+    const glm::vec3 w = d * (1.0f / std::sqrt(dist2));
+    const glm::vec3 f_camera = surface_f(pt, pt.wo, w);
+    if (!(max_component(f_camera) > 0.0f)) continue;
+    const glm::vec3 f_light = emission(scene_, qs, -w);
+    if (!(max_component(f_light) > 0.0f)) continue;
+    const float cos_light = qs.point_light || infinite(qs) ? 1.0f : std::abs(glm::dot(qs.ng, w));
+    const float g = std::abs(glm::dot(pt.ng, w)) * cos_light / dist2;
+    const glm::vec3 contribution = pt.beta * f_camera * (g * f_light) * qs.beta;
+    if (!(max_component(contribution) > 0.0f)) continue;
+    Ray ray;
+    const bool has_ray = shadow_ray(pt, qs, w, ray);
+    add(1, t, contribution, has_ray, ray, &w);
+  }
+}
+
+#if defined(TRITRACE_LANES)
+void BdptTracer::run_lane_jobs() {
+  const size_t n = lane_job_count_;
+  if (n == 0) return;
+  lane_job_count_ = 0;
+  using lanes::F;
+  using lanes::I;
+  using lanes::V3;
+  constexpr size_t W = lanes::kWidth;
+  const BdptSettings& settings = it_.settings_;
+  // Per lane (lanes past n repeat lane 0 and are not written back) its
+  // vertices, and each number gathered into a register lane by lane: stored to
+  // memory one float at a time and loaded as a vector, the loads waited for the
+  // stores (store forwarding fails on such loads).
+  std::array<const LaneJob*, W> jobs;
+  std::array<const Vertex*, W> pts, minus, lights;
+  for (size_t l = 0; l < W; ++l) {
+    jobs[l] = &lane_jobs_[l < n ? l : 0];
+    pts[l] = jobs[l]->pt;
+    minus[l] = jobs[l]->pt - 1;
+    lights[l] = jobs[l]->light;
+  }
+  const auto lane = [](auto get) {
+    return F{get(0), get(1), get(2), get(3), get(4), get(5), get(6), get(7)};
+  };
+  const auto lane_mask = [](auto get) {
+    return I{get(0), get(1), get(2), get(3), get(4), get(5), get(6), get(7)};
+  };
+  const auto lane3 = [&](const std::array<const Vertex*, W>& v, auto member) {
+    return V3{lane([&](size_t l) { return (v[l]->*member).x; }),
+              lane([&](size_t l) { return (v[l]->*member).y; }),
+              lane([&](size_t l) { return (v[l]->*member).z; })};
+  };
+  const auto lane_tri3 = [&](const std::array<const Vertex*, W>& v,
+                             glm::vec3 SurfaceTriangle::*member) {
+    return V3{lane([&](size_t l) { return (v[l]->tri.*member).x; }),
+              lane([&](size_t l) { return (v[l]->tri.*member).y; }),
+              lane([&](size_t l) { return (v[l]->tri.*member).z; })};
+  };
+  const auto lane1 = [&](const std::array<const Vertex*, W>& v, float Vertex::*member) {
+    return lane([&](size_t l) { return v[l]->*member; });
+  };
+  const I has_outer = lane_mask([&](size_t l) { return jobs[l]->has_outer ? -1 : 0; });
+  const I has_inner = lane_mask([&](size_t l) { return jobs[l]->has_inner ? -1 : 0; });
+  const F inner_terms = lane([&](size_t l) { return jobs[l]->inner_terms; });
+  const F outer_add = lane([&](size_t l) { return jobs[l]->outer_add; });
+  const V3 pt_p = lane3(pts, &Vertex::p), pt_ng = lane3(pts, &Vertex::ng);
+  const V3 frame_z{lane([&](size_t l) { return pts[l]->frame.z.x; }),
+                   lane([&](size_t l) { return pts[l]->frame.z.y; }),
+                   lane([&](size_t l) { return pts[l]->frame.z.z; })};
+  const V3 qs_p = lane3(lights, &Vertex::p), qs_ng = lane3(lights, &Vertex::ng);
+  const V3 pt_wo = lane3(pts, &Vertex::wo), pt_albedo = lane3(pts, &Vertex::albedo),
+           pt_beta = lane3(pts, &Vertex::beta), pt_to_prev = lane3(pts, &Vertex::to_prev);
+  const V3 pt_v0 = lane_tri3(pts, &SurfaceTriangle::v0),
+           pt_e1 = lane_tri3(pts, &SurfaceTriangle::e1),
+           pt_e2 = lane_tri3(pts, &SurfaceTriangle::e2);
+  const V3 qs_e1 = lane_tri3(lights, &SurfaceTriangle::e1),
+           qs_e2 = lane_tri3(lights, &SurfaceTriangle::e2), qs_beta = lane3(lights, &Vertex::beta);
+  const V3 qs_le{lane([&](size_t l) { return lights[l]->material->emission.x; }),
+                 lane([&](size_t l) { return lights[l]->material->emission.y; }),
+                 lane([&](size_t l) { return lights[l]->material->emission.z; })};
+  const F pt_fwd = lane1(pts, &Vertex::pdf_fwd), edge_dist2 = lane1(pts, &Vertex::edge_dist2),
+          prev_factor = lane1(pts, &Vertex::prev_factor),
+          minus_fwd = lane1(minus, &Vertex::pdf_fwd), q_fwd = lane1(lights, &Vertex::pdf_fwd);
+  const I sided = lane_mask([&](size_t l) { return lights[l]->two_sided ? -1 : 0; });
+  // connect_camera_only's scalar s = 1, term by term.
+  const V3 d = qs_p - pt_p;
+  const F dist2 = lanes::dot(d, d);
+  I keep = dist2 > 0.0f;
+  const V3 w = d * (1.0f / lanes::sqrt(dist2));
+  const V3 minus_w = -w;
+  // surface_f (flat: no shading factor) with lambert_eval.
+  const F cos_g = lanes::abs(lanes::dot(pt_ng, w));
+  F wo_z = lanes::dot(pt_wo, frame_z), wi_z = lanes::dot(w, frame_z);
+  {
+    const I flip = wo_z < 0.0f;
+    wo_z = flip ? -wo_z : wo_z;
+    wi_z = flip ? -wi_z : wi_z;
+  }
+  const I f_nonzero = (cos_g > 0.0f) & ~((wo_z <= 0.0f) | (wi_z <= 0.0f));
+  const V3 f_camera = lanes::select(f_nonzero, pt_albedo * lanes::splat(kInvPi), V3{});
+  keep &= lanes::max_component(f_camera) > 0.0f;
+  // emission: emitted_radiance of the light's material towards -w.
+  const F c_light = lanes::dot(qs_ng, minus_w);
+  const V3 f_light = lanes::select(sided | (c_light > 0.0f), qs_le, V3{});
+  keep &= lanes::max_component(f_light) > 0.0f;
+  const F cos_light = lanes::abs(lanes::dot(qs_ng, w));
+  const F g = cos_g * cos_light / dist2;
+  const V3 contribution = pt_beta * f_camera * (g * f_light) * qs_beta;
+  keep &= lanes::max_component(contribution) > 0.0f;
+  // shadow_ray: ray_start at pt (leave_surface on w's side), the light's end
+  // moved off its surface towards pt and stopped short.
+  const I front = lanes::dot(pt_ng, w) >= 0.0f;
+  const V3 side = lanes::select(front, pt_ng, -pt_ng);
+  const V3 from = lanes::leave_surface(pt_v0, pt_e1, pt_e2, lanes::triangle_extent(pt_e1, pt_e2),
+                                       pt_p, side, it_.offset_);
+  const V3 side_l = lanes::select(lanes::dot(qs_ng, w) <= 0.0f, qs_ng, -qs_ng);
+  const V3 end =
+      lanes::offset_ray_origin(qs_p, side_l, lanes::triangle_extent(qs_e1, qs_e2), it_.offset_);
+  const V3 end_segment = end - from;
+  const V3 to = end + side_l * (kRayEndScale * lanes::sqrt(lanes::dot(end_segment, end_segment)));
+  const V3 segment = to - from;
+  const F length = lanes::sqrt(lanes::dot(segment, segment));
+  const I has_ray = (length > 0.0f) & (lanes::dot(segment, w) > 0.0f);
+  const V3 ray_dir = segment * (1.0f / length);
+  // mis_weight_recursive for s = 1.
+  F weight = lanes::splat(1.0f);
+  if (!settings.unweighted) {
+    const bool balance = settings.balance;
+    const auto remap = [balance](F f) { return f != 0.0f ? (balance ? f : f * f) : 1.0f; };
+    const auto ratio = [&](F rev, F fwd) { return remap(rev) / remap(fwd); };
+    const auto scaled = [](F r, F terms) { return terms > 0.0f ? r * terms : F{}; };
+    const auto lambert_pdf = [](F given_z, F sampled_z) {
+      const I flip = given_z < 0.0f;
+      const F o = flip ? -given_z : given_z, i = flip ? -sampled_z : sampled_z;
+      return o <= 0.0f ? F{} : (i > 0.0f ? i * kInvPi : F{});
+    };
+    const V3 w_pt_minus = pt_to_prev;
+    const F qs_dir =
+        sided ? 0.5f * lanes::abs(c_light) * kInvPi : (c_light > 0.0f ? c_light * kInvPi : F{});
+    const F minus_z = lanes::dot(w_pt_minus, frame_z), w_z = lanes::dot(w, frame_z);
+    const F pt_dir = lambert_pdf(minus_z, w_z);
+    const V3 d2 = pt_p - qs_p;
+    const F dist2b = lanes::dot(d2, d2);
+    const I apart = dist2b > 0.0f;
+    const F len2 = lanes::sqrt(dist2b);
+    F pt_rev = apart ? qs_dir / dist2b * (lanes::abs(lanes::dot(pt_ng, d2)) / len2) : F{};
+    F qs_rev = apart ? pt_dir / dist2b : F{};
+    qs_rev = apart ? qs_rev * (lanes::abs(lanes::dot(qs_ng, d2)) / len2) : qs_rev;
+    pt_rev *= settings.light_paths;
+    const F pt_minus_rev = lambert_pdf(w_z, minus_z) / edge_dist2 * prev_factor;
+    const F inner = has_inner ? scaled(ratio(pt_minus_rev, minus_fwd), inner_terms) : F{};
+    const F outer = has_outer ? scaled(ratio(pt_rev, pt_fwd), inner + outer_add) : F{};
+    F sum = F{} + outer;
+    sum = sum + scaled(ratio(qs_rev, q_fwd), F{} + 1.0f);
+    weight = 1.0f / (1.0f + sum);
+  }
+  const V3 term = contribution * weight;
+  for (size_t l = 0; l < n; ++l) {
+    Pending& pending = pending_[static_cast<size_t>(lane_jobs_[l].pending)];
+    if (!keep[l]) {
+      pending.skip = true;
+    } else {
+      pending.contribution = glm::vec3(term.x[l], term.y[l], term.z[l]);
+      if (has_ray[l]) {
+        Ray& r = rays_[static_cast<size_t>(pending.ray)];
+        r.origin = glm::vec3(from.x[l], from.y[l], from.z[l]);
+        r.dir = glm::vec3(ray_dir.x[l], ray_dir.y[l], ray_dir.z[l]);
+        r.tmin = 0.0f;
+        r.tmax = length[l];
+        continue;
+      }
+    }
+    pending.ray = -1;
+    ++ray_holes_;
+  }
+}
+#else
+void BdptTracer::run_lane_jobs() {}
+#endif
+
 void BdptTracer::connect(size_t k, Sampler& sampler) {
   const BdptSettings& settings = it_.settings_;
+  if (settings.camera_only_connect && state_[k].nl <= 1 &&
+      !(settings.only_s >= 0 && settings.only_t >= 0)) {
+    return connect_camera_only(k);
+  }
   select(k);
   const int nc = current_->nc, nl = current_->nl;
   Vertex* camera = camera_;

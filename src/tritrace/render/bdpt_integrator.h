@@ -92,6 +92,10 @@ struct BdptSettings {
   // contributions and work go to this tally instead of the image (no splats are added). Not
   // thread-safe: one radiance call at a time.
   LightPathsTally* pilot = nullptr;
+  // For tests: false connects the samples whose light subpath is its first vertex only (most of
+  // them where light_paths < 1) with the general code too, whose image the dedicated one
+  // (s = 0 and s = 1 only, each connection weighted as it is made) must match bit for bit.
+  bool camera_only_connect = true;
 };
 
 // The smallest BdptSettings::light_paths accepted (smaller shares divide contributions by

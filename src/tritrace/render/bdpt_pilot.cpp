@@ -20,6 +20,8 @@ LightPathsChoice choose_light_paths(const Scene& scene, const Accel& accel,
   BdptSettings pilot_settings = settings;
   pilot_settings.light_paths = 1.0f;
   pilot_settings.pilot = &tally;
+  // pilot_record reads each connection's vertices, which only the general connect queues.
+  pilot_settings.camera_only_connect = false;
   pilot_settings.weight_check = nullptr;
   const BdptIntegrator integrator(scene, pilot_settings);
 
