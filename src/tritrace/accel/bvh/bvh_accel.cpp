@@ -364,6 +364,11 @@ template <int Kz>
     --s.sp;
   } while (s.stack[s.sp].key > s.best.t);
   s.ref = s.stack[s.sp].ref;
+  // The entry below is the next to be popped, perhaps at this ray's next step (when s.ref is a
+  // leaf): asked for now, it has a whole round of the other slots' steps to arrive. At the push
+  // only the top kPrefetchDepth entries were asked for, and the deeper ones waited on memory when
+  // popped (the floor's root entries keep the index valid).
+  prefetch(bases, s.stack[s.sp - 1].ref);
   return true;
 }
 
