@@ -326,14 +326,35 @@ struct AnyRay {
   uint32_t stack[kStackFloor + kStackSize + kWidth];
 };
 
-// One step of closest_hit_from for ray s: a leaf block or a node. Returns false once the ray is
-// done (s.best is its answer).
+// Pops the next entry for ray s, skipping those beyond its hit; false when none is left.
+[[gnu::always_inline]] inline bool closest_pop(const TreeBases& bases, ClosestRay& s) {
+  do {
+    if (s.sp == kStackFloor) return false;
+    --s.sp;
+  } while (s.stack[s.sp].key > s.best.t);
+  s.ref = s.stack[s.sp].ref;
+  // The entry below is the next to be popped, perhaps at this ray's next step (when s.ref is a
+  // leaf): asked for now, it has a whole round of the other slots' steps to arrive. At the push
+  // only the top kPrefetchDepth entries were asked for, and the deeper ones waited on memory when
+  // popped (the floor's root entries keep the index valid).
+  prefetch(bases, s.stack[s.sp - 1].ref);
+  return true;
+}
+
+// One step of closest_hit_from for ray s: a leaf block or a node (or both: a leaf block, then the
+// node popped after it). Returns false once the ray is done (s.best is its answer).
 template <int Kz>
 [[gnu::always_inline]] inline bool closest_step(const WideBvh& tree, const TreeBases& bases,
                                                 ClosestRay& s) {
   if (s.ref & kLeafBit) {
     bvh::block_watertight_axis<Kz>(tree.blocks[s.ref & ~kLeafBit], s.wt, &s.best);
-  } else {
+    // A popped node goes on in this step rather than the next: it was asked for a round ago or
+    // more (at its push or at the pop before), so it has mostly arrived, and the switch to the
+    // next slot and back is saved. A popped leaf waits for its own step.
+    if (!closest_pop(bases, s)) return false;
+    if (s.ref & kLeafBit) return true;
+  }
+  {
     const WideNode& node = tree.nodes[s.ref];
     alignas(32) float tnear[kWidth];
     const uint32_t mask =
@@ -359,17 +380,7 @@ template <int Kz>
       return true;
     }
   }
-  do {
-    if (s.sp == kStackFloor) return false;
-    --s.sp;
-  } while (s.stack[s.sp].key > s.best.t);
-  s.ref = s.stack[s.sp].ref;
-  // The entry below is the next to be popped, perhaps at this ray's next step (when s.ref is a
-  // leaf): asked for now, it has a whole round of the other slots' steps to arrive. At the push
-  // only the top kPrefetchDepth entries were asked for, and the deeper ones waited on memory when
-  // popped (the floor's root entries keep the index valid).
-  prefetch(bases, s.stack[s.sp - 1].ref);
-  return true;
+  return closest_pop(bases, s);
 }
 
 // One step of any_hit for ray s. Returns false once the ray is done; `hit` says how.
