@@ -341,8 +341,8 @@ struct AnyRay {
   return true;
 }
 
-// One step of closest_hit_from for ray s: a leaf block or a node (or both: a leaf block, then the
-// node popped after it). Returns false once the ray is done (s.best is its answer).
+// One step of closest_hit_from for ray s: a leaf block, or nodes, or a leaf block and then nodes.
+// Returns false once the ray is done (s.best is its answer).
 template <int Kz>
 [[gnu::always_inline]] inline bool closest_step(const WideBvh& tree, const TreeBases& bases,
                                                 ClosestRay& s) {
@@ -354,7 +354,9 @@ template <int Kz>
     if (!closest_pop(bases, s)) return false;
     if (s.ref & kLeafBit) return true;
   }
-  {
+  // Nodes until one has a hit child or a leaf is next: a node none of whose children is hit pops
+  // the next entry, a node asked for a round ago or more, and goes on with it in this step.
+  for (;;) {
     const WideNode& node = tree.nodes[s.ref];
     alignas(32) float tnear[kWidth];
     const uint32_t mask =
@@ -379,8 +381,9 @@ template <int Kz>
       s.ref = top[n - 1].ref;
       return true;
     }
+    if (!closest_pop(bases, s)) return false;
+    if (s.ref & kLeafBit) return true;
   }
-  return closest_pop(bases, s);
 }
 
 // One step of any_hit for ray s. Returns false once the ray is done; `hit` says how.
