@@ -395,7 +395,15 @@ template <int Kz>
       hit = true;
       return false;
     }
-  } else {
+    // As in closest_step: a popped node goes on in this step (it was asked for at its push).
+    if (s.sp == kStackFloor) {
+      hit = false;
+      return false;
+    }
+    s.ref = s.stack[--s.sp];
+    if (s.ref & kLeafBit) return true;
+  }
+  {
     const WideNode& node = tree.nodes[s.ref];
     alignas(32) float tnear[kWidth];
     const uint32_t mask = intersect_boxes(node, s.setup, s.setup.tmax, tnear);
