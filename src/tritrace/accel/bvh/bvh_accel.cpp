@@ -326,14 +326,37 @@ struct AnyRay {
   uint32_t stack[kStackFloor + kStackSize + kWidth];
 };
 
-// One step of closest_hit_from for ray s: a leaf block or a node. Returns false once the ray is
-// done (s.best is its answer).
+// Pops the next entry for ray s, skipping those beyond its hit; false when none is left.
+[[gnu::always_inline]] inline bool closest_pop(const TreeBases& bases, ClosestRay& s) {
+  do {
+    if (s.sp == kStackFloor) return false;
+    --s.sp;
+  } while (s.stack[s.sp].key > s.best.t);
+  s.ref = s.stack[s.sp].ref;
+  // The entry below is the next to be popped, perhaps at this ray's next step (when s.ref is a
+  // leaf): asked for now, it has a whole round of the other slots' steps to arrive. At the push
+  // only the top kPrefetchDepth entries were asked for, and the deeper ones waited on memory when
+  // popped (the floor's root entries keep the index valid).
+  prefetch(bases, s.stack[s.sp - 1].ref);
+  return true;
+}
+
+// One step of closest_hit_from for ray s: a leaf block, or nodes, or a leaf block and then nodes.
+// Returns false once the ray is done (s.best is its answer).
 template <int Kz>
 [[gnu::always_inline]] inline bool closest_step(const WideBvh& tree, const TreeBases& bases,
                                                 ClosestRay& s) {
   if (s.ref & kLeafBit) {
     bvh::block_watertight_axis<Kz>(tree.blocks[s.ref & ~kLeafBit], s.wt, &s.best);
-  } else {
+    // A popped node goes on in this step rather than the next: it was asked for a round ago or
+    // more (at its push or at the pop before), so it has mostly arrived, and the switch to the
+    // next slot and back is saved. A popped leaf waits for its own step.
+    if (!closest_pop(bases, s)) return false;
+    if (s.ref & kLeafBit) return true;
+  }
+  // Nodes until one has a hit child or a leaf is next: a node none of whose children is hit pops
+  // the next entry, a node asked for a round ago or more, and goes on with it in this step.
+  for (;;) {
     const WideNode& node = tree.nodes[s.ref];
     alignas(32) float tnear[kWidth];
     const uint32_t mask =
@@ -358,13 +381,9 @@ template <int Kz>
       s.ref = top[n - 1].ref;
       return true;
     }
+    if (!closest_pop(bases, s)) return false;
+    if (s.ref & kLeafBit) return true;
   }
-  do {
-    if (s.sp == kStackFloor) return false;
-    --s.sp;
-  } while (s.stack[s.sp].key > s.best.t);
-  s.ref = s.stack[s.sp].ref;
-  return true;
 }
 
 // One step of any_hit for ray s. Returns false once the ray is done; `hit` says how.
@@ -376,7 +395,15 @@ template <int Kz>
       hit = true;
       return false;
     }
-  } else {
+    // As in closest_step: a popped node goes on in this step (it was asked for at its push).
+    if (s.sp == kStackFloor) {
+      hit = false;
+      return false;
+    }
+    s.ref = s.stack[--s.sp];
+    if (s.ref & kLeafBit) return true;
+  }
+  {
     const WideNode& node = tree.nodes[s.ref];
     alignas(32) float tnear[kWidth];
     const uint32_t mask = intersect_boxes(node, s.setup, s.setup.tmax, tnear);
