@@ -802,8 +802,8 @@ neighbours' pilots within its 16 x 16 tile, never its own, so the image is unbia
 `tritrace render --noise-threshold`; Frame.mean_spp says how many it took), aperture
 (a thin lens's radius in world units, as `tritrace render --aperture`; path only), focus
 (the distance of the plane in focus, as --focus), light_paths (bdpt only: the share of samples,
-in (0, 1], that also trace a light subpath, as `tritrace render --light-paths`; default 1; or
-"auto", the pilot's choice per scene, which Frame.light_paths reports).
+in (0, 1], that also trace a light subpath, as `tritrace render --light-paths`; or
+"auto", the default: the pilot's choice per scene, which Frame.light_paths reports).
 aovs: any of "albedo", "normal", "depth", "variance", "spp". Camera settings beyond the CLI's
 flags, as a scene file's camera has them: position, look_at, up, vertical_fov (degrees) or
 focal_length (pixels); giving any to a built-in scene replaces the lab's orbit camera with a

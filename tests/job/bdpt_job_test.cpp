@@ -66,7 +66,9 @@ TEST(BdptJob, RendersWhatTheRendererRendersWithBdptDirectly) {
 
     const LoadedScene loaded = load_job_scene(s);
     const auto accel = make_accel(AccelKind::kBvh, loaded.scene, Kernel::kWatertight);
-    const BdptIntegrator integrator(loaded.scene);
+    // bdpt's default share is `auto`'s: the pilot's choice (LightPathsAuto... tests it).
+    ASSERT_TRUE(job.light_paths_pilot().has_value()) << scene;
+    const BdptIntegrator integrator(loaded.scene, {.light_paths = job.light_paths()});
     const Image want = render(loaded.scene, *accel, integrator, {.threads = 1, .spp = 4});
     EXPECT_TRUE(same_pixels(got.image, want)) << scene;
   }
@@ -297,11 +299,15 @@ TEST(BdptJob, LightPathsFlagSceneKeyAndIdentity) {
   const BdptIntegrator integrator(loaded.scene, {.light_paths = 0.25f});
   EXPECT_TRUE(same_pixels(job.render().image,
                           render(loaded.scene, *accel, integrator, {.threads = 1, .spp = 4})));
+  // The default is `auto`: its parts merge with explicit auto's, never with an explicit share's.
   JobSettings every = small_bdpt("cornell-area");
-  const RenderJob one(every, load_job_scene(every));
-  EXPECT_FALSE(job.identity() == one.identity());
+  const RenderJob by_default(every, load_job_scene(every));
+  EXPECT_TRUE(by_default.spec().light_paths_auto);
+  EXPECT_FALSE(job.identity() == by_default.identity());
+  every.light_paths = "auto";
+  EXPECT_TRUE(RenderJob(every, load_job_scene(every)).identity() == by_default.identity());
   every.light_paths = "1";
-  EXPECT_TRUE(RenderJob(every, load_job_scene(every)).identity() == one.identity());
+  EXPECT_FALSE(RenderJob(every, load_job_scene(every)).identity() == by_default.identity());
   for (const char* other : {"path", "lab"}) {
     JobSettings o = s;
     o.integrator = other;
@@ -314,6 +320,11 @@ TEST(BdptJob, LightPathsFlagSceneKeyAndIdentity) {
       "integrator": {"type": "bdpt", "light_paths": 0.5}})",
                                             path);
   EXPECT_EQ(file.integrator.light_paths, 0.5f);
+  EXPECT_FALSE(file.integrator.light_paths_auto);
+  EXPECT_TRUE(parse_scene_json(R"({"meshes": [{"generator": "cornell-area"}],
+      "integrator": {"type": "bdpt"}})",
+                               path)
+                  .integrator.light_paths_auto);
   for (const char* bad : {"0", "1.5", "\"half\""}) {
     const std::string text = std::string(R"({"meshes": [{"generator": "cornell-area"}],
         "integrator": {"type": "bdpt", "light_paths": )") +

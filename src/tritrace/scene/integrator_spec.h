@@ -27,9 +27,9 @@ struct IntegratorSpec {
   // bdpt's share of camera samples that also trace a light subpath (BdptSettings::light_paths),
   // in (0, 1]; 1: every sample.
   float light_paths = 1.0f;
-  // `--light-paths auto`: the render job runs a pilot (render/bdpt_pilot.h) that chooses
-  // light_paths for the scene before it renders.
-  bool light_paths_auto = false;
+  // `--light-paths auto`, bdpt's default: the render job runs a pilot (render/bdpt_pilot.h) that
+  // chooses light_paths for the scene before it renders; false: light_paths as set.
+  bool light_paths_auto = true;
 };
 
 }  // namespace tritrace

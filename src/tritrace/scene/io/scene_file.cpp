@@ -866,6 +866,7 @@ class Parser {
                  describe(v));
       } else {
         spec.light_paths = static_cast<float>(f);
+        spec.light_paths_auto = false;
       }
     }
   }
