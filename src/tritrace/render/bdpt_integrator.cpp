@@ -662,6 +662,14 @@ class BdptTracer {
     };
     return remap(rev) / remap(fwd);
   }
+  // One step of prepare_weights' camera-side partial sum: the sum a before vertex x (whose
+  // predecessor on the subpath is `before`) carried across x, and stored there.
+  float carry_camera_sum(float a, Vertex& x, const Vertex& before) const {
+    const float c = !x.delta && !before.delta ? 1.0f : 0.0f;
+    a = a + c > 0.0f ? density_ratio(x.pdf_rev, x.pdf_fwd) * (a + c) : 0.0f;
+    x.mis_sum = a;
+    return a;
+  }
   // The smallest camera vertex index i whose strategy (s + t - i, i) exists: 1 (light tracing)
   // or 2.
   int first_camera_strategy() const { return it_.settings_.light_tracing ? 1 : 2; }
@@ -1017,23 +1025,10 @@ void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState
   const I below = wo_local.z < 0.0f;
   const F wo_z = below ? -wo_local.z : wo_local.z;
   const I up = ~(wo_z <= 0.0f);
-  const F a = 2.0f * lane([&](size_t l) { return (*u[l < n ? l : 0])[1].x; }) - 1.0f,
-          b = 2.0f * lane([&](size_t l) { return (*u[l < n ? l : 0])[1].y; }) - 1.0f;
-  const I centre = (a == 0.0f) & (b == 0.0f);
-  const I wide = lanes::abs(a) > lanes::abs(b);
-  const F radius = wide ? a : b;
-  const F phi = wide ? 0.25f * kPi * (b / a) : 0.5f * kPi - 0.25f * kPi * (a / b);
-  F cos_phi, sin_phi;
-  for (size_t l = 0; l < W; ++l) {
-    float s_l, c_l;
-    ::sincosf(phi[l], &s_l, &c_l);
-    sin_phi[l] = s_l;
-    cos_phi[l] = c_l;
-  }
-  const F dx = centre ? F{} : radius * cos_phi;
-  const F dy = centre ? F{} : radius * sin_phi;
-  const F z = lanes::sqrt(lanes::max(F{}, 1.0f - dx * dx - dy * dy));
-  const F pdf = z > 0.0f ? z * kInvPi : F{};
+  const lanes::CosineSample cs = lanes::cosine_hemisphere(
+      2.0f * lane([&](size_t l) { return (*u[l < n ? l : 0])[1].x; }) - 1.0f,
+      2.0f * lane([&](size_t l) { return (*u[l < n ? l : 0])[1].y; }) - 1.0f);
+  const F dx = cs.x, dy = cs.y, z = cs.z, pdf = cs.pdf;
   const I has_pdf = pdf > 0.0f;
   const V3 weight = lanes::select(
       has_pdf, lane3([&](size_t l) { return xs[l]->albedo; }) * lanes::splat(kInvPi) * (z / pdf),
@@ -1499,9 +1494,7 @@ void BdptTracer::prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) 
       x.mis_sum = 0.0f;
       continue;
     }
-    const float c = !x.delta && !camera[k - 1].delta ? 1.0f : 0.0f;
-    a = a + c > 0.0f ? density_ratio(x.pdf_rev, x.pdf_fwd) * (a + c) : 0.0f;
-    x.mis_sum = a;
+    a = carry_camera_sum(a, x, camera[k - 1]);
   }
   float b = 0.0f;
   for (int k = 0; k < nl; ++k) {
@@ -1838,9 +1831,7 @@ void BdptTracer::connect_camera_only(size_t k) {
       x.mis_sum = 0.0f;
       return;
     }
-    const float c = !x.delta && !camera[i - 1].delta ? 1.0f : 0.0f;
-    a = a + c > 0.0f ? density_ratio(x.pdf_rev, x.pdf_fwd) * (a + c) : 0.0f;
-    x.mis_sum = a;
+    a = carry_camera_sum(a, x, camera[i - 1]);
   };
   if (weighted && nc > 0) partial_sum(0);
 #if defined(TRITRACE_LANES)

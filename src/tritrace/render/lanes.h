@@ -9,11 +9,13 @@
 #define TRITRACE_LANES 1
 #include <immintrin.h>
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 
 #include "tritrace/math/offset_ray.h"
+#include "tritrace/math/sampling.h"
 
 namespace tritrace::lanes {
 
@@ -136,6 +138,32 @@ inline void store3(float (&p)[3][kWidth], const V3& v) {
 }
 inline void store_mask(int32_t* p, I v) {
   std::memcpy(p, &v, sizeof v);
+}
+
+// sample_cosine_hemisphere (math/sampling.h) in lanes, from its two uniforms mapped to [-1, 1)
+// (a = 2 u.x - 1, b = 2 u.y - 1): the concentric disk point (x, y), lifted to z, and the density
+// z / pi. sincosf runs lane by lane so every lane has the scalar code's bits.
+struct CosineSample {
+  F x, y, z, pdf;
+};
+inline CosineSample cosine_hemisphere(F a, F b) {
+  const I centre = (a == 0.0f) & (b == 0.0f);
+  const I wide = abs(a) > abs(b);
+  const F radius = wide ? a : b;
+  const F phi = wide ? 0.25f * kPi * (b / a) : 0.5f * kPi - 0.25f * kPi * (a / b);
+  F cos_phi, sin_phi;
+  for (size_t l = 0; l < kWidth; ++l) {
+    float s_l, c_l;
+    ::sincosf(phi[l], &s_l, &c_l);
+    sin_phi[l] = s_l;
+    cos_phi[l] = c_l;
+  }
+  CosineSample out;
+  out.x = centre ? F{} : radius * cos_phi;
+  out.y = centre ? F{} : radius * sin_phi;
+  out.z = sqrt(max(F{}, 1.0f - out.x * out.x - out.y * out.y));
+  out.pdf = out.z > 0.0f ? out.z * kInvPi : F{};
+  return out;
 }
 
 }  // namespace tritrace::lanes

@@ -398,22 +398,9 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
 
         // The bounce: sample_cosine_hemisphere (its concentric disk with sincosf lane by lane)
         // about the frame of n, then Russian roulette.
-        const F a = 2.0f * u_bsdf_x - 1.0f, b = 2.0f * u_bsdf_y - 1.0f;
-        const I centre = (a == 0.0f) & (b == 0.0f);
-        const I wide = lanes::abs(a) > lanes::abs(b);
-        const F radius = wide ? a : b;
-        const F phi = wide ? 0.25f * kPi * (b / a) : 0.5f * kPi - 0.25f * kPi * (a / b);
-        F cos_phi, sin_phi;
-        for (size_t l = 0; l < W; ++l) {
-          float s_l, c_l;
-          ::sincosf(phi[l], &s_l, &c_l);
-          sin_phi[l] = s_l;
-          cos_phi[l] = c_l;
-        }
-        const F dx = centre ? F{} : radius * cos_phi;
-        const F dy = centre ? F{} : radius * sin_phi;
-        const F z = lanes::sqrt(lanes::max(F{}, 1.0f - dx * dx - dy * dy));
-        const F pdf = z > 0.0f ? z * kInvPi : F{};
+        const lanes::CosineSample cs =
+            lanes::cosine_hemisphere(2.0f * u_bsdf_x - 1.0f, 2.0f * u_bsdf_y - 1.0f);
+        const F dx = cs.x, dy = cs.y, z = cs.z, pdf = cs.pdf;
         const F sign = reinterpret_cast<F>((reinterpret_cast<lanes::U>(n.z) & 0x80000000u) |
                                            reinterpret_cast<lanes::U>(lanes::splat(1.0f)));
         const F fa = -1.0f / (sign + n.z);
