@@ -577,17 +577,31 @@ void for_each_packet(std::span<const Ray> rays, std::span<Out> out, Fn&& fn) {
 
 }  // namespace
 
+// How a tree's incoherent queries are traced, for each of BvhAccel's trees: as packets where
+// packets are on and the tree is tiny (it stays in L1, and packets of even unrelated rays share
+// its few nodes and leaves).
+static bool incoherent_as_packets(const bvh::WideBvh& tree, bool packets) {
+  return packets && tree.node_bytes() + tree.block_bytes() <= kIncoherentPacketBytes;
+}
+#if defined(__AVX2__)
+// Interleaved (several rays in flight) where a ray waits on memory; a tree that stays in the
+// caches is traversed faster one ray at a time (see docs/PERFORMANCE.md, issue 27).
+static bool interleaves_incoherent(const bvh::WideBvh& tree, Kernel kernel,
+                                   BvhTraversal traversal) {
+  return kernel == Kernel::kWatertight && !tree.nodes.empty() &&
+         (traversal == BvhTraversal::kSingleInterleaved ||
+          tree.node_bytes() + tree.block_bytes() >= kInterleaveBytes);
+}
+#endif
+
 BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConfig& config,
                    BvhTraversal traversal)
     : BvhAccel(mesh, bvh::build_wide_bvh(mesh, config), kernel, traversal) {
   if (bvh::wants_incoherent_closest_tree(config) && !bvh_.nodes.empty()) {
     closest_ = bvh::build_wide_bvh(mesh, bvh::incoherent_closest_config(config));
-    closest_packets_ =
-        packets_ && closest_.node_bytes() + closest_.block_bytes() <= kIncoherentPacketBytes;
+    closest_packets_ = incoherent_as_packets(closest_, packets_);
 #if defined(__AVX2__)
-    closest_interleave_ = kernel_ == Kernel::kWatertight &&
-                          (traversal == BvhTraversal::kSingleInterleaved ||
-                           closest_.node_bytes() + closest_.block_bytes() >= kInterleaveBytes);
+    closest_interleave_ = interleaves_incoherent(closest_, kernel_, traversal);
 #endif
   }
 }
@@ -598,15 +612,10 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, bvh::WideBvh tree, Kernel kernel,
       bvh_(std::move(tree)),
       kernel_(kernel),
       packets_(traversal == BvhTraversal::kAuto && bvh::has_packet_kernel(kernel)),
-      incoherent_packets_(packets_ &&
-                          bvh_.node_bytes() + bvh_.block_bytes() <= kIncoherentPacketBytes) {
+      incoherent_packets_(incoherent_as_packets(bvh_, packets_)) {
 #if defined(__AVX2__)
-  // Interleaving pays where a ray waits on memory; a tree that stays in the caches is traversed
-  // faster one ray at a time (see docs/PERFORMANCE.md, issue 27). Decided here for both
-  // constructors (GeometrySet's big meshes interleave too).
-  interleave_ = kernel_ == Kernel::kWatertight && !bvh_.nodes.empty() &&
-                (traversal == BvhTraversal::kSingleInterleaved ||
-                 bvh_.node_bytes() + bvh_.block_bytes() >= kInterleaveBytes);
+  // Decided here for both constructors (GeometrySet's big meshes interleave too).
+  interleave_ = interleaves_incoherent(bvh_, kernel_, traversal);
 #endif
   closest_packets_ = incoherent_packets_;
   closest_interleave_ = interleave_;
