@@ -498,8 +498,14 @@ void draw_groups(Sampler* const* samplers, size_t count,
 // The per-sample work, with the integrator's data at hand.
 class BdptTracer {
  public:
-  BdptTracer(const BdptIntegrator& integrator, const Scene& scene, const Accel& accel)
-      : it_(integrator), scene_(scene), accel_(accel) {}
+  BdptTracer(const BdptIntegrator& integrator, const Scene& scene, const Accel& accel,
+             const CausticGuide* guide = nullptr)
+      : it_(integrator), scene_(scene), accel_(accel), guide_(guide) {}
+
+  // The caustic guide's pre-pass: `n` light paths from the emissive triangles (PCG32 numbers from
+  // a fixed seed), each followed through specular surfaces to its first non-specular one, which
+  // is a photon where the path met at least one specular surface.
+  std::vector<CausticPhoton> caustic_photons(uint32_t n);
 
   // Samples [first, first + count) of the batch (count <= kWavefront): their subpaths walked
   // side by side, then each sample's connections in order. Radiance and AOVs go to `out` at the
@@ -649,8 +655,12 @@ class BdptTracer {
   // sample the path with its density ratio to this one's (remapped: squared for the power
   // heuristic; counts left out) and whether it uses the light subpath past its first vertex (s >=
   // 2).
+  // `caustic_q`: the path's caustic_q (> 0 on a caustic path the guide can sample), which adds
+  // the caustic strategy (of density q^(1/2) times the density of s = 0, for the power heuristic)
+  // to the strategies weighed and listed.
   float mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, float ratio,
-                        std::vector<std::pair<float, bool>>* strategies = nullptr) const;
+                        std::vector<std::pair<float, bool>>* strategies = nullptr,
+                        float caustic_q = 0.0f) const;
   // Light tracing's count ratio at pixel (x, y) for the MIS weights (SplatPass::count_ratio,
   // times the tests' BdptSettings::mis_count_scale).
   float mis_count_ratio(int x, int y) const;
@@ -674,9 +684,40 @@ class BdptTracer {
   // or 2.
   int first_camera_strategy() const { return it_.settings_.light_tracing ? 1 : 2; }
 
+  // The caustic strategy (BdptSettings::caustic_paths; docs/BDPT.md). Its paths, "caustic paths",
+  // end D S+ L: an emissive triangle L, one or more vertices on specular surfaces (every lobe a
+  // delta), and before them a vertex D on a non-specular surface, not the camera, that scatters
+  // by a non-delta lobe there and whose guide cell has photons. The strategy samples them from the
+  // camera subpath as far as D, then the direction at D from the guide (density p_g) instead of
+  // the Bsdf (p_b), then the specular vertices as the camera subpath would. It joins the others in
+  // the power heuristic: its density over the camera subpath's own (s = 0) is p_g / p_b, so with
+  // q = (p_g / p_b)^2 and w_0 the weight of s = 0 among the other strategies, a path's weights
+  // become w / (1 + q w_0) for every other strategy and q w_0 / (1 + q w_0) for this one.
+  // q of the path of strategy (s, t) (light vertices [0, s), camera vertices [0, t), the camera
+  // at `eye`), 0 where it is not a caustic path or the guide cannot sample it.
+  float caustic_q(int s, int t, glm::vec3 eye) const;
+  // The guide's strategy for sample k, after its connections are added (flush): at each camera
+  // vertex with a guide cell, from the last to the first, one direction from the guide followed
+  // through specular surfaces, its vertices written over the camera subpath past that vertex (no
+  // longer read) so that the ratio walk weighs the path; every emitter met after at least one
+  // specular surface adds its weighted term. Its numbers come from a PCG32 stream of the sample's
+  // own (pixel key and sample index), not from the sampler's dimensions, so that nothing else the
+  // sample draws moves.
+  void caustic_strategy(size_t k, const Sampler& sampler);
+  // One incoherent ray (Accel::intersect's single ray takes the batch path, packets on small
+  // trees).
+  Hit trace_one(const Ray& ray) const {
+    Hit hit;
+    accel_.intersect_incoherent(std::span<const Ray>(&ray, 1), std::span<Hit>(&hit, 1));
+    return hit;
+  }
+  // Queues a term weighted already that needs no shadow ray (s = 0 on a caustic path).
+  void queue_fixed(int t, glm::vec3 term);
+
   const BdptIntegrator& it_;
   const Scene& scene_;
   const Accel& accel_;
+  const CausticGuide* guide_ = nullptr;
   uint64_t traced_ = 0;
   size_t first_ = 0;  // the wavefront's first sample in the batch
   // Per wavefront sample: its vertex counts, whether its camera subpath escaped, its radiance so
@@ -714,6 +755,7 @@ class BdptTracer {
     uint32_t sample = 0;       // the wavefront sample's index
     glm::vec3 dir{0.0f};       // t >= 2, s >= 1: the connection's direction (connection_weight)
     bool weighted = false;     // `contribution` is the weighted term (connect_camera_only)
+    float caustic_q = 0.0f;    // s >= 1: the path's caustic_q (0: the recursion's weight)
     bool skip = false;         // a lane job's connection that carries nothing
   };
   static constexpr int kMaxPending = 256;
@@ -1303,6 +1345,7 @@ void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const
   p.dir = dir;
   p.sample = static_cast<uint32_t>(current_ - state_.data());
   p.weighted = false;
+  p.caustic_q = 0.0f;
   p.skip = false;
   p.ray = -1;
   if (has_ray) {
@@ -1346,7 +1389,22 @@ void BdptTracer::flush() {
       continue;
     }
     select(p.sample);
-    const glm::vec3 term = p.contribution * (unweighted ? 1.0f : weight_of(p));
+    float weight = 1.0f;
+    if (!unweighted) {
+      if (p.caustic_q > 0.0f) {
+        // A caustic path: the ratio walk's weight, and its s = 0 term for w_0.
+        const float ratio = p.t == 1 ? p.count_ratio * it_.settings_.mis_count_scale : pixel_ratio_;
+        Vertex& eye = camera_[0];
+        const glm::vec3 saved = eye.p;
+        if (p.t == 1 && scene_.camera.is_orthographic())
+          eye.p = ortho_lens_point(light_[p.s - 1].p);
+        weight = mis_weight_walk(light_, camera_, p.s, p.t, ratio, nullptr, p.caustic_q);
+        eye.p = saved;
+      } else {
+        weight = weight_of(p);
+      }
+    }
+    const glm::vec3 term = p.contribution * weight;
     // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
     // dropped rather than let a NaN or infinity into the pixel.
     if (!std::isfinite(term.x + term.y + term.z)) continue;
@@ -1378,7 +1436,7 @@ void BdptTracer::pilot_record(const Pending& p) {
   pilot_strategies_.clear();
   pilot_strategies_.emplace_back(1.0f, light);
   const float ratio = p.t == 1 ? p.count_ratio * it_.settings_.mis_count_scale : pixel_ratio_;
-  (void)mis_weight_walk(light_, camera_, p.s, p.t, ratio, &pilot_strategies_);
+  (void)mis_weight_walk(light_, camera_, p.s, p.t, ratio, &pilot_strategies_, p.caustic_q);
   eye.p = saved;
   add_pilot_contribution(rec, v, p.t == 1, pilot_strategies_);
 }
@@ -1389,7 +1447,8 @@ void BdptTracer::pilot_record(const Pending& p) {
 // changes sides. The connection's four neighbouring pdf_rev values are set for this path and
 // restored afterwards.
 float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, float ratio,
-                                  std::vector<std::pair<float, bool>>* strategies) const {
+                                  std::vector<std::pair<float, bool>>* strategies,
+                                  float caustic_q) const {
   if (s + t == 2) return 1.0f;  // an emitter seen by the camera: (1, 1) is not a strategy here
   const bool balance = it_.settings_.balance;
   const auto remap = [balance](float f) { return f != 0.0f ? (balance ? f : f * f) : 1.0f; };
@@ -1449,14 +1508,18 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, f
       if (strategies) strategies->emplace_back(r, s + t - i >= 2);
     }
   }
+  // Strategy s = 0's ratio to this one, and its term (with counts); this one's where s = 0.
+  float s0_ratio = s == 0 ? 1.0f : 0.0f, s0_term = s0_ratio;
   r = 1.0f;
   for (int i = s - 1; i >= 0; --i) {
     const float fwd = i == 1 ? light[1].pdf_fwd / light_paths : light[i].pdf_fwd;
     r *= remap(light[i].pdf_rev) / remap(fwd);
     const bool delta_light_side = i > 0 ? light[i - 1].delta : delta_light(light[0]);
     if (!light[i].delta && !delta_light_side) {
-      sum += r * remap(count(i, s + t - i)) / own;
+      const float term = r * remap(count(i, s + t - i)) / own;
+      sum += term;
       if (strategies) strategies->emplace_back(r, i >= 2);
+      if (i == 0) s0_ratio = r, s0_term = term;
     }
   }
 
@@ -1468,6 +1531,11 @@ float BdptTracer::mis_weight_walk(Vertex* light, Vertex* camera, int s, int t, f
     qs->delta = saved_qs_delta;
   }
   if (qs_minus != nullptr) qs_minus->pdf_rev = saved_qs_minus;
+  if (caustic_q > 0.0f && s0_term > 0.0f) {
+    // The caustic strategy, sampled once per camera sample as s = 0 is.
+    sum += s0_term * caustic_q;
+    if (strategies) strategies->emplace_back(s0_ratio * caustic_q, false);
+  }
   return 1.0f / (1.0f + sum);
 }
 
@@ -1677,6 +1745,7 @@ void BdptTracer::splat_light_subpath(int nl) {
     // (w is glm::normalize(d), bit for bit.)
     const bool has_ray = camera_shadow_ray(qs, eye, w, ray);
     queue(s, 1, contribution, has_ray, ray, px, py, pass_ ? pass_->count_ratio(px, py) : 1.0f);
+    pending_[static_cast<size_t>(pending_count_ - 1)].caustic_q = caustic_q(s, 1, eye);
   }
 }
 
@@ -1804,13 +1873,15 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
   }
   flush();
   for (size_t k = 0; k < count; ++k) {
-    out.radiance[first + k] = state_[k].total;
     if (!out.albedo.empty() || !out.normal.empty()) {
       glm::vec3 albedo, normal;
       surface_aovs(k, albedo, normal);
       if (!out.albedo.empty()) out.albedo[first + k] = albedo;
       if (!out.normal.empty()) out.normal[first + k] = normal;
     }
+    // (After the AOVs: it writes over the camera subpath.)
+    if (guide_ != nullptr) caustic_strategy(k, samplers[k]);
+    out.radiance[first + k] = state_[k].total;
   }
 }
 
@@ -1854,7 +1925,15 @@ void BdptTracer::connect_camera_only(size_t k) {
     // s = 0 (t <= nc <= max_depth + 2).
     if (pt.emits) {
       const glm::vec3 contribution = pt.beta * emission(scene_, pt, pt.wo);
-      if (max_component(contribution) > 0.0f) add(0, t, contribution, false, Ray{}, nullptr);
+      if (max_component(contribution) > 0.0f) {
+        const float q = caustic_q(0, t, camera[0].p);
+        if (q > 0.0f) {
+          const float w0 = weighted ? mis_weight(light, camera, 0, t, pixel_ratio_) : 1.0f;
+          queue_fixed(t, contribution * (w0 / (1.0f + q * w0)));
+        } else {
+          add(0, t, contribution, false, Ray{}, nullptr);
+        }
+      }
     }
     // s = 1: next-event estimation to the light subpath's first vertex (connect's arithmetic).
     if (nl < 1 || 1 + t > settings.max_depth + 2) continue;
@@ -2065,7 +2144,8 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
   const BdptSettings& settings = it_.settings_;
   if (settings.camera_only_connect && state_[k].nl <= 1 &&
       !(settings.only_s >= 0 && settings.only_t >= 0)) {
-    return connect_camera_only(k);
+    connect_camera_only(k);
+    return;
   }
   select(k);
   const int nc = current_->nc, nl = current_->nl;
@@ -2082,9 +2162,20 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
       glm::vec3 dir(0.0f);
       Ray ray;
       bool has_ray = false;
+      float s0_caustic_q = 0.0f;
       if (s == 0) {
         if (!pt.emits) continue;
         contribution = pt.beta * emission(scene_, pt, pt.wo);
+        const float q = caustic_q(0, t, camera[0].p);
+        if (q > 0.0f && settings.pilot == nullptr) {
+          if (max_component(contribution) > 0.0f) {
+            const float w0 = mis_weight(light, camera, 0, t, pixel_ratio_);
+            queue_fixed(t, contribution * (w0 / (1.0f + q * w0)));
+          }
+          continue;
+        }
+        // (The pilot weighs it by the walk with the caustic strategy, in pilot_record.)
+        s0_caustic_q = q;
       } else {
         const Vertex& qs = light[s - 1];
         if (!pt.connectible || !qs.connectible) continue;
@@ -2111,6 +2202,8 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
       // Strategies past the light subpath's first vertex have light_paths' share of the samples.
       if (s >= 2) contribution *= it_.inverse_light_paths_;
       queue(s, t, contribution, has_ray, ray, 0, 0, 1.0f, dir);
+      pending_[static_cast<size_t>(pending_count_ - 1)].caustic_q =
+          s >= 1 ? caustic_q(s, t, camera[0].p) : s0_caustic_q;
     }
   }
   // The renderer always gives an integrator that splats its film's light image
@@ -2130,6 +2223,182 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
     }
     splat_light_subpath(nl);
   }
+}
+
+float BdptTracer::caustic_q(int s, int t, glm::vec3 eye) const {
+  if (guide_ == nullptr) return 0.0f;
+  // The path's vertices from the light's end: light[0, s), then camera[t - 1] down to camera[0].
+  const int n = s + t;
+  const auto at = [&](int k) -> const Vertex& { return k < s ? light_[k] : camera_[n - 1 - k]; };
+  const Vertex& l = at(0);
+  if (s >= 1 ? l.type != VertexType::kLight || l.point_light || l.directional
+             : l.type != VertexType::kSurface) {
+    return 0.0f;
+  }
+  int k = 1;
+  while (k < n && at(k).type == VertexType::kSurface && at(k).specular) ++k;
+  if (k == 1 || k >= n - 1) return 0.0f;  // no specular vertex, or none but the camera before
+  const Vertex& d = at(k);
+  if (d.type != VertexType::kSurface || !d.connectible) return 0.0f;
+  // A connection's end scatters by a non-delta lobe; elsewhere the subpath's own choice: a light
+  // vertex's towards the camera side, a camera vertex's towards the light side.
+  if (k != s - 1 && k != s && d.delta) return 0.0f;
+  const CausticGuide::Cell cell = guide_->cell(d.p);
+  if (cell.count == 0) return 0.0f;
+  const glm::vec3 w = glm::normalize(at(k - 1).p - d.p);
+  const float pg = CausticGuide::pdf(cell, w);
+  if (!(pg > 0.0f)) return 0.0f;
+  const glm::vec3 towards_camera = k + 1 == n - 1 ? eye : at(k + 1).p;
+  const float pb = surface_pdf(d, glm::normalize(towards_camera - d.p), w);
+  const double ratio = static_cast<double>(pg) / static_cast<double>(pb);
+  const double q = it_.settings_.balance ? ratio : ratio * ratio;
+  return static_cast<float>(std::min(q, 1e30));
+}
+
+void BdptTracer::queue_fixed(int t, glm::vec3 term) {
+  queue(0, t, term, false, Ray{});
+  Pending& p = pending_[static_cast<size_t>(pending_count_ - 1)];
+  p.weighted = true;
+}
+
+void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
+  select(k);
+  std::vector<Vertex>& path = thread_subpaths()[k].camera;
+  const int nc = current_->nc;
+  const int max_vertices = it_.settings_.max_depth + 2;
+  const bool balance = it_.settings_.balance;
+  // D is camera vertex i; a caustic path needs at least two vertices after it. From the last D
+  // down: each writes over the camera subpath past its D only.
+  for (int i = std::min(nc - 1, max_vertices - 3); i >= 1; --i) {
+    Vertex& d = path[static_cast<size_t>(i)];
+    if (d.type != VertexType::kSurface || !d.connectible) continue;
+    const CausticGuide::Cell cell = guide_->cell(d.p);
+    if (cell.count == 0) continue;
+    Pcg32 rng(hash_words(sampler.pixel_key(), sampler.sample_index(), i, 0x63617573746963ull), 0);
+    const float u_pick = rng.next_float();
+    const glm::vec2 u_dir(rng.next_float(), rng.next_float());
+    const glm::vec3 w = CausticGuide::sample(cell, u_pick, u_dir);
+    const float pg = CausticGuide::pdf(cell, w);
+    if (!(pg > 0.0f)) continue;
+    const glm::vec3 f = surface_f(d, d.wo, w);
+    if (!(max_component(f) > 0.0f)) continue;
+    const float pb = surface_pdf(d, d.wo, w);
+    const double ratio = static_cast<double>(pg) / static_cast<double>(pb);
+    const auto q = static_cast<float>(std::min(balance ? ratio : ratio * ratio, 1e30));
+    glm::vec3 beta = d.beta * f * (std::abs(glm::dot(d.ng, w)) / pg);
+    if (!(max_component(beta) > 0.0f) || !std::isfinite(max_component(beta))) continue;
+    // D's scattering as the camera subpath would have made it towards w, for the ratio walk: D's
+    // predecessor's reverse density, D's lobe, the next vertex's forward density (p_b).
+    Vertex& before = path[static_cast<size_t>(i - 1)];
+    before.pdf_rev = to_area_prev(surface_pdf(d, w, d.wo), d, before);
+    d.delta = false;
+    float pdf_dir = pb;
+    Ray ray{ray_start(d, w, it_.offset_), w, 0.0f, kRayTMax};
+    int count = i + 1;  // the path's vertices so far
+    bool specular_met = false;
+    while (count < max_vertices) {
+      const Hit hit = trace_one(ray);
+      ++traced_;
+      if (LightPathsTally* tally = it_.settings_.pilot) ++tally->samples[first_ + k].always_rays;
+      if (!hit.found()) break;
+      if (static_cast<size_t>(count) >= path.size()) {
+        path.resize(std::min(2 * path.size(), static_cast<size_t>(max_vertices)));
+        selected_ = kWavefront;
+        select(k);  // the subpath moved
+      }
+      Vertex& prev = path[static_cast<size_t>(count - 1)];
+      Vertex& x = path[static_cast<size_t>(count)];
+      make_surface(x, ray, hit);
+      x.beta = beta;
+      x.pdf_fwd = measure_edge(pdf_dir, prev, x);
+      x.pdf_rev = 0.0f;
+      ++count;
+      if (specular_met && x.emits) {
+        const glm::vec3 le = emission(scene_, x, x.wo);
+        if (LightPathsTally* tally = it_.settings_.pilot; tally && max_component(le) > 0.0f) {
+          // The pilot weighs the term at each share itself: the other strategies' densities
+          // relative to this one's are the walk's relative to s = 0 over q.
+          pilot_strategies_.assign(2, {1.0f, false});  // this strategy, then s = 0
+          (void)mis_weight_walk(light_, camera_, 0, count, pixel_ratio_, &pilot_strategies_);
+          for (size_t j = 1; j < pilot_strategies_.size(); ++j) pilot_strategies_[j].first /= q;
+          const double v = luminance(beta * le);
+          if (v > 0.0 && std::isfinite(v)) {
+            add_pilot_contribution(tally->samples[first_ + k], v, false, pilot_strategies_);
+          }
+        } else if (max_component(le) > 0.0f) {
+          // The weight q w_0 / (1 + q w_0), written so that q w_0 of 0 or infinity gives 0 or 1.
+          const float w0 = mis_weight_walk(light_, camera_, 0, count, pixel_ratio_);
+          const float weight = 1.0f / (1.0f + 1.0f / (q * w0));
+          const glm::vec3 term = beta * le * weight;
+          if (std::isfinite(term.x + term.y + term.z)) current_->total += term;
+        }
+      }
+      if (!x.specular || count >= max_vertices) break;
+      specular_met = true;
+      // A specular vertex's scattering as the camera subpath's walk_scatter samples it (the
+      // choice between its delta lobes by its probability; no Russian roulette).
+      if (!agrees(x, x.wo)) break;
+      const glm::vec3 wo_local = x.frame.to_local(x.wo);
+      const float u_lobe = rng.next_float();
+      const glm::vec2 u(rng.next_float(), rng.next_float());
+      const BsdfSample bs = bsdf_sample(x, wo_local, u_lobe, u);
+      if (!bs.valid()) break;
+      const glm::vec3 w_next = x.frame.to_world(bs.wi);
+      if (!agrees(x, w_next)) break;
+      x.delta = bs.delta;
+      prev.pdf_rev = to_area_prev(bs.delta ? 0.0f : bsdf_pdf(x, bs.wi, wo_local), x, prev);
+      beta *= bs.weight;
+      if (!(max_component(beta) > 0.0f) || !std::isfinite(max_component(beta))) break;
+      pdf_dir = bs.delta ? 0.0f : bs.pdf;
+      ray = Ray{ray_start(x, w_next, it_.offset_), w_next, 0.0f, kRayTMax};
+    }
+  }
+}
+
+std::vector<CausticPhoton> BdptTracer::caustic_photons(uint32_t n) {
+  std::vector<CausticPhoton> photons;
+  std::vector<Vertex> path(kInitialSubpathVertices);
+  const int max_vertices = it_.settings_.max_depth + 1;
+  Pcg32 rng(0x70686f746f6e73ull, 0);
+  for (uint32_t i = 0; i < n; ++i) {
+    std::array<glm::vec2, 3> u;
+    for (glm::vec2& v : u) v = glm::vec2(rng.next_float(), rng.next_float());
+    WalkState w;
+    light_subpath(path, max_vertices, u, true, w);
+    if (w.count == 0) continue;
+    const Vertex& l0 = path[0];
+    if (l0.type != VertexType::kLight || l0.point_light || l0.directional) continue;
+    bool specular_met = false, escaped = false;
+    while (w.active) {
+      const Hit hit = trace_one(w.ray);
+      if (!hit.found()) break;
+      const bool more = walk_hit(path, w, hit, escaped);
+      const Vertex& x = path[static_cast<size_t>(w.count - 1)];
+      if (!x.specular) {
+        if (specular_met && x.connectible && x.edge) {
+          photons.push_back({x.p, x.to_prev, std::sqrt(x.edge_dist2)});
+        }
+        break;
+      }
+      specular_met = true;
+      if (!more) break;
+      std::array<glm::vec2, 2> us;
+      for (glm::vec2& v : us) v = glm::vec2(rng.next_float(), rng.next_float());
+      walk_scatter(path, w, us);
+    }
+  }
+  return photons;
+}
+
+const CausticGuide* BdptIntegrator::caustic_guide(const Scene& scene, const Accel& accel) const {
+  if (!wants_guide_) return nullptr;
+  std::call_once(guide_->once, [&] {
+    BdptTracer tracer(*this, scene, accel);
+    const std::vector<CausticPhoton> photons =
+        tracer.caustic_photons(static_cast<uint32_t>(settings_.caustic_paths));
+    guide_->guide = CausticGuide(photons, guide_cell_);
+  });
+  return guide_->guide.empty() ? nullptr : &guide_->guide;
 }
 
 bool camera_light_tracing(const Camera& camera) {
@@ -2250,6 +2519,19 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
     emissive_prims_.push_back(prim);
     emissive_index_.push_back(index);
   }
+  // The caustic guide: where light from emissive triangles can meet a surface whose material is
+  // not diffuse (only those can be specular), and the tests of single strategies are not running.
+  const bool any_not_diffuse = std::any_of(scene.materials.begin(), scene.materials.end(),
+                                           [](const Material& m) { return !m.is_diffuse(); });
+  wants_guide_ = settings_.caustic_paths > 0 && !settings_.unweighted &&
+                 !(settings_.only_s >= 0 && settings_.only_t >= 0) && !prims.empty() &&
+                 any_not_diffuse;
+  if (wants_guide_) {
+    const Bounds3 b = scene_bounds(scene);
+    const float diagonal = glm::length(b.hi - b.lo);
+    wants_guide_ = std::isfinite(diagonal) && diagonal > 0.0f;
+    guide_cell_ = diagonal / 128.0f;
+  }
 }
 
 void BdptIntegrator::add_delta_lights(const Scene& scene, std::vector<float>& power) {
@@ -2313,7 +2595,7 @@ uint64_t BdptIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
                                   const Scene& scene, const Accel& accel) const {
   const size_t n = batch.rays.size();
   assert(n <= kMaxBatch && batch.samplers.size() == n && out.radiance.size() == n);
-  BdptTracer tracer(*this, scene, accel);
+  BdptTracer tracer(*this, scene, accel, caustic_guide(scene, accel));
   // The camera rays together, as the path tracer traces them (packets where the accel has them;
   // the same hits as one at a time, bit for bit).
   std::array<Hit, kMaxBatch> first_hits;

@@ -9,12 +9,14 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
 
 #include "tritrace/math/offset_ray.h"
 #include "tritrace/math/sampling.h"
+#include "tritrace/render/caustic_guide.h"
 #include "tritrace/render/environment_light.h"
 #include "tritrace/render/integrator.h"
 
@@ -96,6 +98,13 @@ struct BdptSettings {
   // them where light_paths < 1) with the general code too, whose image the dedicated one
   // (s = 0 and s = 1 only, each connection weighted as it is made) must match bit for bit.
   bool camera_only_connect = true;
+  // Light paths traced by the caustic guide's pre-pass (render/caustic_guide.h, docs/BDPT.md):
+  // where light from emissive triangles reaches non-specular surfaces through specular ones
+  // (smooth glass, mirrors), a guided strategy samples those paths from the camera subpath's
+  // vertices towards the specular surfaces, weighted against the camera subpath's own sampling of
+  // them (which the light subpath's strategies then leave out). 0: no guide. Off, whatever its
+  // value, where only_s and only_t or `unweighted` are set (they test the other strategies).
+  int caustic_paths = 1 << 17;
 };
 
 // The smallest BdptSettings::light_paths accepted (smaller shares divide contributions by
@@ -127,6 +136,11 @@ class BdptIntegrator final : public Integrator {
 
   const BdptSettings& settings() const { return settings_; }
 
+  // The caustic guide (BdptSettings::caustic_paths), built by its pre-pass on the first call (or
+  // the first radiance call) and kept; null where the settings or the scene have none (no
+  // emissive triangle, no material other than diffuse, or no photon found).
+  const CausticGuide* caustic_guide(const Scene& scene, const Accel& accel) const;
+
   // An emitter for light subpaths: a point, spot or directional light, an emissive triangle or the
   // environment.
   struct Emitter {
@@ -151,6 +165,14 @@ class BdptIntegrator final : public Integrator {
   std::vector<uint32_t> emissive_prims_;  // sorted, for the density of choosing a hit emitter
   std::vector<uint32_t> emissive_index_;  // parallel: the emitter's index in emitters_
   float inverse_light_paths_ = 1.0f;      // 1 / settings_.light_paths
+  // The caustic guide, built once (shared by copies of the integrator).
+  struct GuideSlot {
+    std::once_flag once;
+    CausticGuide guide;
+  };
+  std::shared_ptr<GuideSlot> guide_ = std::make_shared<GuideSlot>();
+  bool wants_guide_ = false;  // the settings ask for one and the scene can have caustics
+  float guide_cell_ = 1.0f;   // its cells' edge: the scene's bounding box diagonal / 128
 
   // Appends the scene's spot and directional lights to emitters_ with their selection weights.
   void add_delta_lights(const Scene& scene, std::vector<float>& power);

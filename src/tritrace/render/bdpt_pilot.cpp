@@ -88,9 +88,9 @@ LightPathsChoice choose_light_paths(const Scene& scene, const Accel& accel,
   for (size_t k = 0; k < all.size(); k += spp) {
     // One pixel's samples. At share F a sample's estimate is X = a + (I / F) b (a: the
     // strategies every sample has, b: those of the light subpath past its first vertex, I:
-    // whether the sample traces it, probability F, independent of the paths), so
-    //   Var X_F = Var(a_F + b_F) + (1 / F - 1) E[b_F^2],
-    // with Var from the spread of the pixel's samples (unbiased) and E[b^2] from their mean; the
+    // whether the sample traces it, a share F of each pixel's samples spread evenly), so
+    //   Var X_F = Var(a_F + b_F) + (1 / F - 1) Var b_F,
+    // each Var from the spread of the pixel's samples (unbiased); the
     // light-tracing splats (landing on other pixels, each a small part of a pixel's mean) add
     // their second moment over F. A rare bright path that every share weighs alike would
     // otherwise decide the choice alone (its square swamps the differences), so F = 1's spread
@@ -108,19 +108,26 @@ LightPathsChoice choose_light_paths(const Scene& scene, const Accel& accel,
     std::array<double, kPilotCandidates> spread{};
     for (size_t j = 0; j < kPilotCandidates; ++j) {
       const double f = kPilotShares[j];
-      double sum = 0.0, sum2 = 0.0, thinned = 0.0;
+      double sum = 0.0, sum2 = 0.0, light = 0.0, light2 = 0.0, thinned = 0.0;
       for (size_t i = k; i < k + spp; ++i) {
         const LightPathsTally::Sample& r = all[i];
         const double x = r.always[j] + r.light[j];
         sum += x;
         sum2 += x * x;
-        thinned += (1.0 / f - 1.0) * r.light[j] * r.light[j] + r.splat2[j] / f;
+        light += r.light[j];
+        light2 += r.light[j] * r.light[j];
+        thinned += r.splat2[j] / f;
         cost[j] += static_cast<double>(r.camera_vertices) +
                    kPilotConnectionCost * static_cast<double>(r.always_rays) +
                    f * (static_cast<double>(r.light_vertices) +
                         kPilotConnectionCost * static_cast<double>(r.light_rays));
       }
       spread[j] = (sum2 - sum * sum / m) / (m - 1.0) * m;
+      // The thinning: (1 / F - 1) times b's variance, not its second moment as independent
+      // choices would give: the samples that trace a light subpath are spread evenly over a
+      // pixel's samples (traces_light_subpath: any n consecutive samples hold floor(n F) or
+      // ceil(n F)), so b's mean over the pixel is carried by F m of them every time.
+      thinned += (1.0 / f - 1.0) * (light2 - light * light / m) / (m - 1.0) * m;
       moment[j] += baseline + (spread[j] - spread[0]) + thinned;
     }
   }

@@ -1,0 +1,130 @@
+// bdpt's caustic strategy (BdptSettings::caustic_paths, render/caustic_guide.h, docs/BDPT.md)
+// against oracles that do not use it: the guide's directions checked by tracing them (they must
+// lead into the glass), and images against the path tracer's and against bdpt's without the guide
+// (the strategy only moves weight between estimators of the same paths), which must also keep the
+// images bit-identical for any thread count, tile size and connection code.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "mean_and_error.h"
+#include "tritrace/accel/bvh/bvh_accel.h"
+#include "tritrace/render/bdpt_integrator.h"
+#include "tritrace/render/caustic_guide.h"
+#include "tritrace/render/path_integrator.h"
+#include "tritrace/render/renderer.h"
+#include "tritrace/scene/cornell_box.h"
+#include "tritrace/scene/io/scene_loader.h"
+
+namespace tritrace {
+namespace {
+
+using testing_mc::expect_same_mean;
+using testing_mc::luminance_mean;
+using testing_mc::same_bits;
+
+// scenes/caustics.json: a glass sphere on the floor of a box lit by a small area light high on
+// its left wall, the caustic on the floor beside the sphere.
+Scene caustics(int side) {
+  SceneOverrides size;
+  size.width = side;
+  size.height = side;
+  return load_scene(std::string(TRITRACE_SOURCE_DIR) + "/scenes/caustics.json", size).scene;
+}
+
+testing_mc::MeanAndError mean_of_renders(const Scene& scene, const Accel& accel,
+                                         const Integrator& integrator, uint32_t spp, uint64_t seed,
+                                         int k) {
+  return testing_mc::mean_of(k, [&](int i) {
+    return luminance_mean(render(scene, accel, integrator, {.spp = spp, .seed = seed + i}));
+  });
+}
+
+// Where the guide has a cell on the floor, its directions lead back to the glass: a ray from the
+// floor point along each of them meets the sphere first (nearly always: a cell is 1/128 of the
+// box's diagonal wide, and its photons arrived at other points of it).
+TEST(BdptCaustics, GuideDirectionsLeadIntoTheGlass) {
+  const Scene scene = caustics(16);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const BdptIntegrator bdpt(scene);
+  const CausticGuide* guide = bdpt.caustic_guide(scene, accel);
+  ASSERT_NE(guide, nullptr);
+  EXPECT_GT(guide->cell_count(), 20u);
+  uint32_t glass = 0;
+  for (uint32_t m = 0; m < scene.materials.size(); ++m) {
+    if (scene.materials[m].type == MaterialType::kDielectric) glass = m;
+  }
+  int axes = 0, into_glass = 0, guided_points = 0;
+  // The floor is y = 1 (world y points down), x and z in [-1, 1].
+  for (int i = 0; i < 100; ++i) {
+    for (int j = 0; j < 100; ++j) {
+      const glm::vec3 p(-0.99f + 0.0198f * static_cast<float>(i), 0.9999f,
+                        -0.99f + 0.0198f * static_cast<float>(j));
+      const CausticGuide::Cell cell = guide->cell(p);
+      if (cell.count == 0) continue;
+      ++guided_points;
+      for (uint32_t a = 0; a < cell.count; ++a) {
+        const Hit hit = accel.intersect(Ray{p, cell.axes[a], 1e-4f, kRayTMax});
+        ++axes;
+        if (hit.found() && scene.material_of(hit.prim) == glass) ++into_glass;
+      }
+    }
+  }
+  std::printf("  %d floor points guided, %d of %d directions into the glass\n", guided_points,
+              into_glass, axes);
+  EXPECT_GT(guided_points, 20);
+  EXPECT_GE(into_glass, 0.95 * axes);
+}
+
+TEST(BdptCaustics, NoGuideWithoutSpecularSurfacesOrWhenTurnedOff) {
+  const Scene box = make_cornell_area({.width = 8, .height = 8});
+  const BvhAccel box_accel(box.mesh, kDefaultKernel);
+  EXPECT_EQ(BdptIntegrator(box).caustic_guide(box, box_accel), nullptr);
+  const Scene scene = caustics(8);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  EXPECT_EQ(BdptIntegrator(scene, {.caustic_paths = 0}).caustic_guide(scene, accel), nullptr);
+  // The tests of single strategies run without it (they cover the other strategies).
+  EXPECT_EQ(BdptIntegrator(scene, {.unweighted = true}).caustic_guide(scene, accel), nullptr);
+}
+
+// The caustic strategy changes how a caustic path's contribution is split between estimators,
+// never the total: the image mean equals the path tracer's and bdpt's without the guide.
+TEST(BdptCaustics, AgreesWithThePathTracerAndWithoutTheGuide) {
+  const Scene scene = caustics(24);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const BdptIntegrator guided(scene);
+  ASSERT_NE(guided.caustic_guide(scene, accel), nullptr);
+  const auto with = mean_of_renders(scene, accel, guided, 64, 10, 8);
+  expect_same_mean(with, mean_of_renders(scene, accel, PathIntegrator(scene), 256, 20, 8), 0.01);
+  expect_same_mean(
+      with, mean_of_renders(scene, accel, BdptIntegrator(scene, {.caustic_paths = 0}), 64, 30, 8),
+      0.01);
+  // The strategy is there: the same samples give another image without it.
+  EXPECT_FALSE(
+      same_bits(render(scene, accel, guided, {.spp = 4}),
+                render(scene, accel, BdptIntegrator(scene, {.caustic_paths = 0}), {.spp = 4})));
+}
+
+TEST(BdptCaustics, BitIdenticalForThreadsTilesAndConnectionCode) {
+  const Scene scene = caustics(20);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  for (const float share : {1.0f, 0.25f}) {
+    const BdptIntegrator bdpt(scene, {.light_paths = share});
+    const Image want = render(scene, accel, bdpt, {.threads = 1, .tile_size = 16, .spp = 8});
+    for (const int threads : {2, 3}) {
+      for (const int tile : {1, 5}) {
+        EXPECT_TRUE(same_bits(
+            want, render(scene, accel, bdpt, {.threads = threads, .tile_size = tile, .spp = 8})))
+            << "light_paths " << share << ", " << threads << " threads, tile " << tile;
+      }
+    }
+    // Samples without a light subpath connect by their own code (connect_camera_only).
+    const BdptIntegrator general(scene, {.light_paths = share, .camera_only_connect = false});
+    EXPECT_TRUE(
+        same_bits(want, render(scene, accel, general, {.threads = 1, .tile_size = 16, .spp = 8})))
+        << "light_paths " << share;
+  }
+}
+
+}  // namespace
+}  // namespace tritrace
