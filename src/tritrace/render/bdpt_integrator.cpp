@@ -448,6 +448,10 @@ bool traces_light_subpath(const Sampler& sampler, float light_paths) {
   return std::floor((i + 1.0) * f + phi) > std::floor(i * f + phi);
 }
 
+// The caustic strategy's directions per guided vertex (BdptTracer::caustic_strategy): its vertices
+// are few (the caustics' cells), so several directions each cost little and cut its variance.
+inline constexpr int kCausticDirections = 8;
+
 // Samples whose subpaths are walked side by side: each bounce's rays of all of them are traced in
 // one query (packets on small trees, interleaved traversal on large ones), as the path tracer
 // traces its batch's bounces, instead of one ray per query. Half a batch (kMaxBatch): larger
@@ -2250,7 +2254,7 @@ float BdptTracer::caustic_q(int s, int t, glm::vec3 eye) const {
   if (!(pg > 0.0f)) return 0.0f;
   const glm::vec3 towards_camera = k + 1 == n - 1 ? eye : at(k + 1).p;
   const float pb = surface_pdf(d, glm::normalize(towards_camera - d.p), w);
-  const double ratio = static_cast<double>(pg) / static_cast<double>(pb);
+  const double ratio = kCausticDirections * static_cast<double>(pg) / static_cast<double>(pb);
   const double q = it_.settings_.balance ? ratio : ratio * ratio;
   return static_cast<float>(std::min(q, 1e30));
 }
@@ -2274,83 +2278,90 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
     if (d.type != VertexType::kSurface || !d.connectible) continue;
     const CausticGuide::Cell cell = guide_->cell(d.p);
     if (cell.count == 0) continue;
-    Pcg32 rng(hash_words(sampler.pixel_key(), sampler.sample_index(), i, 0x63617573746963ull), 0);
-    const float u_pick = rng.next_float();
-    const glm::vec2 u_dir(rng.next_float(), rng.next_float());
-    const glm::vec3 w = CausticGuide::sample(cell, u_pick, u_dir);
-    const float pg = CausticGuide::pdf(cell, w);
-    if (!(pg > 0.0f)) continue;
-    const glm::vec3 f = surface_f(d, d.wo, w);
-    if (!(max_component(f) > 0.0f)) continue;
-    const float pb = surface_pdf(d, d.wo, w);
-    const double ratio = static_cast<double>(pg) / static_cast<double>(pb);
-    const auto q = static_cast<float>(std::min(balance ? ratio : ratio * ratio, 1e30));
-    glm::vec3 beta = d.beta * f * (std::abs(glm::dot(d.ng, w)) / pg);
-    if (!(max_component(beta) > 0.0f) || !std::isfinite(max_component(beta))) continue;
-    // D's scattering as the camera subpath would have made it towards w, for the ratio walk: D's
-    // predecessor's reverse density, D's lobe, the next vertex's forward density (p_b).
-    Vertex& before = path[static_cast<size_t>(i - 1)];
-    before.pdf_rev = to_area_prev(surface_pdf(d, w, d.wo), d, before);
-    d.delta = false;
-    float pdf_dir = pb;
-    Ray ray{ray_start(d, w, it_.offset_), w, 0.0f, kRayTMax};
-    int count = i + 1;  // the path's vertices so far
-    bool specular_met = false;
-    while (count < max_vertices) {
-      const Hit hit = trace_one(ray);
-      ++traced_;
-      if (LightPathsTally* tally = it_.settings_.pilot) ++tally->samples[first_ + k].always_rays;
-      if (!hit.found()) break;
-      if (static_cast<size_t>(count) >= path.size()) {
-        path.resize(std::min(2 * path.size(), static_cast<size_t>(max_vertices)));
-        selected_ = kWavefront;
-        select(k);  // the subpath moved
-      }
-      Vertex& prev = path[static_cast<size_t>(count - 1)];
-      Vertex& x = path[static_cast<size_t>(count)];
-      make_surface(x, ray, hit);
-      x.beta = beta;
-      x.pdf_fwd = measure_edge(pdf_dir, prev, x);
-      x.pdf_rev = 0.0f;
-      ++count;
-      if (specular_met && x.emits) {
-        const glm::vec3 le = emission(scene_, x, x.wo);
-        if (LightPathsTally* tally = it_.settings_.pilot; tally && max_component(le) > 0.0f) {
-          // The pilot weighs the term at each share itself: the other strategies' densities
-          // relative to this one's are the walk's relative to s = 0 over q.
-          pilot_strategies_.assign(2, {1.0f, false});  // this strategy, then s = 0
-          (void)mis_weight_walk(light_, camera_, 0, count, pixel_ratio_, &pilot_strategies_);
-          for (size_t j = 1; j < pilot_strategies_.size(); ++j) pilot_strategies_[j].first /= q;
-          const double v = luminance(beta * le);
-          if (v > 0.0 && std::isfinite(v)) {
-            add_pilot_contribution(tally->samples[first_ + k], v, false, pilot_strategies_);
-          }
-        } else if (max_component(le) > 0.0f) {
-          // The weight q w_0 / (1 + q w_0), written so that q w_0 of 0 or infinity gives 0 or 1.
-          const float w0 = mis_weight_walk(light_, camera_, 0, count, pixel_ratio_);
-          const float weight = 1.0f / (1.0f + 1.0f / (q * w0));
-          const glm::vec3 term = beta * le * weight;
-          if (std::isfinite(term.x + term.y + term.z)) current_->total += term;
+    for (int j = 0; j < kCausticDirections; ++j) {
+      Vertex& d = path[static_cast<size_t>(i)];  // (again: the subpath may have moved)
+      Pcg32 rng(hash_words(sampler.pixel_key(), sampler.sample_index(), i, j, 0x63617573746963ull),
+                0);
+      const float u_pick = rng.next_float();
+      const glm::vec2 u_dir(rng.next_float(), rng.next_float());
+      const glm::vec3 w = CausticGuide::sample(cell, u_pick, u_dir);
+      const float pg = CausticGuide::pdf(cell, w);
+      if (!(pg > 0.0f)) continue;
+      const glm::vec3 f = surface_f(d, d.wo, w);
+      if (!(max_component(f) > 0.0f)) continue;
+      const float pb = surface_pdf(d, d.wo, w);
+      // The strategy's density counts its kCausticDirections samples (Veach 1997, sec. 9.2).
+      const double ratio = kCausticDirections * static_cast<double>(pg) / static_cast<double>(pb);
+      const auto q = static_cast<float>(std::min(balance ? ratio : ratio * ratio, 1e30));
+      glm::vec3 beta =
+          d.beta * f *
+          (std::abs(glm::dot(d.ng, w)) / (pg * static_cast<float>(kCausticDirections)));
+      if (!(max_component(beta) > 0.0f) || !std::isfinite(max_component(beta))) continue;
+      // D's scattering as the camera subpath would have made it towards w, for the ratio walk:
+      // D's predecessor's reverse density, D's lobe, the next vertex's forward density (p_b).
+      Vertex& before = path[static_cast<size_t>(i - 1)];
+      before.pdf_rev = to_area_prev(surface_pdf(d, w, d.wo), d, before);
+      d.delta = false;
+      float pdf_dir = pb;
+      Ray ray{ray_start(d, w, it_.offset_), w, 0.0f, kRayTMax};
+      int count = i + 1;  // the path's vertices so far
+      bool specular_met = false;
+      while (count < max_vertices) {
+        const Hit hit = trace_one(ray);
+        ++traced_;
+        if (LightPathsTally* tally = it_.settings_.pilot) ++tally->samples[first_ + k].always_rays;
+        if (!hit.found()) break;
+        if (static_cast<size_t>(count) >= path.size()) {
+          path.resize(std::min(2 * path.size(), static_cast<size_t>(max_vertices)));
+          selected_ = kWavefront;
+          select(k);  // the subpath moved
         }
+        Vertex& prev = path[static_cast<size_t>(count - 1)];
+        Vertex& x = path[static_cast<size_t>(count)];
+        make_surface(x, ray, hit);
+        x.beta = beta;
+        x.pdf_fwd = measure_edge(pdf_dir, prev, x);
+        x.pdf_rev = 0.0f;
+        ++count;
+        if (specular_met && x.emits) {
+          const glm::vec3 le = emission(scene_, x, x.wo);
+          if (LightPathsTally* tally = it_.settings_.pilot; tally && max_component(le) > 0.0f) {
+            // The pilot weighs the term at each share itself: the other strategies' densities
+            // relative to this one's are the walk's relative to s = 0 over q.
+            pilot_strategies_.assign(2, {1.0f, false});  // this strategy, then s = 0
+            (void)mis_weight_walk(light_, camera_, 0, count, pixel_ratio_, &pilot_strategies_);
+            for (size_t j = 1; j < pilot_strategies_.size(); ++j) pilot_strategies_[j].first /= q;
+            const double v = luminance(beta * le);
+            if (v > 0.0 && std::isfinite(v)) {
+              add_pilot_contribution(tally->samples[first_ + k], v, false, pilot_strategies_);
+            }
+          } else if (max_component(le) > 0.0f) {
+            // The weight q w_0 / (1 + q w_0), written so that q w_0 of 0 or infinity gives 0 or 1.
+            const float w0 = mis_weight_walk(light_, camera_, 0, count, pixel_ratio_);
+            const float weight = 1.0f / (1.0f + 1.0f / (q * w0));
+            const glm::vec3 term = beta * le * weight;
+            if (std::isfinite(term.x + term.y + term.z)) current_->total += term;
+          }
+        }
+        if (!x.specular || count >= max_vertices) break;
+        specular_met = true;
+        // A specular vertex's scattering as the camera subpath's walk_scatter samples it (the
+        // choice between its delta lobes by its probability; no Russian roulette).
+        if (!agrees(x, x.wo)) break;
+        const glm::vec3 wo_local = x.frame.to_local(x.wo);
+        const float u_lobe = rng.next_float();
+        const glm::vec2 u(rng.next_float(), rng.next_float());
+        const BsdfSample bs = bsdf_sample(x, wo_local, u_lobe, u);
+        if (!bs.valid()) break;
+        const glm::vec3 w_next = x.frame.to_world(bs.wi);
+        if (!agrees(x, w_next)) break;
+        x.delta = bs.delta;
+        prev.pdf_rev = to_area_prev(bs.delta ? 0.0f : bsdf_pdf(x, bs.wi, wo_local), x, prev);
+        beta *= bs.weight;
+        if (!(max_component(beta) > 0.0f) || !std::isfinite(max_component(beta))) break;
+        pdf_dir = bs.delta ? 0.0f : bs.pdf;
+        ray = Ray{ray_start(x, w_next, it_.offset_), w_next, 0.0f, kRayTMax};
       }
-      if (!x.specular || count >= max_vertices) break;
-      specular_met = true;
-      // A specular vertex's scattering as the camera subpath's walk_scatter samples it (the
-      // choice between its delta lobes by its probability; no Russian roulette).
-      if (!agrees(x, x.wo)) break;
-      const glm::vec3 wo_local = x.frame.to_local(x.wo);
-      const float u_lobe = rng.next_float();
-      const glm::vec2 u(rng.next_float(), rng.next_float());
-      const BsdfSample bs = bsdf_sample(x, wo_local, u_lobe, u);
-      if (!bs.valid()) break;
-      const glm::vec3 w_next = x.frame.to_world(bs.wi);
-      if (!agrees(x, w_next)) break;
-      x.delta = bs.delta;
-      prev.pdf_rev = to_area_prev(bs.delta ? 0.0f : bsdf_pdf(x, bs.wi, wo_local), x, prev);
-      beta *= bs.weight;
-      if (!(max_component(beta) > 0.0f) || !std::isfinite(max_component(beta))) break;
-      pdf_dir = bs.delta ? 0.0f : bs.pdf;
-      ray = Ray{ray_start(x, w_next, it_.offset_), w_next, 0.0f, kRayTMax};
     }
   }
 }
