@@ -603,9 +603,10 @@ class BdptTracer {
   void connect_camera_only(size_t k);
   // connect_camera_only's connection s = 1 at camera vertex t - 1 of sample k, where that vertex
   // is a flat Lambert surface and the light vertex a point of an emissive triangle without an
-  // emission texture, for pending_[pending] whose shadow ray has slot rays_[pending.ray]: kept
-  // (lane_jobs_) and computed eight to a SIMD operation (lanes.h) when eight are kept or before
-  // the queue is flushed, bit for bit connect_camera_only's scalar code.
+  // emission texture, for pending_[pending]: kept (lane_jobs_) and computed eight to a SIMD
+  // operation (lanes.h) when eight are kept or before the queue is flushed, bit for bit
+  // connect_camera_only's scalar code; its shadow ray, if it has one, is appended to rays_ then
+  // (the query's order is no part of its answers).
   struct LaneJob {
     const Vertex* pt = nullptr;     // camera vertex t - 1 (its predecessor is pt - 1)
     const Vertex* light = nullptr;  // light vertex 0
@@ -618,7 +619,6 @@ class BdptTracer {
   };
   std::array<LaneJob, 8> lane_jobs_{};
   size_t lane_job_count_ = 0;
-  int ray_holes_ = 0;  // lane jobs' reserved rays_ slots that their connections did not use
   void run_lane_jobs();
   // The shadow ray of the connection between camera-side vertex c and light-side vertex l, whose
   // direction from c is w (direction(c, l)); false where nothing fits between its two ends (then
@@ -1338,18 +1338,6 @@ void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const
 
 void BdptTracer::flush() {
   run_lane_jobs();
-  if (ray_holes_ > 0) {
-    // Close the slots that lane jobs reserved and left unused (their order is the queue's).
-    int r = 0;
-    for (int k = 0; k < pending_count_; ++k) {
-      Pending& p = pending_[static_cast<size_t>(k)];
-      if (p.ray < 0) continue;
-      rays_[static_cast<size_t>(r)] = rays_[static_cast<size_t>(p.ray)];
-      p.ray = r++;
-    }
-    ray_count_ = r;
-    ray_holes_ = 0;
-  }
   const auto n = static_cast<size_t>(ray_count_);
   if (n > 0) {
     accel_.occluded_incoherent(std::span<const Ray>(rays_.data(), n),
@@ -1886,7 +1874,7 @@ void BdptTracer::connect_camera_only(size_t k) {
     const Vertex& qs = light[0];
 #if defined(TRITRACE_LANES)
     if (lane_ready && pt.lambert && !pt.smooth && pt.edge) {
-      queue(1, t, glm::vec3(0.0f), true, Ray{});
+      queue(1, t, glm::vec3(0.0f), false, Ray{});  // run_lane_jobs adds its ray
       pending_[static_cast<size_t>(pending_count_ - 1)].weighted = true;
       LaneJob& job = lane_jobs_[lane_job_count_++];
       job.pt = &pt;
@@ -2066,19 +2054,18 @@ void BdptTracer::run_lane_jobs() {
     Pending& pending = pending_[static_cast<size_t>(lane_jobs_[l].pending)];
     if (!keep[l]) {
       pending.skip = true;
-    } else {
-      pending.contribution = glm::vec3(term.x[l], term.y[l], term.z[l]);
-      if (has_ray[l]) {
-        Ray& r = rays_[static_cast<size_t>(pending.ray)];
-        r.origin = glm::vec3(from.x[l], from.y[l], from.z[l]);
-        r.dir = glm::vec3(ray_dir.x[l], ray_dir.y[l], ray_dir.z[l]);
-        r.tmin = 0.0f;
-        r.tmax = length[l];
-        continue;
-      }
+      continue;
     }
-    pending.ray = -1;
-    ++ray_holes_;
+    pending.contribution = glm::vec3(term.x[l], term.y[l], term.z[l]);
+    if (has_ray[l]) {
+      // (At most one ray per queued connection: rays_ has room.)
+      pending.ray = ray_count_++;
+      Ray& r = rays_[static_cast<size_t>(pending.ray)];
+      r.origin = glm::vec3(from.x[l], from.y[l], from.z[l]);
+      r.dir = glm::vec3(ray_dir.x[l], ray_dir.y[l], ray_dir.z[l]);
+      r.tmin = 0.0f;
+      r.tmax = length[l];
+    }
   }
 }
 #else
