@@ -1689,6 +1689,13 @@ void BdptTracer::splat_light_subpath(int nl) {
     Ray ray;
     // (w is glm::normalize(d), bit for bit.)
     const bool has_ray = camera_shadow_ray(qs, eye, w, ray);
+    // The splat's sums, fetched for the atomic adds that flush makes: at a pixel anywhere in the
+    // image, they are rarely in the cache.
+    if (splats_ != nullptr) {
+      const uint64_t* sums = splats_->raw(px, py);
+      __builtin_prefetch(sums, 1);
+      __builtin_prefetch(sums + 2, 1);
+    }
     queue(s, 1, contribution, has_ray, ray, px, py, pass_ ? pass_->count_ratio(px, py) : 1.0f);
   }
 }
