@@ -104,7 +104,8 @@ struct alignas(64) Vertex {
 static_assert(std::is_standard_layout_v<Vertex>);
 static_assert(offsetof(Vertex, ng) == offsetof(Vertex, p) + 12 &&
               offsetof(Vertex, ns) == offsetof(Vertex, p) + 24);
-static_assert(offsetof(Vertex, beta) == offsetof(Vertex, wo) + 12 &&
+static_assert(offsetof(Vertex, wo) == offsetof(Vertex, ns) + 12 &&
+              offsetof(Vertex, beta) == offsetof(Vertex, wo) + 12 &&
               offsetof(Vertex, albedo) == offsetof(Vertex, wo) + 24);
 static_assert(offsetof(Vertex, pdf_fwd) == offsetof(Vertex, albedo) + 12 &&
               offsetof(Vertex, pdf_rev) == offsetof(Vertex, albedo) + 16 &&
@@ -1951,12 +1952,13 @@ void BdptTracer::run_lane_jobs() {
   const auto runs = [](const std::array<const Vertex*, W>& v, size_t offset, F* out) {
     lanes::transpose8(reinterpret_cast<const void* const*>(v.data()), offset, out);
   };
-  F pt_p_run[W], pt_wo_run[W], pt_pdf_run[W], pt_frame_run[W], pt_tri_run[W];
-  runs(pts, offsetof(Vertex, p), pt_p_run);               // p, ng, ns.x, ns.y
-  runs(pts, offsetof(Vertex, wo), pt_wo_run);             // wo, beta, albedo.x, .y
-  runs(pts, offsetof(Vertex, albedo) + 8, pt_pdf_run);    // albedo.z, pdf_fwd, ..., to_prev.y
-  runs(pts, offsetof(Vertex, frame) + 24, pt_frame_run);  // frame.z, v0, e1.x, e1.y
-  runs(pts, offsetof(Vertex, tri) + 20, pt_tri_run);      // e1.z, e2, normal, material
+  // The camera vertex's frame.z is its ns (Frame::from_normal(ns)'s z): read from the first
+  // cache lines, its frame's (the third) is not touched.
+  F pt_p_run[W], pt_wo_run[W], pt_pdf_run[W], pt_tri_run[W];
+  runs(pts, offsetof(Vertex, p), pt_p_run);             // p, ng, ns.x, ns.y
+  runs(pts, offsetof(Vertex, ns) + 8, pt_wo_run);       // ns.z, wo, beta, albedo.x
+  runs(pts, offsetof(Vertex, albedo) + 4, pt_pdf_run);  // albedo.y, .z, pdf_fwd, ..., to_prev.x
+  runs(pts, offsetof(Vertex, tri), pt_tri_run);         // v0, e1, e2.x, e2.y
   F qs_p_run[W], qs_wo_run[W], qs_pdf_run[W], qs_tri_run[W];
   runs(lights, offsetof(Vertex, p), qs_p_run);             // p, ng, ns.x, ns.y
   runs(lights, offsetof(Vertex, wo), qs_wo_run);           // wo, beta, albedo.x, .y
@@ -1967,21 +1969,20 @@ void BdptTracer::run_lane_jobs() {
   const F inner_terms = lane([&](size_t l) { return jobs[l]->inner_terms; });
   const F outer_add = lane([&](size_t l) { return jobs[l]->outer_add; });
   const V3 pt_p = lanes::v3(pt_p_run), pt_ng = lanes::v3(pt_p_run + 3);
-  const V3 frame_z = lanes::v3(pt_frame_run);
+  const V3 frame_z{pt_p_run[6], pt_p_run[7], pt_wo_run[0]};
   const V3 qs_p = lanes::v3(qs_p_run), qs_ng = lanes::v3(qs_p_run + 3);
-  const V3 pt_wo = lanes::v3(pt_wo_run), pt_albedo{pt_wo_run[6], pt_wo_run[7], pt_pdf_run[0]},
-           pt_beta = lanes::v3(pt_wo_run + 3),
-           pt_to_prev{pt_pdf_run[6], pt_pdf_run[7],
+  const V3 pt_wo = lanes::v3(pt_wo_run + 1), pt_albedo{pt_wo_run[7], pt_pdf_run[0], pt_pdf_run[1]},
+           pt_beta = lanes::v3(pt_wo_run + 4),
+           pt_to_prev{pt_pdf_run[7], lane([&](size_t l) { return pts[l]->to_prev.y; }),
                       lane([&](size_t l) { return pts[l]->to_prev.z; })};
-  const V3 pt_v0 = lanes::v3(pt_frame_run + 3),
-           pt_e1{pt_frame_run[6], pt_frame_run[7], pt_tri_run[0]},
-           pt_e2 = lanes::v3(pt_tri_run + 1);
+  const V3 pt_v0 = lanes::v3(pt_tri_run), pt_e1 = lanes::v3(pt_tri_run + 3),
+           pt_e2{pt_tri_run[6], pt_tri_run[7], lane([&](size_t l) { return pts[l]->tri.e2.z; })};
   const V3 qs_e1 = lanes::v3(qs_tri_run), qs_e2 = lanes::v3(qs_tri_run + 3),
            qs_beta = lanes::v3(qs_wo_run + 3);
   const V3 qs_le{lane([&](size_t l) { return lights[l]->material->emission.x; }),
                  lane([&](size_t l) { return lights[l]->material->emission.y; }),
                  lane([&](size_t l) { return lights[l]->material->emission.z; })};
-  const F pt_fwd = pt_pdf_run[1], edge_dist2 = pt_pdf_run[4], prev_factor = pt_pdf_run[5],
+  const F pt_fwd = pt_pdf_run[2], edge_dist2 = pt_pdf_run[5], prev_factor = pt_pdf_run[6],
           minus_fwd = lane([&](size_t l) { return minus[l]->pdf_fwd; }), q_fwd = qs_pdf_run[1];
   const I sided = lane_mask([&](size_t l) { return lights[l]->two_sided ? -1 : 0; });
   // connect_camera_only's scalar s = 1, term by term.
