@@ -947,16 +947,18 @@ void BdptTracer::walk_all(std::vector<Vertex>* const* paths, WalkState* walks, S
   std::array<uint32_t, kWavefront> index;
   std::array<Sampler*, kWavefront> drawing{};
   std::array<std::array<glm::vec2, 2>, kWavefront> u{};
+  // The active walks, in order, kept without a branch (which walks are active is random: the
+  // branch mispredicted often). A walk that stops never starts again, so each bounce's list is
+  // the previous one's walks still active: its later bounces go over the few walks left, not the
+  // whole wavefront.
+  size_t n = 0;
+  for (size_t k = 0; k < count; ++k) {
+    index[n] = static_cast<uint32_t>(k);
+    n += walks[k].active ? 1 : 0;
+  }
   for (;;) {
-    // The active walks' rays gathered without a branch (which walks are active is random: the
-    // branch mispredicted often).
-    size_t n = 0;
-    for (size_t k = 0; k < count; ++k) {
-      index[n] = static_cast<uint32_t>(k);
-      rays[n] = walks[k].ray;
-      n += walks[k].active ? 1 : 0;
-    }
     if (n == 0) return;
+    for (size_t j = 0; j < n; ++j) rays[j] = walks[index[j]].ray;
     // Incoherent rays, one query for the wavefront's bounce: on a small tree as packets, on a
     // large one interleaved (BvhAccel::intersect_incoherent); the hits are those of one ray at a
     // time, bit for bit.
@@ -969,6 +971,13 @@ void BdptTracer::walk_all(std::vector<Vertex>* const* paths, WalkState* walks, S
     }
     draw_groups<2>(drawing.data(), m, u);
     step_bounce(paths, walks, index.data(), hits.data(), n, u.data(), escaped);
+    size_t still = 0;
+    for (size_t j = 0; j < n; ++j) {
+      const uint32_t k = index[j];
+      index[still] = k;
+      still += walks[k].active ? 1 : 0;
+    }
+    n = still;
   }
 }
 
