@@ -9,6 +9,7 @@
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <cstddef>
 #include <glm/geometric.hpp>
 #include <limits>
 #include <mutex>
@@ -97,6 +98,24 @@ struct alignas(64) Vertex {
   SmoothCorners corners{};
   Bsdf bsdf{Material{}};
 };
+// The SIMD lanes (walk_scatter_lanes, run_lane_jobs) load runs of eight consecutive floats from
+// eight vertices and transpose them (lanes::transpose8): p, ng, ns; wo, beta, albedo; albedo.z
+// and the densities; the frame and the triangle. The runs' members must stay in this order.
+static_assert(std::is_standard_layout_v<Vertex>);
+static_assert(offsetof(Vertex, ng) == offsetof(Vertex, p) + 12 &&
+              offsetof(Vertex, ns) == offsetof(Vertex, p) + 24);
+static_assert(offsetof(Vertex, wo) == offsetof(Vertex, ns) + 12 &&
+              offsetof(Vertex, beta) == offsetof(Vertex, wo) + 12 &&
+              offsetof(Vertex, albedo) == offsetof(Vertex, wo) + 24);
+static_assert(offsetof(Vertex, pdf_fwd) == offsetof(Vertex, albedo) + 12 &&
+              offsetof(Vertex, pdf_rev) == offsetof(Vertex, albedo) + 16 &&
+              offsetof(Vertex, edge_dist2) == offsetof(Vertex, albedo) + 24 &&
+              offsetof(Vertex, prev_factor) == offsetof(Vertex, albedo) + 28 &&
+              offsetof(Vertex, to_prev) == offsetof(Vertex, albedo) + 32);
+static_assert(sizeof(Frame) == 36 && offsetof(Frame, y) == 12 && offsetof(Frame, z) == 24 &&
+              offsetof(Vertex, tri) == offsetof(Vertex, frame) + 36);
+static_assert(offsetof(SurfaceTriangle, e1) == 12 && offsetof(SurfaceTriangle, e2) == 24 &&
+              offsetof(SurfaceTriangle, normal) == 36);
 
 // Builds `member` from make()'s value where it stays: `member = make()` builds the value in a
 // temporary and copies it, and the copy's 32-byte loads of the temporary's narrower stores stalled
@@ -483,6 +502,10 @@ struct WalkState {
   bool light = false;       // the adjoint (importance) transport
   bool active = false;      // a ray to trace
 };
+// walk_scatter_lanes loads beta, rr_beta and pdf_dir as one run of floats.
+static_assert(std::is_standard_layout_v<WalkState> &&
+              offsetof(WalkState, rr_beta) == offsetof(WalkState, beta) + 12 &&
+              sizeof(WalkState) >= offsetof(WalkState, beta) + 32);
 
 // The next N 2-D groups of each of `count` samplers (count <= kWavefront): exactly what
 // get_2d_groups<N> draws for each, with eight samplers sharing each SIMD operation
@@ -591,9 +614,10 @@ class BdptTracer {
   void connect_camera_only(size_t k);
   // connect_camera_only's connection s = 1 at camera vertex t - 1 of sample k, where that vertex
   // is a flat Lambert surface and the light vertex a point of an emissive triangle without an
-  // emission texture, for pending_[pending] whose shadow ray has slot rays_[pending.ray]: kept
-  // (lane_jobs_) and computed eight to a SIMD operation (lanes.h) when eight are kept or before
-  // the queue is flushed, bit for bit connect_camera_only's scalar code.
+  // emission texture, for pending_[pending]: kept (lane_jobs_) and computed eight to a SIMD
+  // operation (lanes.h) when eight are kept or before the queue is flushed, bit for bit
+  // connect_camera_only's scalar code; its shadow ray, if it has one, is appended to rays_ then
+  // (the query's order is no part of its answers).
   struct LaneJob {
     const Vertex* pt = nullptr;     // camera vertex t - 1 (its predecessor is pt - 1)
     const Vertex* light = nullptr;  // light vertex 0
@@ -606,7 +630,6 @@ class BdptTracer {
   };
   std::array<LaneJob, 8> lane_jobs_{};
   size_t lane_job_count_ = 0;
-  int ray_holes_ = 0;  // lane jobs' reserved rays_ slots that their connections did not use
   void run_lane_jobs();
   // The shadow ray of the connection between camera-side vertex c and light-side vertex l, whose
   // direction from c is w (direction(c, l)); false where nothing fits between its two ends (then
@@ -970,16 +993,18 @@ void BdptTracer::walk_all(std::vector<Vertex>* const* paths, WalkState* walks, S
   std::array<uint32_t, kWavefront> index;
   std::array<Sampler*, kWavefront> drawing{};
   std::array<std::array<glm::vec2, 2>, kWavefront> u{};
+  // The active walks, in order, kept without a branch (which walks are active is random: the
+  // branch mispredicted often). A walk that stops never starts again, so each bounce's list is
+  // the previous one's walks still active: its later bounces go over the few walks left, not the
+  // whole wavefront.
+  size_t n = 0;
+  for (size_t k = 0; k < count; ++k) {
+    index[n] = static_cast<uint32_t>(k);
+    n += walks[k].active ? 1 : 0;
+  }
   for (;;) {
-    // The active walks' rays gathered without a branch (which walks are active is random: the
-    // branch mispredicted often).
-    size_t n = 0;
-    for (size_t k = 0; k < count; ++k) {
-      index[n] = static_cast<uint32_t>(k);
-      rays[n] = walks[k].ray;
-      n += walks[k].active ? 1 : 0;
-    }
     if (n == 0) return;
+    for (size_t j = 0; j < n; ++j) rays[j] = walks[index[j]].ray;
     // Incoherent rays, one query for the wavefront's bounce: on a small tree as packets, on a
     // large one interleaved (BvhAccel::intersect_incoherent); the hits are those of one ray at a
     // time, bit for bit.
@@ -992,6 +1017,13 @@ void BdptTracer::walk_all(std::vector<Vertex>* const* paths, WalkState* walks, S
     }
     draw_groups<2>(drawing.data(), m, u);
     step_bounce(paths, walks, index.data(), hits.data(), n, u.data(), escaped);
+    size_t still = 0;
+    for (size_t j = 0; j < n; ++j) {
+      const uint32_t k = index[j];
+      index[still] = k;
+      still += walks[k].active ? 1 : 0;
+    }
+    n = still;
   }
 }
 
@@ -1039,9 +1071,9 @@ void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState
   using lanes::I;
   using lanes::V3;
   constexpr size_t W = lanes::kWidth;
-  // Per lane (lanes past n repeat lane 0 and are not written back) its vertex and walk, each
-  // number gathered into a register lane by lane (stores to memory reloaded as vectors wait for
-  // the stores: store forwarding fails on such loads).
+  // Per lane (lanes past n repeat lane 0 and are not written back) its vertex and walk: the runs
+  // of floats they keep together transposed into registers, the rest gathered lane by lane (never
+  // stored per lane and reloaded as vectors: store forwarding fails on such loads).
   std::array<const Vertex*, W> xs;
   std::array<const WalkState*, W> ws;
   for (size_t l = 0; l < W; ++l) {
@@ -1052,19 +1084,22 @@ void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState
   const auto lane = [](auto get) {
     return F{get(0), get(1), get(2), get(3), get(4), get(5), get(6), get(7)};
   };
-  const auto lane3 = [&](auto get) {
-    return V3{lane([&](size_t l) { return get(l).x; }), lane([&](size_t l) { return get(l).y; }),
-              lane([&](size_t l) { return get(l).z; })};
-  };
   const auto lane_mask = [](auto get) {
     return I{get(0), get(1), get(2), get(3), get(4), get(5), get(6), get(7)};
   };
   const I edge_mask = lane_mask([&](size_t l) { return xs[l]->edge ? -1 : 0; });
-  const V3 fx = lane3([&](size_t l) { return xs[l]->frame.x; });
-  const V3 fy = lane3([&](size_t l) { return xs[l]->frame.y; });
-  const V3 fz = lane3([&](size_t l) { return xs[l]->frame.z; });
+  // The vertices' runs of floats (Vertex's layout notes), transposed eight lanes at a time.
+  const void* const* rows = reinterpret_cast<const void* const*>(xs.data());
+  F p_run[W], wo_run[W], pdf_run[W], frame_run[W], tri_run[W];
+  lanes::transpose8(rows, offsetof(Vertex, p), p_run);             // p, ng, ns.x, ns.y
+  lanes::transpose8(rows, offsetof(Vertex, wo), wo_run);           // wo, beta, albedo.x, .y
+  lanes::transpose8(rows, offsetof(Vertex, albedo) + 8, pdf_run);  // albedo.z, pdf_fwd, ...
+  lanes::transpose8(rows, offsetof(Vertex, frame), frame_run);     // frame.x, .y, .z.x, .z.y
+  lanes::transpose8(rows, offsetof(Vertex, frame) + 32, tri_run);  // frame.z.z, v0, e1, e2.x
+  const V3 fx = lanes::v3(frame_run), fy = lanes::v3(frame_run + 3);
+  const V3 fz{frame_run[6], frame_run[7], tri_run[0]};
   // Frame::to_local(x.wo).
-  const V3 w_prev = lane3([&](size_t l) { return xs[l]->wo; });
+  const V3 w_prev = lanes::v3(wo_run);
   const V3 wo_local{lanes::dot(w_prev, fx), lanes::dot(w_prev, fy), lanes::dot(w_prev, fz)};
   // bsdf_sample's Lambert branch: wo turned up, sample_cosine_hemisphere (its concentric disk
   // with sincosf lane by lane), the density and the weight, then wi turned back.
@@ -1077,8 +1112,7 @@ void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState
   const F dx = cs.x, dy = cs.y, z = cs.z, pdf = cs.pdf;
   const I has_pdf = pdf > 0.0f;
   const V3 weight = lanes::select(
-      has_pdf, lane3([&](size_t l) { return xs[l]->albedo; }) * lanes::splat(kInvPi) * (z / pdf),
-      V3{});
+      has_pdf, V3{wo_run[6], wo_run[7], pdf_run[0]} * lanes::splat(kInvPi) * (z / pdf), V3{});
   const I valid = up & has_pdf & ((weight.x > 0.0f) | (weight.y > 0.0f) | (weight.z > 0.0f));
   const V3 wi{dx, dy, below ? -z : z};
   const V3 w_next = fx * wi.x + fy * wi.y + fz * wi.z;  // Frame::to_world
@@ -1086,13 +1120,13 @@ void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState
   const I flip = wi.z < 0.0f;
   const F rev_o = flip ? -wi.z : wi.z, rev_i = flip ? -wo_local.z : wo_local.z;
   const F pdf_rev_dir = rev_o <= 0.0f ? F{} : (rev_i > 0.0f ? rev_i * kInvPi : F{});
-  const F prev_pdf_rev = edge_mask
-                             ? pdf_rev_dir / lane([&](size_t l) { return xs[l]->edge_dist2; }) *
-                                   lane([&](size_t l) { return xs[l]->prev_factor; })
-                             : F{};
+  const F prev_pdf_rev = edge_mask ? pdf_rev_dir / pdf_run[4] * pdf_run[5] : F{};
   // The throughput, Russian roulette, and the walk's test of what is left.
-  V3 beta_next = lane3([&](size_t l) { return ws[l]->beta; }) * weight;
-  V3 rr_next = lane3([&](size_t l) { return ws[l]->rr_beta; }) * weight;
+  F beta_run[W];  // the walks' beta, rr_beta, pdf_dir and flags
+  lanes::transpose8(reinterpret_cast<const void* const*>(ws.data()), offsetof(WalkState, beta),
+                    beta_run);
+  V3 beta_next = lanes::v3(beta_run) * weight;
+  V3 rr_next = lanes::v3(beta_run + 3) * weight;
   const I rr = lane_mask(
       [&](size_t l) { return ws[l]->count - 1 >= it_.settings_.roulette_depth ? -1 : 0; });
   const F survive = lanes::min(lanes::splat(1.0f), lanes::sqrt(lanes::max_component(rr_next)));
@@ -1103,14 +1137,15 @@ void BdptTracer::walk_scatter_lanes(std::vector<Vertex>* const* paths, WalkState
   const F largest = lanes::max_component(beta_next);
   alive &= (largest > 0.0f) & (lanes::abs(largest) <= std::numeric_limits<float>::max());
   // ray_start: leave_surface on the side w_next leaves to.
-  const V3 n_lab = lane3([&](size_t l) { return xs[l]->ng; });
+  const V3 n_lab = lanes::v3(p_run + 3);
   const I front = lanes::dot(n_lab, w_next) >= 0.0f;
   const V3 side = lanes::select(front, n_lab, -n_lab);
-  const V3 e1v = lane3([&](size_t l) { return xs[l]->tri.e1; }),
-           e2v = lane3([&](size_t l) { return xs[l]->tri.e2; });
-  const V3 start = lanes::leave_surface(
-      lane3([&](size_t l) { return xs[l]->tri.v0; }), e1v, e2v, lanes::triangle_extent(e1v, e2v),
-      lane3([&](size_t l) { return xs[l]->p; }), side, it_.offset_);
+  const V3 e1v = lanes::v3(tri_run + 4),
+           e2v{tri_run[7], lane([&](size_t l) { return xs[l]->tri.e2.y; }),
+               lane([&](size_t l) { return xs[l]->tri.e2.z; })};
+  const V3 start =
+      lanes::leave_surface(lanes::v3(tri_run + 1), e1v, e2v, lanes::triangle_extent(e1v, e2v),
+                           lanes::v3(p_run), side, it_.offset_);
   for (size_t l = 0; l < n; ++l) {
     if (!valid[l]) continue;
     WalkState& w = walks[index[l]];
@@ -1360,18 +1395,6 @@ void BdptTracer::queue(int s, int t, glm::vec3 contribution, bool has_ray, const
 
 void BdptTracer::flush() {
   run_lane_jobs();
-  if (ray_holes_ > 0) {
-    // Close the slots that lane jobs reserved and left unused (their order is the queue's).
-    int r = 0;
-    for (int k = 0; k < pending_count_; ++k) {
-      Pending& p = pending_[static_cast<size_t>(k)];
-      if (p.ray < 0) continue;
-      rays_[static_cast<size_t>(r)] = rays_[static_cast<size_t>(p.ray)];
-      p.ray = r++;
-    }
-    ray_count_ = r;
-    ray_holes_ = 0;
-  }
   const auto n = static_cast<size_t>(ray_count_);
   if (n > 0) {
     accel_.occluded_incoherent(std::span<const Ray>(rays_.data(), n),
@@ -1748,6 +1771,13 @@ void BdptTracer::splat_light_subpath(int nl) {
     Ray ray;
     // (w is glm::normalize(d), bit for bit.)
     const bool has_ray = camera_shadow_ray(qs, eye, w, ray);
+    // The splat's sums, fetched for the atomic adds that flush makes: at a pixel anywhere in the
+    // image, they are rarely in the cache.
+    if (splats_ != nullptr) {
+      const uint64_t* sums = splats_->raw(px, py);
+      __builtin_prefetch(sums, 1);
+      __builtin_prefetch(sums + 2, 1);
+    }
     queue(s, 1, contribution, has_ray, ray, px, py, pass_ ? pass_->count_ratio(px, py) : 1.0f);
     pending_[static_cast<size_t>(pending_count_ - 1)].caustic_q = caustic_q(s, 1, eye);
   }
@@ -1944,7 +1974,7 @@ void BdptTracer::connect_camera_only(size_t k) {
     const Vertex& qs = light[0];
 #if defined(TRITRACE_LANES)
     if (lane_ready && pt.lambert && !pt.smooth && pt.edge) {
-      queue(1, t, glm::vec3(0.0f), true, Ray{});
+      queue(1, t, glm::vec3(0.0f), false, Ray{});  // run_lane_jobs adds its ray
       pending_[static_cast<size_t>(pending_count_ - 1)].weighted = true;
       LaneJob& job = lane_jobs_[lane_job_count_++];
       job.pt = &pt;
@@ -1993,10 +2023,9 @@ void BdptTracer::run_lane_jobs() {
   using lanes::V3;
   constexpr size_t W = lanes::kWidth;
   const BdptSettings& settings = it_.settings_;
-  // Per lane (lanes past n repeat lane 0 and are not written back) its
-  // vertices, and each number gathered into a register lane by lane: stored to
-  // memory one float at a time and loaded as a vector, the loads waited for the
-  // stores (store forwarding fails on such loads).
+  // Per lane (lanes past n repeat lane 0 and are not written back) its vertices: the runs of
+  // floats they keep together transposed into registers, the rest gathered lane by lane (never
+  // stored per lane and reloaded as vectors: store forwarding fails on such loads).
   std::array<const LaneJob*, W> jobs;
   std::array<const Vertex*, W> pts, minus, lights;
   for (size_t l = 0; l < W; ++l) {
@@ -2011,42 +2040,42 @@ void BdptTracer::run_lane_jobs() {
   const auto lane_mask = [](auto get) {
     return I{get(0), get(1), get(2), get(3), get(4), get(5), get(6), get(7)};
   };
-  const auto lane3 = [&](const std::array<const Vertex*, W>& v, auto member) {
-    return V3{lane([&](size_t l) { return (v[l]->*member).x; }),
-              lane([&](size_t l) { return (v[l]->*member).y; }),
-              lane([&](size_t l) { return (v[l]->*member).z; })};
+  // The vertices' runs of floats (Vertex's layout notes), transposed eight lanes at a time.
+  const auto runs = [](const std::array<const Vertex*, W>& v, size_t offset, F* out) {
+    lanes::transpose8(reinterpret_cast<const void* const*>(v.data()), offset, out);
   };
-  const auto lane_tri3 = [&](const std::array<const Vertex*, W>& v,
-                             glm::vec3 SurfaceTriangle::*member) {
-    return V3{lane([&](size_t l) { return (v[l]->tri.*member).x; }),
-              lane([&](size_t l) { return (v[l]->tri.*member).y; }),
-              lane([&](size_t l) { return (v[l]->tri.*member).z; })};
-  };
-  const auto lane1 = [&](const std::array<const Vertex*, W>& v, float Vertex::*member) {
-    return lane([&](size_t l) { return v[l]->*member; });
-  };
+  // The camera vertex's frame.z is its ns (Frame::from_normal(ns)'s z): read from the first
+  // cache lines, its frame's (the third) is not touched.
+  F pt_p_run[W], pt_wo_run[W], pt_pdf_run[W], pt_tri_run[W];
+  runs(pts, offsetof(Vertex, p), pt_p_run);             // p, ng, ns.x, ns.y
+  runs(pts, offsetof(Vertex, ns) + 8, pt_wo_run);       // ns.z, wo, beta, albedo.x
+  runs(pts, offsetof(Vertex, albedo) + 4, pt_pdf_run);  // albedo.y, .z, pdf_fwd, ..., to_prev.x
+  runs(pts, offsetof(Vertex, tri), pt_tri_run);         // v0, e1, e2.x, e2.y
+  F qs_p_run[W], qs_wo_run[W], qs_pdf_run[W], qs_tri_run[W];
+  runs(lights, offsetof(Vertex, p), qs_p_run);             // p, ng, ns.x, ns.y
+  runs(lights, offsetof(Vertex, wo), qs_wo_run);           // wo, beta, albedo.x, .y
+  runs(lights, offsetof(Vertex, albedo) + 8, qs_pdf_run);  // albedo.z, pdf_fwd, ...
+  runs(lights, offsetof(Vertex, tri) + 12, qs_tri_run);    // e1, e2, normal.x, normal.y
   const I has_outer = lane_mask([&](size_t l) { return jobs[l]->has_outer ? -1 : 0; });
   const I has_inner = lane_mask([&](size_t l) { return jobs[l]->has_inner ? -1 : 0; });
   const F inner_terms = lane([&](size_t l) { return jobs[l]->inner_terms; });
   const F outer_add = lane([&](size_t l) { return jobs[l]->outer_add; });
-  const V3 pt_p = lane3(pts, &Vertex::p), pt_ng = lane3(pts, &Vertex::ng);
-  const V3 frame_z{lane([&](size_t l) { return pts[l]->frame.z.x; }),
-                   lane([&](size_t l) { return pts[l]->frame.z.y; }),
-                   lane([&](size_t l) { return pts[l]->frame.z.z; })};
-  const V3 qs_p = lane3(lights, &Vertex::p), qs_ng = lane3(lights, &Vertex::ng);
-  const V3 pt_wo = lane3(pts, &Vertex::wo), pt_albedo = lane3(pts, &Vertex::albedo),
-           pt_beta = lane3(pts, &Vertex::beta), pt_to_prev = lane3(pts, &Vertex::to_prev);
-  const V3 pt_v0 = lane_tri3(pts, &SurfaceTriangle::v0),
-           pt_e1 = lane_tri3(pts, &SurfaceTriangle::e1),
-           pt_e2 = lane_tri3(pts, &SurfaceTriangle::e2);
-  const V3 qs_e1 = lane_tri3(lights, &SurfaceTriangle::e1),
-           qs_e2 = lane_tri3(lights, &SurfaceTriangle::e2), qs_beta = lane3(lights, &Vertex::beta);
+  const V3 pt_p = lanes::v3(pt_p_run), pt_ng = lanes::v3(pt_p_run + 3);
+  const V3 frame_z{pt_p_run[6], pt_p_run[7], pt_wo_run[0]};
+  const V3 qs_p = lanes::v3(qs_p_run), qs_ng = lanes::v3(qs_p_run + 3);
+  const V3 pt_wo = lanes::v3(pt_wo_run + 1), pt_albedo{pt_wo_run[7], pt_pdf_run[0], pt_pdf_run[1]},
+           pt_beta = lanes::v3(pt_wo_run + 4),
+           pt_to_prev{pt_pdf_run[7], lane([&](size_t l) { return pts[l]->to_prev.y; }),
+                      lane([&](size_t l) { return pts[l]->to_prev.z; })};
+  const V3 pt_v0 = lanes::v3(pt_tri_run), pt_e1 = lanes::v3(pt_tri_run + 3),
+           pt_e2{pt_tri_run[6], pt_tri_run[7], lane([&](size_t l) { return pts[l]->tri.e2.z; })};
+  const V3 qs_e1 = lanes::v3(qs_tri_run), qs_e2 = lanes::v3(qs_tri_run + 3),
+           qs_beta = lanes::v3(qs_wo_run + 3);
   const V3 qs_le{lane([&](size_t l) { return lights[l]->material->emission.x; }),
                  lane([&](size_t l) { return lights[l]->material->emission.y; }),
                  lane([&](size_t l) { return lights[l]->material->emission.z; })};
-  const F pt_fwd = lane1(pts, &Vertex::pdf_fwd), edge_dist2 = lane1(pts, &Vertex::edge_dist2),
-          prev_factor = lane1(pts, &Vertex::prev_factor),
-          minus_fwd = lane1(minus, &Vertex::pdf_fwd), q_fwd = lane1(lights, &Vertex::pdf_fwd);
+  const F pt_fwd = pt_pdf_run[2], edge_dist2 = pt_pdf_run[5], prev_factor = pt_pdf_run[6],
+          minus_fwd = lane([&](size_t l) { return minus[l]->pdf_fwd; }), q_fwd = qs_pdf_run[1];
   const I sided = lane_mask([&](size_t l) { return lights[l]->two_sided ? -1 : 0; });
   // connect_camera_only's scalar s = 1, term by term.
   const V3 d = qs_p - pt_p;
@@ -2125,19 +2154,18 @@ void BdptTracer::run_lane_jobs() {
     Pending& pending = pending_[static_cast<size_t>(lane_jobs_[l].pending)];
     if (!keep[l]) {
       pending.skip = true;
-    } else {
-      pending.contribution = glm::vec3(term.x[l], term.y[l], term.z[l]);
-      if (has_ray[l]) {
-        Ray& r = rays_[static_cast<size_t>(pending.ray)];
-        r.origin = glm::vec3(from.x[l], from.y[l], from.z[l]);
-        r.dir = glm::vec3(ray_dir.x[l], ray_dir.y[l], ray_dir.z[l]);
-        r.tmin = 0.0f;
-        r.tmax = length[l];
-        continue;
-      }
+      continue;
     }
-    pending.ray = -1;
-    ++ray_holes_;
+    pending.contribution = glm::vec3(term.x[l], term.y[l], term.z[l]);
+    if (has_ray[l]) {
+      // (At most one ray per queued connection: rays_ has room.)
+      pending.ray = ray_count_++;
+      Ray& r = rays_[static_cast<size_t>(pending.ray)];
+      r.origin = glm::vec3(from.x[l], from.y[l], from.z[l]);
+      r.dir = glm::vec3(ray_dir.x[l], ray_dir.y[l], ray_dir.z[l]);
+      r.tmin = 0.0f;
+      r.tmax = length[l];
+    }
   }
 }
 #else
