@@ -613,8 +613,8 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConf
 #endif
     // Shadow rays took 1.25x less time through the second tree on scenes/sky.json but 1.15x more on
     // scenes/glass.json, whose rays to a small light pass more of its looser leaf boxes: which
-    // tree serves a scene's rays is measured on its first ones (occluded_tree()).
-    if (!incoherent_packets_) occluded_choice_.store(kUndecided, std::memory_order_relaxed);
+    // tree serves a scene's rays is counted on a sample of them (occluded_tree()).
+    probes_occluded_ = !incoherent_packets_;
     node_price_ = config.traversal_cost;
     block_price_ = config.block_cost;
   }
@@ -693,12 +693,14 @@ void BvhAccel::occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t>
       return;
     }
   }
-  const int choice = occluded_choice_.load(std::memory_order_relaxed);
-  if (choice == kUndecided) {
-    probe_occluded(rays, occluded);
-    return;
+  if (probes_occluded_) {
+    static thread_local uint64_t calls = 0;
+    if (calls++ % kOccludedProbeEvery == 0) {
+      probe_occluded(rays, occluded);
+      return;
+    }
   }
-  const bool coarse = choice == kCoarse;
+  const bool coarse = occluded_choice_.load(std::memory_order_relaxed) == kCoarse;
   const bvh::WideBvh& tree = coarse ? closest_ : bvh_;
 #if defined(__AVX2__)
   if ((coarse ? closest_interleave_ : interleave_) && rays.size() > 1) {
@@ -713,8 +715,8 @@ void BvhAccel::occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t>
 }
 
 // Traces `rays` through both trees, counting the steps, and once kOccludedProbeRays rays have been
-// probed (by any thread) chooses the tree whose steps, priced as the SAH prices them, cost less;
-// tree() on a tie. Threads that probe at once may count a few rays beyond kOccludedProbeRays.
+// counted (by any thread) chooses the tree whose steps so far, priced as the SAH prices them, cost
+// less; tree() on a tie. Counts from threads that probe at once may land in either choice.
 void BvhAccel::probe_occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
   StepCount steps[2];
   with_kernel(kernel_, [&]<Kernel K>() {
@@ -738,9 +740,7 @@ void BvhAccel::probe_occluded(std::span<const Ray> rays, std::span<uint8_t> occl
     cost[t] = node_price_ * static_cast<double>(probe_nodes_[t].load(std::memory_order_relaxed)) +
               block_price_ * static_cast<double>(probe_blocks_[t].load(std::memory_order_relaxed));
   }
-  int undecided = kUndecided;
-  occluded_choice_.compare_exchange_strong(undecided, cost[1] < cost[0] ? kCoarse : kFine,
-                                           std::memory_order_relaxed);
+  occluded_choice_.store(cost[1] < cost[0] ? kCoarse : kFine, std::memory_order_relaxed);
 }
 
 }  // namespace tritrace

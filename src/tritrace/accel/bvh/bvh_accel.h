@@ -48,10 +48,14 @@ class BvhAccel final : public Accel {
   // incoherent packets take fewer steps to their closest hit.
   const bvh::WideBvh& closest_tree() const { return closest_.nodes.empty() ? bvh_ : closest_; }
   // The tree of occluded_incoherent: tree(), or closest_tree() where that is a second tree and the
-  // first kOccludedProbeRays rays given to occluded_incoherent took fewer steps through it (each
-  // traced through both, its node and leaf visits counted and priced as the SAH prices them).
-  // tree() until then. The answers are the same through either tree.
-  static constexpr uint64_t kOccludedProbeRays = 4096;
+  // rays given to occluded_incoherent take fewer steps through it. One call in
+  // kOccludedProbeEvery (per thread) is traced through both trees, its node and leaf visits
+  // counted and priced as the SAH prices them, and once kOccludedProbeRays rays have been counted
+  // each count chooses again from all counted so far: a frame's first tiles alone, whose rays may
+  // be unlike the rest (sky or ground), do not decide. tree() until then. The answers are the same
+  // through either tree.
+  static constexpr uint64_t kOccludedProbeEvery = 128;
+  static constexpr uint64_t kOccludedProbeRays = 2048;
   const bvh::WideBvh& occluded_tree() const {
     return occluded_choice_.load(std::memory_order_relaxed) == kCoarse ? closest_ : bvh_;
   }
@@ -70,8 +74,9 @@ class BvhAccel final : public Accel {
   [[maybe_unused]] bool closest_interleave_ = false;
   // occluded_tree()'s choice and the probe that makes it: node and leaf-block visits of the probed
   // rays through each tree ([0] tree(), [1] closest_tree()) and the SAH's prices of the two.
-  enum : int { kUndecided, kFine, kCoarse };
+  enum : int { kFine, kCoarse };
   mutable std::atomic<int> occluded_choice_{kFine};
+  bool probes_occluded_ = false;  // a second tree and single shadow rays: the choice is counted
   mutable std::atomic<uint64_t> probe_rays_{0};
   mutable std::atomic<uint64_t> probe_nodes_[2] = {0, 0}, probe_blocks_[2] = {0, 0};
   float node_price_ = 1.0f, block_price_ = 1.0f;
