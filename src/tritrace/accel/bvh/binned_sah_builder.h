@@ -53,12 +53,14 @@ inline BuildConfig default_build_config(size_t triangles) {
 
 // The build of a second tree that BvhAccel keeps for a small mesh's incoherent closest-hit queries
 // (the path tracer's bounce rays): `config` (fine leaves, priced per triangle) with a triangle
-// priced at a quarter of its cost, so that leaves hold more triangles and a ray takes fewer steps.
+// priced at 0.15 of its cost, so that leaves hold more triangles and a ray takes fewer steps.
 // The path tracer's bounce rays ran 1.25x faster through it on scenes/sky.json (single rays) and
-// 1.35x on cornell-area (incoherent packets), the same on scenes/glass.json; its shadow rays (any
-// hit) and the lab's coherent packets were slower on such a tree, so they keep the fine one
-// (docs/PERFORMANCE.md, "Single rays on small trees", issue 27).
-inline constexpr float kIncoherentClosestCostScale = 0.25f;
+// 1.35x on cornell-area (incoherent packets) at 0.25, the same on scenes/glass.json, and 4% faster
+// again on sky.json at 0.15; the lab's coherent packets were slower on such a tree, so they keep
+// the fine one, and shadow rays take whichever tree a sample of them chose
+// (BvhAccel::occluded_tree; docs/PERFORMANCE.md, "Single rays on small trees" and "Shadow rays on
+// the tree a sample of them chose", issue 27).
+inline constexpr float kIncoherentClosestCostScale = 0.15f;
 inline bool wants_incoherent_closest_tree(const BuildConfig& config) {
   return config.block_size == 1 && config.method == BuildMethod::kBinnedSah;
 }

@@ -175,8 +175,15 @@ Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray)
   return closest_hit_from<K, -1>(tree, tris, ray, prepared);
 }
 
-template <Kernel K>
-bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray) {
+// Node and leaf-block visits of a traversal (BvhAccel's probe of its shadow rays).
+struct StepCount {
+  uint64_t nodes = 0, blocks = 0;
+};
+
+// Steps: the node and block visits are added to *steps (kCounted only; the same traversal).
+template <Kernel K, bool kCounted = false>
+bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
+             [[maybe_unused]] StepCount* steps = nullptr) {
   if (tree.nodes.empty() || !traceable(ray)) return false;
   const RayBoxSetup setup = box_setup(ray);
   const PreparedRay<K> prepared(ray);
@@ -185,6 +192,7 @@ bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray) {
   uint32_t ref = 0;
   alignas(32) float tnear[kWidth];
   for (;;) {
+    if constexpr (kCounted) ++((ref & kLeafBit) ? steps->blocks : steps->nodes);
     if (ref & kLeafBit) {
       if (intersect_block<K>(tree.blocks[ref & ~kLeafBit], tris, ray, prepared, nullptr)) {
         return true;
@@ -603,6 +611,12 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConf
 #if defined(__AVX2__)
     closest_interleave_ = interleaves_incoherent(closest_, kernel_, traversal);
 #endif
+    // Shadow rays took 1.25x less time through the second tree on scenes/sky.json but 1.15x more on
+    // scenes/glass.json, whose rays to a small light pass more of its looser leaf boxes: which
+    // tree serves a scene's rays is counted on a sample of them (occluded_tree()).
+    probes_occluded_ = !incoherent_packets_;
+    node_price_ = config.traversal_cost;
+    block_price_ = config.block_cost;
   }
 }
 
@@ -679,16 +693,54 @@ void BvhAccel::occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t>
       return;
     }
   }
+  if (probes_occluded_) {
+    static thread_local uint64_t calls = 0;
+    if (calls++ % kOccludedProbeEvery == 0) {
+      probe_occluded(rays, occluded);
+      return;
+    }
+  }
+  const bool coarse = occluded_choice_.load(std::memory_order_relaxed) == kCoarse;
+  const bvh::WideBvh& tree = coarse ? closest_ : bvh_;
 #if defined(__AVX2__)
-  if (interleave_ && rays.size() > 1) {
-    any_hits_interleaved(bvh_, rays, occluded);
+  if ((coarse ? closest_interleave_ : interleave_) && rays.size() > 1) {
+    any_hits_interleaved(tree, rays, occluded);
     return;
   }
 #endif
   with_kernel(kernel_, [&]<Kernel K>() {
     const TriangleArrays tris = mesh_.arrays();
-    for (size_t i = 0; i < rays.size(); ++i) occluded[i] = any_hit<K>(bvh_, tris, rays[i]) ? 1 : 0;
+    for (size_t i = 0; i < rays.size(); ++i) occluded[i] = any_hit<K>(tree, tris, rays[i]) ? 1 : 0;
   });
+}
+
+// Traces `rays` through both trees, counting the steps, and once kOccludedProbeRays rays have been
+// counted (by any thread) chooses the tree whose steps so far, priced as the SAH prices them, cost
+// less; tree() on a tie. Counts from threads that probe at once may land in either choice.
+void BvhAccel::probe_occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+  StepCount steps[2];
+  with_kernel(kernel_, [&]<Kernel K>() {
+    const TriangleArrays tris = mesh_.arrays();
+    for (size_t i = 0; i < rays.size(); ++i) {
+      occluded[i] = any_hit<K, true>(bvh_, tris, rays[i], &steps[0]) ? 1 : 0;
+      [[maybe_unused]] const bool same = any_hit<K, true>(closest_, tris, rays[i], &steps[1]);
+      assert(same == (occluded[i] != 0));
+    }
+  });
+  for (int t = 0; t < 2; ++t) {
+    probe_nodes_[t].fetch_add(steps[t].nodes, std::memory_order_relaxed);
+    probe_blocks_[t].fetch_add(steps[t].blocks, std::memory_order_relaxed);
+  }
+  if (probe_rays_.fetch_add(rays.size(), std::memory_order_relaxed) + rays.size() <
+      kOccludedProbeRays) {
+    return;
+  }
+  double cost[2];
+  for (int t = 0; t < 2; ++t) {
+    cost[t] = node_price_ * static_cast<double>(probe_nodes_[t].load(std::memory_order_relaxed)) +
+              block_price_ * static_cast<double>(probe_blocks_[t].load(std::memory_order_relaxed));
+  }
+  occluded_choice_.store(cost[1] < cost[0] ? kCoarse : kFine, std::memory_order_relaxed);
 }
 
 }  // namespace tritrace

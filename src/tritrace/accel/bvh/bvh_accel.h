@@ -4,6 +4,9 @@
 // exactly the hits of BruteForceAccel, ties included.
 #pragma once
 
+#include <atomic>
+#include <cstdint>
+
 #include "tritrace/accel/accel.h"
 #include "tritrace/accel/bvh/wide_bvh.h"
 #include "tritrace/geometry/intersect.h"
@@ -44,6 +47,18 @@ class BvhAccel final : public Accel {
   // second tree with bigger ones (bvh::incoherent_closest_config), on which single rays and
   // incoherent packets take fewer steps to their closest hit.
   const bvh::WideBvh& closest_tree() const { return closest_.nodes.empty() ? bvh_ : closest_; }
+  // The tree of occluded_incoherent: tree(), or closest_tree() where that is a second tree and the
+  // rays given to occluded_incoherent take fewer steps through it. One call in
+  // kOccludedProbeEvery (per thread) is traced through both trees, its node and leaf visits
+  // counted and priced as the SAH prices them, and once kOccludedProbeRays rays have been counted
+  // each count chooses again from all counted so far: a frame's first tiles alone, whose rays may
+  // be unlike the rest (sky or ground), do not decide. tree() until then. The answers are the same
+  // through either tree.
+  static constexpr uint64_t kOccludedProbeEvery = 128;
+  static constexpr uint64_t kOccludedProbeRays = 2048;
+  const bvh::WideBvh& occluded_tree() const {
+    return occluded_choice_.load(std::memory_order_relaxed) == kCoarse ? closest_ : bvh_;
+  }
   Kernel kernel() const { return kernel_; }
 
  private:
@@ -57,6 +72,16 @@ class BvhAccel final : public Accel {
   // incoherent_packets_ and interleave_ for closest_tree()
   bool closest_packets_ = false;
   [[maybe_unused]] bool closest_interleave_ = false;
+  // occluded_tree()'s choice and the probe that makes it: node and leaf-block visits of the probed
+  // rays through each tree ([0] tree(), [1] closest_tree()) and the SAH's prices of the two.
+  enum : int { kFine, kCoarse };
+  mutable std::atomic<int> occluded_choice_{kFine};
+  bool probes_occluded_ = false;  // a second tree and single shadow rays: the choice is counted
+  mutable std::atomic<uint64_t> probe_rays_{0};
+  mutable std::atomic<uint64_t> probe_nodes_[2] = {0, 0}, probe_blocks_[2] = {0, 0};
+  float node_price_ = 1.0f, block_price_ = 1.0f;
+
+  void probe_occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const;
 };
 
 }  // namespace tritrace
