@@ -13,6 +13,29 @@
 
 namespace tritrace::simd {
 
+#if defined(__AVX2__)
+// The AVX 8 x 8 transpose (8 loads, 24 shuffles; far cheaper than 8 gathers of the same data):
+// out[c] holds column c of the rows, lane l from rows[l][c]. Moves only: the bits are the rows'.
+inline void transpose_8x8(const float* const rows[8], __m256 out[8]) {
+  __m256 r[8], t[8], u[8];
+  for (int i = 0; i < 8; ++i) r[i] = _mm256_loadu_ps(rows[i]);
+  for (int i = 0; i < 8; i += 2) {
+    t[i] = _mm256_unpacklo_ps(r[i], r[i + 1]);
+    t[i + 1] = _mm256_unpackhi_ps(r[i], r[i + 1]);
+  }
+  for (int i = 0; i < 8; i += 4) {
+    u[i] = _mm256_shuffle_ps(t[i], t[i + 2], 0x44);
+    u[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], 0xEE);
+    u[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0x44);
+    u[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0xEE);
+  }
+  for (int c = 0; c < 4; ++c) {
+    out[c] = _mm256_permute2f128_ps(u[c], u[c + 4], 0x20);
+    out[c + 4] = _mm256_permute2f128_ps(u[c], u[c + 4], 0x31);
+  }
+}
+#endif
+
 #if defined(__AVX512F__)
 // GCC 12 reports its own _mm512_undefined_ps() (inside sqrt/min/max/cvtt) as used uninitialized
 // once inlined into larger functions; the zero-masked forms with every lane on are the same
@@ -336,24 +359,11 @@ inline VM first_lanes(int count) {
   return {_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(count), lane))};
 }
 // rows[l] points to 8 floats for each lane l: out[c] holds column c of the rows, lane l from
-// rows[l][c] (the AVX 8 x 8 transpose: far cheaper than 8 gathers of the same data).
+// rows[l][c] (transpose_8x8).
 inline void transpose_rows_of_8(const float* const rows[8], VF out[8]) {
-  __m256 r[8], t[8], u[8];
-  for (int i = 0; i < 8; ++i) r[i] = _mm256_loadu_ps(rows[i]);
-  for (int i = 0; i < 8; i += 2) {
-    t[i] = _mm256_unpacklo_ps(r[i], r[i + 1]);
-    t[i + 1] = _mm256_unpackhi_ps(r[i], r[i + 1]);
-  }
-  for (int i = 0; i < 8; i += 4) {
-    u[i] = _mm256_shuffle_ps(t[i], t[i + 2], 0x44);
-    u[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], 0xEE);
-    u[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0x44);
-    u[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0xEE);
-  }
-  for (int c = 0; c < 4; ++c) {
-    out[c] = {_mm256_permute2f128_ps(u[c], u[c + 4], 0x20)};
-    out[c + 4] = {_mm256_permute2f128_ps(u[c], u[c + 4], 0x31)};
-  }
+  __m256 columns[8];
+  transpose_8x8(rows, columns);
+  for (int c = 0; c < 8; ++c) out[c] = {columns[c]};
 }
 inline float hmin(VF a) {
   __m128 m = _mm_min_ps(_mm256_castps256_ps128(a.v), _mm256_extractf128_ps(a.v, 1));

@@ -16,6 +16,7 @@
 
 #include "tritrace/math/offset_ray.h"
 #include "tritrace/math/sampling.h"
+#include "tritrace/math/simd_lanes.h"
 
 namespace tritrace::lanes {
 
@@ -145,25 +146,13 @@ inline void store_mask(int32_t* p, I v) {
 // gathering the same 64 numbers lane by lane takes 64 loads and 56 inserts. Moves only: each lane
 // has the bits stored there (floats the caller does not use may be any bytes of the object).
 inline void transpose8(const void* const* objects, size_t offset, F out[kWidth]) {
-  __m256 r[8], t[8], u[8];
+  const float* rows[8];
   for (size_t i = 0; i < 8; ++i) {
-    r[i] = _mm256_loadu_ps(
-        reinterpret_cast<const float*>(static_cast<const char*>(objects[i]) + offset));
+    rows[i] = reinterpret_cast<const float*>(static_cast<const char*>(objects[i]) + offset);
   }
-  for (size_t i = 0; i < 8; i += 2) {
-    t[i] = _mm256_unpacklo_ps(r[i], r[i + 1]);
-    t[i + 1] = _mm256_unpackhi_ps(r[i], r[i + 1]);
-  }
-  for (size_t i = 0; i < 8; i += 4) {
-    u[i] = _mm256_shuffle_ps(t[i], t[i + 2], 0x44);
-    u[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], 0xEE);
-    u[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0x44);
-    u[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0xEE);
-  }
-  for (size_t c = 0; c < 4; ++c) {
-    out[c] = reinterpret_cast<F>(_mm256_permute2f128_ps(u[c], u[c + 4], 0x20));
-    out[c + 4] = reinterpret_cast<F>(_mm256_permute2f128_ps(u[c], u[c + 4], 0x31));
-  }
+  __m256 columns[8];
+  simd::transpose_8x8(rows, columns);
+  for (size_t c = 0; c < 8; ++c) out[c] = reinterpret_cast<F>(columns[c]);
 }
 inline V3 v3(const F* columns) {
   return {columns[0], columns[1], columns[2]};
