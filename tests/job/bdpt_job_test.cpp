@@ -200,14 +200,23 @@ TEST(BdptJob, DenoiseIsTheDenoiserOnTheFilmAndTimeLimitPassesAreTheOneRender) {
 // --spp-range parts of a bdpt render (light tracing's splats included), written as partial films
 // and merged in any order, are the one-process image bit for bit: the light image is an integer
 // sum, carried by the partial film.
-TEST(BdptJob, SampleRangePartsMergeIntoTheOneProcessImage) {
+// With the caustic strategy too (scenes/caustics.json: each part builds the same guide from the
+// same pre-pass, and the guided directions are numbers of the sample's own).
+class BdptJobScenes : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(BdptJobScenes, SampleRangePartsMergeIntoTheOneProcessImage) {
   JobSettings whole_settings = small_bdpt("cornell", "21");
+  if (std::string(GetParam()) != "cornell") {
+    whole_settings.scene.clear();
+    whole_settings.file = std::string(TRITRACE_SOURCE_DIR) + "/scenes/" + GetParam();
+  }
   RenderJob whole(whole_settings, load_job_scene(whole_settings));
   whole.prepare();
   const Image want = whole.render().image;
 
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("bdpt_parts_" + std::to_string(::getpid()));
+  const std::string name = std::string(GetParam()) == "cornell" ? "cornell" : "caustics";
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("bdpt_parts_" + std::to_string(::getpid()) + "_" + name);
   std::filesystem::create_directories(dir);
   std::vector<std::string> files;
   for (const char* range : {"16:21", "0:8", "8:16"}) {
@@ -235,6 +244,11 @@ TEST(BdptJob, SampleRangePartsMergeIntoTheOneProcessImage) {
   EXPECT_EQ(back.film.splats().data(), film.splats().data());
   std::filesystem::remove_all(dir);
 }
+
+INSTANTIATE_TEST_SUITE_P(Scenes, BdptJobScenes, ::testing::Values("cornell", "caustics.json"),
+                         [](const auto& info) {
+                           return std::string(info.param) == "cornell" ? "Cornell" : "Caustics";
+                         });
 
 TEST(BdptJob, SceneFilesAskForItByName) {
   const std::string text = R"({"meshes": [{"generator": "cornell-area"}],
