@@ -2,9 +2,11 @@
 // per camera sample one camera subpath and one light subpath, every connection strategy (s, t)
 // with t >= 2, and light tracing to the camera (t = 1, s >= 2: a light subpath vertex connected to
 // the pinhole or the lens, added to the pixel it projects to through the film's SplatBuffer; not
-// to an orthographic camera without a lens, which it cannot reach), combined by multiple importance
-// sampling (power heuristic). Point, spot and directional lights, emissive triangles and the
-// environment (a constant colour or a map). docs/BDPT.md has the design.
+// to an orthographic camera without a lens, which it cannot reach), and where light reaches
+// surfaces through specular ones a caustic strategy (camera paths guided by the photons of a
+// pre-pass, render/caustic_guide.h), combined by multiple importance sampling (power heuristic).
+// Point, spot and directional lights, emissive triangles and the environment (a constant colour or
+// a map). docs/BDPT.md has the design.
 #pragma once
 
 #include <array>
