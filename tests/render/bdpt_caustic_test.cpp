@@ -90,14 +90,14 @@ TEST(BdptCaustics, NoGuideWithoutSpecularSurfacesOrWhenTurnedOff) {
 // The caustic strategy changes how a caustic path's contribution is split between estimators,
 // never the total: the image mean equals the path tracer's and bdpt's without the guide.
 TEST(BdptCaustics, AgreesWithThePathTracerAndWithoutTheGuide) {
-  const Scene scene = caustics(24);
+  const Scene scene = caustics(20);
   const BvhAccel accel(scene.mesh, kDefaultKernel);
   const BdptIntegrator guided(scene);
   ASSERT_NE(guided.caustic_guide(scene, accel), nullptr);
-  const auto with = mean_of_renders(scene, accel, guided, 64, 10, 8);
-  expect_same_mean(with, mean_of_renders(scene, accel, PathIntegrator(scene), 256, 20, 8), 0.01);
+  const auto with = mean_of_renders(scene, accel, guided, 64, 10, 6);
+  expect_same_mean(with, mean_of_renders(scene, accel, PathIntegrator(scene), 256, 20, 6), 0.01);
   expect_same_mean(
-      with, mean_of_renders(scene, accel, BdptIntegrator(scene, {.caustic_paths = 0}), 64, 30, 8),
+      with, mean_of_renders(scene, accel, BdptIntegrator(scene, {.caustic_paths = 0}), 64, 30, 6),
       0.01);
   // The strategy is there: the same samples give another image without it.
   EXPECT_FALSE(
