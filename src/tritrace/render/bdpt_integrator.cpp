@@ -664,7 +664,10 @@ class BdptTracer {
   // of light tracing's connection to an orthographic camera with a lens; `ratio` as mis_weight's.
   // `dir`: for t >= 2 and s >= 1 the connection's direction from camera vertex t - 1 towards light
   // vertex s - 1 as connect computed it (direction()'s value, bit for bit), or null.
-  float connection_weight(int s, int t, float ratio, const glm::vec3* dir = nullptr);
+  // `caustic_q` > 0 (a caustic path): the ratio walk's weight with the caustic strategy among the
+  // strategies (mis_weight_walk) instead of the recursion's.
+  float connection_weight(int s, int t, float ratio, const glm::vec3* dir = nullptr,
+                          float caustic_q = 0.0f);
   // The MIS weights' partial sums (Vertex::mis_sum) along both subpaths, once per sample.
   void prepare_weights(Vertex* light, int nl, Vertex* camera, int nc) const;
   // The weight of strategy (s, t): O(1) from the partial sums (with the settings' weight_check,
@@ -717,19 +720,20 @@ class BdptTracer {
   // by a non-delta lobe there and whose guide cell has photons. The strategy samples them from the
   // camera subpath as far as D, then the direction at D from the guide (density p_g) instead of
   // the Bsdf (p_b), then the specular vertices as the camera subpath would. It joins the others in
-  // the power heuristic: its density over the camera subpath's own (s = 0) is p_g / p_b, so with
-  // q = (p_g / p_b)^2 and w_0 the weight of s = 0 among the other strategies, a path's weights
+  // the power heuristic: its density over the camera subpath's own (s = 0) is n p_g / p_b with its
+  // n = kCausticDirections samples, so with q = (n p_g / p_b)^2 (caustic_q_of) and w_0 the weight
+  // of s = 0 among the other strategies, a path's weights
   // become w / (1 + q w_0) for every other strategy and q w_0 / (1 + q w_0) for this one.
   // q of the path of strategy (s, t) (light vertices [0, s), camera vertices [0, t), the camera
   // at `eye`), 0 where it is not a caustic path or the guide cannot sample it.
   float caustic_q(int s, int t, glm::vec3 eye) const;
   // The guide's strategy for sample k, after its connections are added (flush): at each camera
-  // vertex with a guide cell, from the last to the first, one direction from the guide followed
-  // through specular surfaces, its vertices written over the camera subpath past that vertex (no
-  // longer read) so that the ratio walk weighs the path; every emitter met after at least one
-  // specular surface adds its weighted term. Its numbers come from a PCG32 stream of the sample's
-  // own (pixel key and sample index), not from the sampler's dimensions, so that nothing else the
-  // sample draws moves.
+  // vertex with a guide cell, from the last to the first, kCausticDirections directions from the
+  // guide, each followed through specular surfaces, its vertices written over the camera subpath
+  // past that vertex (no longer read) so that the ratio walk weighs the path; every emitter met
+  // after at least one specular surface adds its weighted term. Its numbers come from a PCG32
+  // stream of the sample's own (pixel key and sample index), not from the sampler's dimensions, so
+  // that nothing else the sample draws moves.
   void caustic_strategy(size_t k, const Sampler& sampler);
   // One incoherent ray (Accel::intersect's single ray takes the batch path, packets on small
   // trees).
@@ -738,8 +742,16 @@ class BdptTracer {
     accel_.intersect_incoherent(std::span<const Ray>(&ray, 1), std::span<Hit>(&hit, 1));
     return hit;
   }
-  // Queues a term weighted already that needs no shadow ray (s = 0 on a caustic path).
-  void queue_fixed(int t, glm::vec3 term);
+  // q of a path whose direction at D has guide density pg and Bsdf density pb: the power
+  // heuristic's (or the balance heuristic's) ratio of the strategy's density, counting its
+  // kCausticDirections samples (Veach 1997, sec. 9.2), to that of s = 0; at most 1e30.
+  float caustic_q_of(float pg, float pb) const {
+    const double ratio = kCausticDirections * static_cast<double>(pg) / static_cast<double>(pb);
+    return static_cast<float>(std::min(it_.settings_.balance ? ratio : ratio * ratio, 1e30));
+  }
+  // s = 0 at camera vertex t - 1 of the selected sample on a caustic path (q > 0), outside the
+  // pilot: queued with its weight w_0 / (1 + q w_0), which needs no shadow ray.
+  void queue_caustic_s0(int t, glm::vec3 contribution, float q);
 
   const BdptIntegrator& it_;
   const Scene& scene_;
@@ -793,7 +805,7 @@ class BdptTracer {
   float weight_of(const Pending& p) {
     return connection_weight(
         p.s, p.t, p.t == 1 ? p.count_ratio * it_.settings_.mis_count_scale : pixel_ratio_,
-        p.t >= 2 && p.s >= 1 ? &p.dir : nullptr);
+        p.t >= 2 && p.s >= 1 ? &p.dir : nullptr, p.caustic_q);
   }
   int pending_count_ = 0;
   int ray_count_ = 0;
@@ -1416,22 +1428,7 @@ void BdptTracer::flush() {
       continue;
     }
     select(p.sample);
-    float weight = 1.0f;
-    if (!unweighted) {
-      if (p.caustic_q > 0.0f) {
-        // A caustic path: the ratio walk's weight, and its s = 0 term for w_0.
-        const float ratio = p.t == 1 ? p.count_ratio * it_.settings_.mis_count_scale : pixel_ratio_;
-        Vertex& eye = camera_[0];
-        const glm::vec3 saved = eye.p;
-        if (p.t == 1 && scene_.camera.is_orthographic())
-          eye.p = ortho_lens_point(light_[p.s - 1].p);
-        weight = mis_weight_walk(light_, camera_, p.s, p.t, ratio, nullptr, p.caustic_q);
-        eye.p = saved;
-      } else {
-        weight = weight_of(p);
-      }
-    }
-    const glm::vec3 term = p.contribution * weight;
+    const glm::vec3 term = p.contribution * (unweighted ? 1.0f : weight_of(p));
     // Density ratios of vertices a few ULPs apart can overflow; such a term (measure zero) is
     // dropped rather than let a NaN or infinity into the pixel.
     if (!std::isfinite(term.x + term.y + term.z)) continue;
@@ -1727,14 +1724,17 @@ void BdptTracer::select(size_t k) {
   pixel_ratio_ = current_->pixel_ratio;
 }
 
-float BdptTracer::connection_weight(int s, int t, float ratio, const glm::vec3* dir) {
-  if (t != 1 || !scene_.camera.is_orthographic()) {
-    return mis_weight(light_, camera_, s, t, ratio, dir);
-  }
+float BdptTracer::connection_weight(int s, int t, float ratio, const glm::vec3* dir,
+                                    float caustic_q) {
+  const auto weigh = [&](const glm::vec3* d) {
+    return caustic_q > 0.0f ? mis_weight_walk(light_, camera_, s, t, ratio, nullptr, caustic_q)
+                            : mis_weight(light_, camera_, s, t, ratio, d);
+  };
+  if (t != 1 || !scene_.camera.is_orthographic()) return weigh(dir);
   Vertex& eye = camera_[0];
   const glm::vec3 saved = eye.p;
   eye.p = ortho_lens_point(light_[s - 1].p);
-  const float w = mis_weight(light_, camera_, s, t, ratio);
+  const float w = weigh(nullptr);
   eye.p = saved;
   return w;
 }
@@ -1962,8 +1962,7 @@ void BdptTracer::connect_camera_only(size_t k) {
       if (max_component(contribution) > 0.0f) {
         const float q = caustic_q(0, t, camera[0].p);
         if (q > 0.0f) {
-          const float w0 = weighted ? mis_weight(light, camera, 0, t, pixel_ratio_) : 1.0f;
-          queue_fixed(t, contribution * (w0 / (1.0f + q * w0)));
+          queue_caustic_s0(t, contribution, q);
         } else {
           add(0, t, contribution, false, Ray{}, nullptr);
         }
@@ -2200,10 +2199,7 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
         contribution = pt.beta * emission(scene_, pt, pt.wo);
         const float q = caustic_q(0, t, camera[0].p);
         if (q > 0.0f && settings.pilot == nullptr) {
-          if (max_component(contribution) > 0.0f) {
-            const float w0 = mis_weight(light, camera, 0, t, pixel_ratio_);
-            queue_fixed(t, contribution * (w0 / (1.0f + q * w0)));
-          }
+          if (max_component(contribution) > 0.0f) queue_caustic_s0(t, contribution, q);
           continue;
         }
         // (The pilot weighs it by the walk with the caustic strategy, in pilot_record.)
@@ -2282,15 +2278,13 @@ float BdptTracer::caustic_q(int s, int t, glm::vec3 eye) const {
   if (!(pg > 0.0f)) return 0.0f;
   const glm::vec3 towards_camera = k + 1 == n - 1 ? eye : at(k + 1).p;
   const float pb = surface_pdf(d, glm::normalize(towards_camera - d.p), w);
-  const double ratio = kCausticDirections * static_cast<double>(pg) / static_cast<double>(pb);
-  const double q = it_.settings_.balance ? ratio : ratio * ratio;
-  return static_cast<float>(std::min(q, 1e30));
+  return caustic_q_of(pg, pb);
 }
 
-void BdptTracer::queue_fixed(int t, glm::vec3 term) {
-  queue(0, t, term, false, Ray{});
-  Pending& p = pending_[static_cast<size_t>(pending_count_ - 1)];
-  p.weighted = true;
+void BdptTracer::queue_caustic_s0(int t, glm::vec3 contribution, float q) {
+  const float w0 = mis_weight(light_, camera_, 0, t, pixel_ratio_);
+  queue(0, t, contribution * (w0 / (1.0f + q * w0)), false, Ray{});
+  pending_[static_cast<size_t>(pending_count_ - 1)].weighted = true;
 }
 
 void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
@@ -2298,13 +2292,12 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
   std::vector<Vertex>& path = thread_subpaths()[k].camera;
   const int nc = current_->nc;
   const int max_vertices = it_.settings_.max_depth + 2;
-  const bool balance = it_.settings_.balance;
   // D is camera vertex i; a caustic path needs at least two vertices after it. From the last D
   // down: each writes over the camera subpath past its D only.
   for (int i = std::min(nc - 1, max_vertices - 3); i >= 1; --i) {
-    Vertex& d = path[static_cast<size_t>(i)];
-    if (d.type != VertexType::kSurface || !d.connectible) continue;
-    const CausticGuide::Cell cell = guide_->cell(d.p);
+    const Vertex& candidate = path[static_cast<size_t>(i)];
+    if (candidate.type != VertexType::kSurface || !candidate.connectible) continue;
+    const CausticGuide::Cell cell = guide_->cell(candidate.p);
     if (cell.count == 0) continue;
     for (int j = 0; j < kCausticDirections; ++j) {
       Vertex& d = path[static_cast<size_t>(i)];  // (again: the subpath may have moved)
@@ -2318,9 +2311,7 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
       const glm::vec3 f = surface_f(d, d.wo, w);
       if (!(max_component(f) > 0.0f)) continue;
       const float pb = surface_pdf(d, d.wo, w);
-      // The strategy's density counts its kCausticDirections samples (Veach 1997, sec. 9.2).
-      const double ratio = kCausticDirections * static_cast<double>(pg) / static_cast<double>(pb);
-      const auto q = static_cast<float>(std::min(balance ? ratio : ratio * ratio, 1e30));
+      const float q = caustic_q_of(pg, pb);
       glm::vec3 beta =
           d.beta * f *
           (std::abs(glm::dot(d.ng, w)) / (pg * static_cast<float>(kCausticDirections)));
@@ -2358,7 +2349,7 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
             // relative to this one's are the walk's relative to s = 0 over q.
             pilot_strategies_.assign(2, {1.0f, false});  // this strategy, then s = 0
             (void)mis_weight_walk(light_, camera_, 0, count, pixel_ratio_, &pilot_strategies_);
-            for (size_t j = 1; j < pilot_strategies_.size(); ++j) pilot_strategies_[j].first /= q;
+            for (size_t m = 1; m < pilot_strategies_.size(); ++m) pilot_strategies_[m].first /= q;
             const double v = luminance(beta * le);
             if (v > 0.0 && std::isfinite(v)) {
               add_pilot_contribution(tally->samples[first_ + k], v, false, pilot_strategies_);
