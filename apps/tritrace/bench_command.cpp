@@ -49,7 +49,8 @@ struct Record {
   double mrays_per_s = 0.0;
   std::string integrator;  // "lab", "path" or "bdpt"
   uint32_t spp = 1;
-  double mpaths_per_s = 0.0;                     // camera samples (paths) per second, in millions
+  double light_paths = 0.0;   // bdpt: the share of samples with a light subpath (0: not bdpt)
+  double mpaths_per_s = 0.0;  // camera samples (paths) per second, in millions
   std::optional<double> ratio_to_embree;         // the fastest non-robust Embree mode
   std::optional<double> ratio_to_embree_robust;  // embree-robust
   // --denoise: the denoiser's time on each frame (median); frame_ms is then the render with AOVs.
@@ -74,6 +75,7 @@ nlohmann::json to_json(const Record& r) {
                       {"mrays_per_s", r.mrays_per_s},
                       {"integrator", r.integrator},
                       {"spp", r.spp},
+                      {"light_paths", r.light_paths},
                       {"mpaths_per_s", r.mpaths_per_s},
                       {"threads", r.threads},
                       {"width", r.width},
@@ -123,6 +125,12 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
                   "Samples per pixel of each path-traced frame (default 16; lab: always 1)")
       ->type_name("N")
       ->check(checked(setting_check("--spp")));
+  sub->add_option("--light-paths", args.light_paths,
+                  "bdpt: share of samples that also trace a light subpath, greater than 0 and at "
+                  "most 1, or auto (a pilot chooses it per scene, before the timed frames), as "
+                  "render's --light-paths (default: the scene's, 1)")
+      ->type_name("F|auto")
+      ->check(checked(setting_check("--light-paths")));
   sub->add_option("--accel", args.accels, "Acceleration structure, repeatable (default: all)")
       ->type_name("NAME")
       ->check(checked(setting_check("--accel")));
@@ -173,6 +181,9 @@ int run_bench(const BenchArgs& args) {
     throw Error("--denoise",
                 "times the denoiser on the path tracer's frames; use --integrator path",
                 ExitCode::kUsage);
+  }
+  if (!args.light_paths.empty() && args.integrator != "bdpt") {
+    throw Error("--light-paths", "applies to bdpt; use --integrator bdpt", ExitCode::kUsage);
   }
   IntegratorSpec spec;
   spec.kind = args.integrator == "bdpt" ? IntegratorSpec::Kind::kBdpt
@@ -233,6 +244,7 @@ int run_bench(const BenchArgs& args) {
     options.settings.threads = std::to_string(threads);
     options.settings.integrator = std::string(integrator_name(spec.kind));
     options.settings.spp = std::to_string(spec.spp);
+    options.settings.light_paths = args.light_paths;
     options.threads = threads;
     options.reps = reps;
     options.json = args.json;
@@ -272,6 +284,7 @@ int run_bench(const BenchArgs& args) {
     settings.threads = std::to_string(threads);
     settings.integrator = std::string(integrator_name(spec.kind));
     settings.spp = std::to_string(spec.spp);
+    settings.light_paths = args.light_paths;
     if (args.denoise) settings.aovs = "albedo,normal,depth,variance";
     const LoadedScene loaded = load_job_scene(settings);
     const Scene& scene = loaded.scene;
@@ -333,6 +346,12 @@ int run_bench(const BenchArgs& args) {
           RenderJob job(row, scene, loaded.integrator);
           AccelInfo info;
           job.prepare(&info);
+          r.light_paths = job.light_paths();
+          if (!args.quiet && kind == accels.front()) {
+            if (const std::string lp = job.light_paths_summary(); !lp.empty()) {
+              std::printf("%s: %s\n", scene_name.c_str(), lp.c_str());
+            }
+          }
           r.build_ms = info.build_ms;
           r.bytes_per_tri =
               static_cast<double>(info.structure_bytes) / std::max<size_t>(1, r.triangles);

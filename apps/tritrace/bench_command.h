@@ -18,9 +18,10 @@ struct BenchArgs {
   std::vector<std::string> files;   // scene files (.json) and mesh files, after the built-ins
   std::vector<std::string> accels;  // empty: every accel this build has
   std::string integrator = "lab";
-  std::string width;   // empty: 1920 (path: 256)
-  std::string height;  // empty: 1080 (path: 256)
-  std::string spp;     // path only; empty: 16
+  std::string width;        // empty: 1920 (path: 256)
+  std::string height;       // empty: 1080 (path: 256)
+  std::string spp;          // path only; empty: 16
+  std::string light_paths;  // bdpt only: F or auto; empty: the scene's (as render's)
   std::string reps = "5";
   std::string threads;                  // empty: all cores
   std::vector<std::string> kernels;     // empty: each accel's default kernel

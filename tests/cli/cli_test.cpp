@@ -827,6 +827,35 @@ TEST_F(CliTest, BenchTimesTheBidirectionalPathTracer) {
   }
 }
 
+// --light-paths reaches bench's bdpt frames as it reaches render's: a share given is the one
+// rendered, auto runs the pilot (its line names its choice, one of the five it chooses among), and
+// it is a usage error for the other integrators or out of range.
+TEST_F(CliTest, BenchTakesBdptsShareOfLightPaths) {
+  const RunResult given =
+      Run({"bench", "--integrator", "bdpt", "--width", "16", "--height", "16", "--spp", "2",
+           "--reps", "1", "--accel", "bvh", "--light-paths", "0.25", "--json", "q.json"});
+  ASSERT_EQ(given.exit_code, 0) << given.err;
+  const nlohmann::json quarter = nlohmann::json::parse(ReadFile(work_ / "q.json"));
+  ASSERT_EQ(quarter.size(), 1u);
+  EXPECT_DOUBLE_EQ(quarter[0]["light_paths"].get<double>(), 0.25);
+
+  const RunResult automatic =
+      Run({"bench", "--integrator", "bdpt", "--width", "16", "--height", "16", "--spp", "2",
+           "--reps", "1", "--accel", "bvh", "--light-paths", "auto", "--json", "a.json"});
+  ASSERT_EQ(automatic.exit_code, 0) << automatic.err;
+  EXPECT_NE(automatic.out.find("cornell-area: bdpt --light-paths auto chose"), std::string::npos)
+      << automatic.out;
+  const nlohmann::json chosen = nlohmann::json::parse(ReadFile(work_ / "a.json"));
+  ASSERT_EQ(chosen.size(), 1u);
+  const double f = chosen[0]["light_paths"].get<double>();
+  EXPECT_TRUE(f == 1.0 || f == 0.5 || f == 0.25 || f == 0.125 || f == 0.0625) << f;
+
+  ExpectErrorLine(Run({"bench", "--integrator", "path", "--light-paths", "0.5"}), 2,
+                  "--light-paths", "applies to bdpt");
+  ExpectErrorLine(Run({"bench", "--integrator", "bdpt", "--light-paths", "2"}), 2, "--light-paths",
+                  "at most 1, got '2'");
+}
+
 // --secondary-rays: one frame's bounce and shadow rays recorded through bvh and traced again. The
 // counts come from the camera (pixels x spp camera rays, the rest recorded) and the recording
 // accel's replay must give its own answers back bit for bit.
