@@ -128,7 +128,7 @@ void add_scene_flags(CLI::App& app, JobSettings& flags) {
       ->check(rule("--clamp"));
   app.add_option("--light-paths", flags.light_paths,
                  "Share of bdpt's samples that also trace a light subpath, greater than 0 and at "
-                 "most 1 (default: the scene's, 1): the others keep the camera subpath, its "
+                 "most 1 (default: the scene's, auto): the others keep the camera subpath, its "
                  "emitter hits and next-event estimation; the rest is divided by the share, so "
                  "the image stays unbiased; auto: a pilot of 16384 samples chooses it for the "
                  "scene among 1, 1/2, 1/4, 1/8 and 1/16 by estimated variance x counted work, "

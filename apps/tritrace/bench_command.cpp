@@ -128,7 +128,7 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& args) {
   sub->add_option("--light-paths", args.light_paths,
                   "bdpt: share of samples that also trace a light subpath, greater than 0 and at "
                   "most 1, or auto (a pilot chooses it per scene, before the timed frames), as "
-                  "render's --light-paths (default: the scene's, 1)")
+                  "render's --light-paths (default: the scene's, auto)")
       ->type_name("F|auto")
       ->check(checked(setting_check("--light-paths")));
   sub->add_option("--accel", args.accels, "Acceleration structure, repeatable (default: all)")

@@ -2239,6 +2239,36 @@ TEST_F(CliTest, RenderDenoiseIsDenoiseOfTheRendersLayers) {
   ExpectErrorLine(lab, 2, "--denoise", "applies to the path tracer");
 }
 
+// A merge of bdpt's parts records the share of light subpaths the one-process render records
+// (tritrace.lightPaths, tritrace.lightPathsChosenBy): the share given. With auto (the default) the
+// parts carry no choice, so the merged header says auto and no share.
+TEST_F(DistributedCliTest, BdptMergeRecordsTheShareOfLightPaths) {
+  for (const std::string share : {"0.25", "1", "auto", ""}) {
+    std::vector<std::string> flags = {"--integrator", "bdpt"};
+    if (!share.empty()) flags.insert(flags.end(), {"--light-paths", share});
+    Whole("whole.exr", flags);
+    std::vector<std::string> a = flags, b = flags;
+    a.insert(a.end(), {"--spp-range", "0:8"});
+    b.insert(b.end(), {"--spp-range", "8:20"});
+    RenderPart("a.exr", a);
+    RenderPart("b.exr", b);
+    ASSERT_EQ(Merge({"a.exr", "b.exr"}, "merged.exr").exit_code, 0);
+    const ExrContents whole = read_exr_channels((work_ / "whole.exr").string());
+    const ExrContents merged = read_exr_channels((work_ / "merged.exr").string());
+    if (share == "auto" || share.empty()) {
+      EXPECT_EQ(whole.strings.at("tritrace.lightPathsChosenBy"), "auto");
+      EXPECT_EQ(merged.strings.at("tritrace.lightPathsChosenBy"), "auto");
+      EXPECT_EQ(merged.numbers.count("tritrace.lightPaths"), 0u);
+    } else {
+      const double expected = std::stod(share);
+      EXPECT_EQ(whole.numbers.at("tritrace.lightPaths"), expected) << share;
+      EXPECT_EQ(merged.numbers.at("tritrace.lightPaths"), expected) << share;
+      EXPECT_EQ(whole.strings.at("tritrace.lightPathsChosenBy"), "setting");
+      EXPECT_EQ(merged.strings.at("tritrace.lightPathsChosenBy"), "setting");
+    }
+  }
+}
+
 // The EXR records the path tracer's sampler (tritrace.sampler), and `tritrace denoise` divides the
 // variance layer by that sampler's overestimate, so a render with --sampler independent denoises
 // later as render --denoise did. A file without the attribute (as tritrace wrote before) is taken

@@ -202,8 +202,8 @@ std::vector<ExrAttribute> render_attributes(const RenderRecord& record) {
   if (record.sampler) {
     out.push_back({"tritrace.sampler", std::string(sampler_name(*record.sampler))});
   }
-  if (record.light_paths > 0.0f) {
-    out.push_back({"tritrace.lightPaths", record.light_paths});
+  if (record.light_paths > 0.0f) out.push_back({"tritrace.lightPaths", record.light_paths});
+  if (record.light_paths > 0.0f || record.light_paths_auto) {
     out.push_back(
         {"tritrace.lightPathsChosenBy", std::string(record.light_paths_auto ? "auto" : "setting")});
   }
@@ -233,6 +233,20 @@ RenderRecord merged_record(const RenderIdentity& identity, const Film& film, dou
     const size_t from = at + sampler_key.size();
     r.sampler = parse_sampler(
         std::string_view(identity.settings).substr(from, identity.settings.find(' ', from) - from));
+  }
+  // bdpt: the share the identity names (absent: 1). With auto every part made the pilot's choice,
+  // which the parts do not carry: the merged header says auto and no share.
+  if (identity.integrator == "bdpt") {
+    const std::string share_key = " light_paths=";
+    const size_t at = identity.settings.find(share_key);
+    const std::string_view share =
+        at == std::string::npos ? std::string_view("1")
+                                : std::string_view(identity.settings)
+                                      .substr(at + share_key.size(),
+                                              identity.settings.find(' ', at + share_key.size()) -
+                                                  (at + share_key.size()));
+    r.light_paths_auto = share == "auto";
+    if (!r.light_paths_auto) r.light_paths = std::strtof(std::string(share).c_str(), nullptr);
   }
   return r;
 }

@@ -57,7 +57,8 @@ struct RenderRecord {
 // tritrace.timeLimit and tritrace.noiseThreshold (float, when set), tritrace.stoppedBy (string:
 // "spp", "converged" or "time limit"), tritrace.sampler (string: "sobol" or "independent", path
 // renders), tritrace.lightPaths (float, bdpt: the share of samples with a light subpath) and
-// tritrace.lightPathsChosenBy (string, bdpt: "auto" for the pilot's choice, else "setting"). Only
+// tritrace.lightPathsChosenBy (string, bdpt: "auto" for the pilot's choice, else "setting"; a merge
+// of auto parts has no lightPaths, which the parts do not carry). Only
 // the two times differ between runs of the same render.
 // None for a record of no render (spp 0: tritrace denoise's).
 std::vector<ExrAttribute> render_attributes(const RenderRecord& record);
@@ -67,7 +68,8 @@ double film_mean_spp(const Film& film);
 
 // The record of a film merged from the parts of the render `identity` (tritrace merge's): the
 // render's spp and noise threshold, with adaptive sampling the mean spp when the film keeps the spp
-// AOV, and `seconds`, the merge's own time (parts do not carry theirs).
+// AOV, bdpt's share of light subpaths (or that auto chose it), and `seconds`, the merge's own time
+// (parts do not carry theirs).
 RenderRecord merged_record(const RenderIdentity& identity, const Film& film, double seconds);
 
 // A whole render's image and the AOV images asked for (empty images for the others).
