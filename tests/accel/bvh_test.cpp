@@ -16,6 +16,7 @@
 #include "query_meshes.h"
 #include "test_rays.h"
 #include "tritrace/accel/brute_force.h"
+#include "tritrace/accel/bvh/packet_traversal.h"
 #include "tritrace/render/lab_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/cornell_box.h"
@@ -255,12 +256,43 @@ static std::vector<Ray> rays_leaving_surface(const TriangleMesh& mesh, int n, ui
   return rays;
 }
 
-// occluded_incoherent on a small mesh's two trees: a sample of the rays is traced through both and
-// chooses the tree of the rest (BvhAccel::occluded_tree()); every answer, before and after the
-// choice, is brute force's. Rays leaving a closed sphere take fewer steps through the
+// Shadow rays in a room towards a small light, as the path tracer's in scenes/glass.json: from
+// points of the floor and the walls (a little inside) to random points of a 0.5 x 0.5 square
+// under the ceiling, ending just before it; each 16 rays start within 0.25 of one point, as a
+// tile's shadow rays start near one another.
+static std::vector<Ray> rays_to_small_light(int n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f), jitter(-0.25f, 0.25f);
+  std::vector<Ray> rays;
+  glm::vec3 centre(0.0f);
+  int wall = 0;
+  for (int i = 0; i < n; ++i) {
+    if (i % 16 == 0) {
+      wall = (i / 16) % 3;  // the floor, a side wall, the back wall
+      centre = {-3.5f + 7.0f * unit(rng), 0.5f + 5.0f * unit(rng), -3.5f + 7.0f * unit(rng)};
+    }
+    glm::vec3 from = centre + glm::vec3(jitter(rng), jitter(rng), jitter(rng));
+    if (wall == 0) from.y = 0.01f;
+    if (wall == 1) from.x = -3.99f;
+    if (wall == 2) from.z = -3.99f;
+    const glm::vec3 to(-0.25f + 0.5f * unit(rng), 5.99f, -0.25f + 0.5f * unit(rng));
+    Ray r;
+    r.origin = from;
+    r.dir = glm::normalize(to - from);
+    r.tmax = 0.999f * glm::length(to - from);
+    rays.push_back(r);
+  }
+  return rays;
+}
+
+// occluded_incoherent on a small mesh's two trees: a sample of the rays is traced every way (one
+// at a time and, under kAuto, as packets, through both trees) and chooses the way of the rest
+// (BvhAccel::occluded_tree(), occluded_as_packets()); every answer, before and after the choice,
+// is brute force's. Rays leaving a closed sphere take fewer steps one at a time through the
 // second tree's bigger leaves (as scenes/sky.json's shadow rays leave its spheres,
 // docs/PERFORMANCE.md, issue 27), so there the choice is the second tree and its any hit is
-// checked too.
+// checked too; rays across a room to a small light take less work as packets (as glass.json's),
+// so there under kAuto the choice is packets and their answers are checked.
 TEST(BvhSingleRayTraversal, SmallMeshShadowRaysOnTheTreeASampleOfThemChose) {
   struct Case {
     const char* name;
@@ -276,8 +308,26 @@ TEST(BvhSingleRayTraversal, SmallMeshShadowRaysOnTheTreeASampleOfThemChose) {
                 0);
   }
   const TriangleMesh terrain = make_terrain_scene(3000).mesh;
+  // A room of 8 x 6 x 8 (floor, ceiling, three walls, two triangles each) with a sphere of radius
+  // 1.5 on the floor under the light.
+  TriangleMesh room;
+  const TriangleMesh ball = icosphere(3, 1.5).mesh();
+  for (size_t t = 0; t < ball.size(); ++t) {
+    const glm::vec3 lift(0.0f, 1.5f, 0.0f);
+    room.add(ball.vertex(t, 0) + lift, ball.vertex(t, 1) + lift, ball.vertex(t, 2) + lift, 0);
+  }
+  auto quad = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d) {
+    room.add(a, b, c, 0);
+    room.add(a, c, d, 0);
+  };
+  quad({-4, 0, -4}, {4, 0, -4}, {4, 0, 4}, {-4, 0, 4});
+  quad({-4, 6, -4}, {4, 6, -4}, {4, 6, 4}, {-4, 6, 4});
+  quad({-4, 0, -4}, {-4, 6, -4}, {-4, 6, 4}, {-4, 0, 4});
+  quad({4, 0, -4}, {4, 6, -4}, {4, 6, 4}, {4, 0, 4});
+  quad({-4, 0, -4}, {4, 0, -4}, {4, 6, -4}, {-4, 6, -4});
   const Case cases[] = {{"spheres", spheres, rays_leaving_surface(spheres, 3000, 5)},
-                        {"terrain", terrain, awkward_rays(terrain, 3000, 31)}};
+                        {"terrain", terrain, awkward_rays(terrain, 3000, 31)},
+                        {"room", room, rays_to_small_light(3000, 7)}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     ASSERT_LT(c.mesh.size(), bvh::kFineLeavesBelow);
@@ -310,6 +360,11 @@ TEST(BvhSingleRayTraversal, SmallMeshShadowRaysOnTheTreeASampleOfThemChose) {
       EXPECT_EQ(mismatches, 0);
       if (c.name == std::string("spheres")) {
         EXPECT_EQ(&accel.occluded_tree(), &accel.closest_tree());
+        EXPECT_FALSE(accel.occluded_as_packets());
+      }
+      if (c.name == std::string("room")) {
+        EXPECT_EQ(accel.occluded_as_packets(),
+                  traversal == BvhTraversal::kAuto && bvh::kPacketSize > 0);
       }
     }
   }

@@ -615,6 +615,10 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConf
     // scenes/glass.json, whose rays to a small light pass more of its looser leaf boxes: which
     // tree serves a scene's rays is counted on a sample of them (occluded_tree()).
     probes_occluded_ = !incoherent_packets_;
+    // Packets of shadow rays to one small light (scenes/glass.json) took 1.5x less time than single
+    // rays, packets of rays from all over three spheres towards the sun (scenes/sky.json) 1.2-1.6x
+    // more (docs/PERFORMANCE.md, issue 27): counted on the sample too.
+    probes_packets_ = packets_;
     node_price_ = config.traversal_cost;
     block_price_ = config.block_cost;
   }
@@ -700,8 +704,17 @@ void BvhAccel::occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t>
       return;
     }
   }
-  const bool coarse = occluded_choice_.load(std::memory_order_relaxed) == kCoarse;
+  const int choice = occluded_choice_.load(std::memory_order_relaxed);
+  const bool coarse = (choice & kCoarse) != 0;
   const bvh::WideBvh& tree = coarse ? closest_ : bvh_;
+  if constexpr (bvh::kPacketSize > 0) {
+    if (choice & kPackets) {
+      for_each_packet(rays, occluded, [&](auto packet, auto out) {
+        bvh::occluded_packet(tree, kernel_, packet, out);
+      });
+      return;
+    }
+  }
 #if defined(__AVX2__)
   if ((coarse ? closest_interleave_ : interleave_) && rays.size() > 1) {
     any_hits_interleaved(tree, rays, occluded);
@@ -714,9 +727,10 @@ void BvhAccel::occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t>
   });
 }
 
-// Traces `rays` through both trees, counting the steps, and once kOccludedProbeRays rays have been
-// counted (by any thread) chooses the tree whose steps so far, priced as the SAH prices them, cost
-// less; tree() on a tie. Counts from threads that probe at once may land in either choice.
+// Traces `rays` through both trees one at a time, and as packets where probes_packets_, counting
+// the work, and once kOccludedProbeRays rays have been counted (by any thread) chooses the way
+// whose work so far, priced as the SAH prices it, costs least; tree() one ray at a time on a tie.
+// Counts from threads that probe at once may land in either choice.
 void BvhAccel::probe_occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
   StepCount steps[2];
   with_kernel(kernel_, [&]<Kernel K>() {
@@ -731,16 +745,54 @@ void BvhAccel::probe_occluded(std::span<const Ray> rays, std::span<uint8_t> occl
     probe_nodes_[t].fetch_add(steps[t].nodes, std::memory_order_relaxed);
     probe_blocks_[t].fetch_add(steps[t].blocks, std::memory_order_relaxed);
   }
+  // Packets cost 1.5-2x single rays on scenes/sky.json's shadow rays, so they are probed in one
+  // probe in kPacketProbeEvery only, their counts weighted by as much.
+  static thread_local uint64_t probes = 0;
+  if constexpr (bvh::kPacketSize > 0) {
+    if (probes_packets_ && probes++ % kPacketProbeEvery == 0) {
+      const bvh::WideBvh* trees[2] = {&bvh_, &closest_};
+      std::array<uint8_t, bvh::kPacketSize> answers{};
+      for (int t = 0; t < 2; ++t) {
+        bvh::PacketSteps work;
+        for_each_packet(rays, occluded, [&](auto packet, auto out) {
+          const std::span<uint8_t> got(answers.data(), packet.size());
+          bvh::occluded_packet_counted(*trees[t], kernel_, packet, got, &work);
+          assert(std::equal(got.begin(), got.end(), out.begin(),
+                            [](uint8_t a, uint8_t b) { return (a != 0) == (b != 0); }));
+          (void)out;
+        });
+        probe_box_tests_[t].fetch_add(kPacketProbeEvery * work.box_tests,
+                                      std::memory_order_relaxed);
+        probe_leaf_tests_[t].fetch_add(
+            kPacketProbeEvery * (work.lane_blocks + work.packet_triangles),
+            std::memory_order_relaxed);
+      }
+    }
+  }
   if (probe_rays_.fetch_add(rays.size(), std::memory_order_relaxed) + rays.size() <
       kOccludedProbeRays) {
     return;
   }
-  double cost[2];
+  auto count = [](const std::atomic<uint64_t>& c) {
+    return static_cast<double>(c.load(std::memory_order_relaxed));
+  };
+  int best = kFine;
+  double best_cost = 0.0;
   for (int t = 0; t < 2; ++t) {
-    cost[t] = node_price_ * static_cast<double>(probe_nodes_[t].load(std::memory_order_relaxed)) +
-              block_price_ * static_cast<double>(probe_blocks_[t].load(std::memory_order_relaxed));
+    const double single =
+        node_price_ * count(probe_nodes_[t]) + block_price_ * count(probe_blocks_[t]);
+    const double packets = kPacketBoxPrice * node_price_ * count(probe_box_tests_[t]) +
+                           block_price_ * count(probe_leaf_tests_[t]);
+    const int way[2] = {t == 1 ? kCoarse : kFine, (t == 1 ? kCoarse : kFine) | kPackets};
+    const double cost[2] = {single, packets};
+    for (int p = 0; p < (probes_packets_ ? 2 : 1); ++p) {
+      if ((t == 0 && p == 0) || cost[p] < best_cost) {
+        best = way[p];
+        best_cost = cost[p];
+      }
+    }
   }
-  occluded_choice_.store(cost[1] < cost[0] ? kCoarse : kFine, std::memory_order_relaxed);
+  occluded_choice_.store(best, std::memory_order_relaxed);
 }
 
 }  // namespace tritrace

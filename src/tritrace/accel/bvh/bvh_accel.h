@@ -47,17 +47,28 @@ class BvhAccel final : public Accel {
   // second tree with bigger ones (bvh::incoherent_closest_config), on which single rays and
   // incoherent packets take fewer steps to their closest hit.
   const bvh::WideBvh& closest_tree() const { return closest_.nodes.empty() ? bvh_ : closest_; }
-  // The tree of occluded_incoherent: tree(), or closest_tree() where that is a second tree and the
-  // rays given to occluded_incoherent take fewer steps through it. One call in
-  // kOccludedProbeEvery (per thread) is traced through both trees, its node and leaf visits
-  // counted and priced as the SAH prices them, and once kOccludedProbeRays rays have been counted
-  // each count chooses again from all counted so far: a frame's first tiles alone, whose rays may
-  // be unlike the rest (sky or ground), do not decide. tree() until then. The answers are the same
-  // through either tree.
+  // The tree of occluded_incoherent, and whether its rays go as packets there: tree() one ray at a
+  // time, or closest_tree() where that is a second tree, or packets of kPacketSize rays through
+  // either, whichever way the rays given to occluded_incoherent take the least work. One call in
+  // kOccludedProbeEvery (per thread) is traced one ray at a time through both trees, and one such
+  // call in kPacketProbeEvery as packets through both too, its node and leaf visits counted and
+  // priced as the SAH prices them (a packet's test of one child box at kPacketBoxPrice of a
+  // node visit, a block tested for one ray or a triangle for the whole packet as a block visit),
+  // and once kOccludedProbeRays rays have been counted each count chooses again from all counted
+  // so far: a frame's first tiles alone, whose rays may be unlike the rest (sky or ground), do not
+  // decide. tree() one ray at a time until then. The answers are the same every way.
   static constexpr uint64_t kOccludedProbeEvery = 128;
   static constexpr uint64_t kOccludedProbeRays = 2048;
+  // A packet's box test took 13-18 ns, a single ray's node or block visit about 20 ns, on
+  // glass.json's and sky.json's shadow rays (docs/PERFORMANCE.md, issue 27): those scenes' counts
+  // pick their faster way for any price from 0.5 to 1.4.
+  static constexpr double kPacketBoxPrice = 0.75;
+  static constexpr uint64_t kPacketProbeEvery = 4;  // of the probed calls, those that try packets
   const bvh::WideBvh& occluded_tree() const {
-    return occluded_choice_.load(std::memory_order_relaxed) == kCoarse ? closest_ : bvh_;
+    return (occluded_choice_.load(std::memory_order_relaxed) & kCoarse) ? closest_ : bvh_;
+  }
+  bool occluded_as_packets() const {
+    return (occluded_choice_.load(std::memory_order_relaxed) & kPackets) != 0;
   }
   Kernel kernel() const { return kernel_; }
 
@@ -72,13 +83,17 @@ class BvhAccel final : public Accel {
   // incoherent_packets_ and interleave_ for closest_tree()
   bool closest_packets_ = false;
   [[maybe_unused]] bool closest_interleave_ = false;
-  // occluded_tree()'s choice and the probe that makes it: node and leaf-block visits of the probed
-  // rays through each tree ([0] tree(), [1] closest_tree()) and the SAH's prices of the two.
-  enum : int { kFine, kCoarse };
+  // occluded_tree()'s and occluded_as_packets()' choice (a kCoarse bit and a kPackets bit) and the
+  // probe that makes it: node and leaf-block visits of the probed rays through each tree ([0]
+  // tree(), [1] closest_tree()) one at a time, and box tests and leaf work as packets, and the
+  // SAH's prices.
+  enum : int { kFine = 0, kCoarse = 1, kPackets = 2 };
   mutable std::atomic<int> occluded_choice_{kFine};
   bool probes_occluded_ = false;  // a second tree and single shadow rays: the choice is counted
+  bool probes_packets_ = false;   // packets are among the ways counted
   mutable std::atomic<uint64_t> probe_rays_{0};
   mutable std::atomic<uint64_t> probe_nodes_[2] = {0, 0}, probe_blocks_[2] = {0, 0};
+  mutable std::atomic<uint64_t> probe_box_tests_[2] = {0, 0}, probe_leaf_tests_[2] = {0, 0};
   float node_price_ = 1.0f, block_price_ = 1.0f;
 
   void probe_occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const;

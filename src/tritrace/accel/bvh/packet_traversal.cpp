@@ -535,9 +535,10 @@ done:
   for (size_t l = 0; l < rays.size(); ++l) hits[l] = best[l].found() ? best[l] : Hit{};
 }
 
-template <Kernel K>
+template <Kernel K, bool kCounted = false>
 void occluded_packet_with(const WideBvh& tree, std::span<const Ray> rays,
-                          std::span<uint8_t> occluded) {
+                          std::span<uint8_t> occluded,
+                          [[maybe_unused]] PacketSteps* steps = nullptr) {
   Packet p = load_packet<K>(rays, wants_frustum(tree));
   uint32_t blocked = 0;
   float farthest_tmax = hmax(p.tmax);  // over the rays not yet blocked
@@ -555,6 +556,7 @@ void occluded_packet_with(const WideBvh& tree, std::span<const Ray> rays,
         const TriangleBlock& b = tree.blocks[ref & ~kLeafBit];
         const uint32_t open = lanes & ~blocked;
         if (std::popcount(open) <= kSingleRayLeafLanes) {
+          if constexpr (kCounted) steps->lane_blocks += static_cast<uint64_t>(std::popcount(open));
           for (uint32_t m = open; m; m &= m - 1) {
             const int l = std::countr_zero(m);
             if (lane_block<K>(p, l, rays[static_cast<size_t>(l)], b, nullptr)) {
@@ -565,6 +567,7 @@ void occluded_packet_with(const WideBvh& tree, std::span<const Ray> rays,
           with_axis<K>(p, [&]<int Kz>() [[gnu::always_inline]] {
             for (int l = 0; l < kWidth; ++l) {
               if (b.prim[l] == kNoHit) continue;
+              if constexpr (kCounted) ++steps->packet_triangles;
               const TriangleHits h = test_triangle<K, Kz>(b, l, p);
               if (h.exact) [[unlikely]] {
                 for (uint32_t m = h.exact & ~blocked; m; m &= m - 1) {
@@ -584,6 +587,7 @@ void occluded_packet_with(const WideBvh& tree, std::span<const Ray> rays,
         for (uint32_t m = candidates(node, p, farthest_tmax); m; m &= m - 1) {
           const int c = std::countr_zero(m);
           VF tn;
+          if constexpr (kCounted) ++steps->box_tests;
           const uint32_t hit = bits(hit_box(node, c, p, p.tmax, tn));
           if (hit) {
             prefetch_child(tree, node.child[c]);
@@ -619,6 +623,15 @@ void occluded_packet(const WideBvh& tree, Kernel kernel, std::span<const Ray> ra
     occluded_packet_with<Kernel::kWatertight>(tree, rays, occluded);
   } else {
     occluded_packet_with<Kernel::kMollerTrumbore>(tree, rays, occluded);
+  }
+}
+
+void occluded_packet_counted(const WideBvh& tree, Kernel kernel, std::span<const Ray> rays,
+                             std::span<uint8_t> occluded, PacketSteps* steps) {
+  if (kernel == Kernel::kWatertight) {
+    occluded_packet_with<Kernel::kWatertight, true>(tree, rays, occluded, steps);
+  } else {
+    occluded_packet_with<Kernel::kMollerTrumbore, true>(tree, rays, occluded, steps);
   }
 }
 

@@ -32,4 +32,13 @@ void intersect_packet(const WideBvh& tree, Kernel kernel, std::span<const Ray> r
 void occluded_packet(const WideBvh& tree, Kernel kernel, std::span<const Ray> rays,
                      std::span<uint8_t> occluded);
 
+// The work of occluded_packet: box tests (one child box against the packet's rays), leaf blocks
+// tested one ray at a time (one per ray), and triangles tested against the whole packet at once.
+struct PacketSteps {
+  uint64_t box_tests = 0, lane_blocks = 0, packet_triangles = 0;
+};
+// occluded_packet, the same answers, with its work added to *steps.
+void occluded_packet_counted(const WideBvh& tree, Kernel kernel, std::span<const Ray> rays,
+                             std::span<uint8_t> occluded, PacketSteps* steps);
+
 }  // namespace tritrace::bvh
