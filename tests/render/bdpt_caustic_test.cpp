@@ -6,9 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "mean_and_error.h"
 #include "tritrace/accel/bvh/bvh_accel.h"
+#include "tritrace/parallel.h"
 #include "tritrace/render/bdpt_integrator.h"
 #include "tritrace/render/caustic_guide.h"
 #include "tritrace/render/path_integrator.h"
@@ -74,6 +76,83 @@ TEST(BdptCaustics, GuideDirectionsLeadIntoTheGlass) {
               into_glass, axes);
   EXPECT_GT(guided_points, 20);
   EXPECT_GE(into_glass, 0.95 * axes);
+}
+
+// Every cell of `guide`, by its cones, probed at the centre of every cell of the scene's bounds.
+std::vector<float> guide_cells(const CausticGuide& guide, const Scene& scene) {
+  const Bounds3 b = scene_bounds(scene);
+  const float c = guide.cell_size();
+  std::vector<float> out;
+  const glm::ivec3 lo(glm::floor(b.lo / c)), hi(glm::floor(b.hi / c));
+  for (int x = lo.x; x <= hi.x; ++x) {
+    for (int y = lo.y; y <= hi.y; ++y) {
+      for (int z = lo.z; z <= hi.z; ++z) {
+        const glm::vec3 p = (glm::vec3(x, y, z) + 0.5f) * c;
+        const CausticGuide::Cell cell = guide.cell(p);
+        if (cell.count == 0) continue;
+        out.insert(out.end(), {p.x, p.y, p.z, static_cast<float>(cell.count), cell.one_minus_cos});
+        for (uint32_t a = 0; a < cell.count; ++a) {
+          out.insert(out.end(), {cell.axes[a].x, cell.axes[a].y, cell.axes[a].z});
+        }
+      }
+    }
+  }
+  return out;
+}
+
+// The pre-pass runs in parallel (fixed chunks of light paths, each with its own stream): the
+// guide is the same for any number of threads.
+TEST(BdptCaustics, GuideTheSameForAnyThreadCount) {
+  const Scene scene = caustics(8);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  std::vector<float> want;
+  size_t photons = 0;
+  for (const int threads : {1, 2, 3, 5}) {
+    const BdptIntegrator bdpt(scene);
+    const CausticGuide* guide = nullptr;
+    parallel::in_arena(threads, [&] { guide = bdpt.caustic_guide(scene, accel); });
+    ASSERT_NE(guide, nullptr);
+    const std::vector<float> cells = guide_cells(*guide, scene);
+    if (threads == 1) {
+      want = cells;
+      photons = guide->photon_count();
+      // Every kept photon was found by the probe (each cell's exactly once).
+      size_t probed = 0;
+      for (size_t i = 0; i < cells.size(); i += 5 + 3 * static_cast<size_t>(cells[i + 3])) {
+        probed += static_cast<size_t>(cells[i + 3]);
+      }
+      EXPECT_EQ(probed, photons);
+      EXPECT_GT(guide->cell_count(), 20u);
+      continue;
+    }
+    EXPECT_EQ(guide->photon_count(), photons) << threads << " threads";
+    EXPECT_TRUE(cells == want) << threads << " threads";
+  }
+}
+
+// The render job's pilot and render share one guide (use_caustic_guide) where they would build
+// the same one, and only there.
+TEST(BdptCaustics, GuideSharedOnlyWithTheSameSettings) {
+  const Scene scene = caustics(8);
+  const BvhAccel accel(scene.mesh, kDefaultKernel);
+  const BdptIntegrator pilot(scene, {.light_paths = 1.0f, .camera_only_connect = false});
+  const CausticGuide* built = pilot.caustic_guide(scene, accel);
+  ASSERT_NE(built, nullptr);
+  BdptIntegrator render_integrator(scene, {.light_paths = 0.25f});
+  EXPECT_TRUE(render_integrator.use_caustic_guide(pilot.shared_caustic_guide()));
+  EXPECT_EQ(render_integrator.caustic_guide(scene, accel), built);
+  // Another depth or number of pre-pass paths builds another guide: not shared.
+  BdptIntegrator deeper(scene, {.max_depth = 3});
+  EXPECT_FALSE(deeper.use_caustic_guide(pilot.shared_caustic_guide()));
+  BdptIntegrator fewer(scene, {.caustic_paths = 1 << 12});
+  EXPECT_FALSE(fewer.use_caustic_guide(pilot.shared_caustic_guide()));
+  BdptIntegrator off(scene, {.caustic_paths = 0});
+  EXPECT_FALSE(off.use_caustic_guide(pilot.shared_caustic_guide()));
+  EXPECT_EQ(off.caustic_guide(scene, accel), nullptr);
+  // A shared guide gives the image of a guide built by the render itself, bit for bit.
+  const BdptIntegrator own(scene, {.light_paths = 0.25f});
+  EXPECT_TRUE(same_bits(render(scene, accel, own, {.threads = 2, .spp = 4}),
+                        render(scene, accel, render_integrator, {.threads = 2, .spp = 4})));
 }
 
 TEST(BdptCaustics, NoGuideWithoutSpecularSurfacesOrWhenTurnedOff) {

@@ -14,6 +14,7 @@
 #include "tritrace/error.h"
 #include "tritrace/image/atomic_file.h"
 #include "tritrace/job/setting_values.h"
+#include "tritrace/parallel.h"
 #include "tritrace/render/bdpt_integrator.h"
 #include "tritrace/render/bdpt_pilot.h"
 #include "tritrace/render/lab_integrator.h"
@@ -438,8 +439,12 @@ void RenderJob::remake_integrator() {
     const auto start = std::chrono::steady_clock::now();
     BdptSettings settings;
     settings.max_depth = spec_.max_depth;
-    const LightPathsChoice choice =
-        choose_light_paths(*scene_, *accel_, settings, spec_.seed, spec_.sampler);
+    // In the job's arena: the caustic guide's pre-pass (built by the pilot) runs on its threads.
+    const int guide_threads = options_.threads > 0 ? options_.threads : default_thread_count();
+    LightPathsChoice choice;
+    parallel::in_arena(guide_threads, [&] {
+      choice = choose_light_paths(*scene_, *accel_, settings, spec_.seed, spec_.sampler);
+    });
     light_paths_pilot_ = LightPathsPilot{
         choice.light_paths, choice.samples, choice.rays,
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
@@ -447,9 +452,19 @@ void RenderJob::remake_integrator() {
     IntegratorSpec chosen = spec_;
     chosen.light_paths = choice.light_paths;
     integrator_ = make_integrator(chosen, *scene_);
+    // The render's caustic guide is the pilot's (built once per job).
+    if (auto* bdpt = dynamic_cast<BdptIntegrator*>(integrator_.get())) {
+      bdpt->use_caustic_guide(choice.guide);
+    }
     return;
   }
   integrator_ = make_integrator(spec_, *scene_);
+  // bdpt's caustic guide, built here on the job's threads (its first radiance call would build
+  // it inside one render task, where the other threads wait instead of helping).
+  if (const auto* bdpt = dynamic_cast<const BdptIntegrator*>(integrator_.get())) {
+    const int guide_threads = options_.threads > 0 ? options_.threads : default_thread_count();
+    parallel::in_arena(guide_threads, [&] { bdpt->caustic_guide(*scene_, *accel_); });
+  }
 }
 
 std::string RenderJob::light_paths_summary() const {

@@ -22,6 +22,7 @@
 
 #include "tritrace/error.h"
 #include "tritrace/math/random.h"
+#include "tritrace/parallel.h"
 #include "tritrace/render/bdpt_pilot.h"
 #include "tritrace/render/lanes.h"
 #include "tritrace/render/light_sampler.h"
@@ -482,6 +483,9 @@ inline constexpr size_t kWavefront = 128;
 // subpaths need, up to the depth limit, rather than to it at once: --max-depth 65536 would
 // otherwise take tens of megabytes per thread.
 inline constexpr size_t kInitialSubpathVertices = 16;
+// The caustic guide's pre-pass traces its light paths in chunks of this many, each from its own
+// random stream (BdptTracer::caustic_photons): the unit of its parallel work.
+inline constexpr uint32_t kGuideChunk = 2048;
 struct Subpaths {
   std::vector<Vertex> camera, light;
 };
@@ -529,10 +533,11 @@ class BdptTracer {
              const CausticGuide* guide = nullptr)
       : it_(integrator), scene_(scene), accel_(accel), guide_(guide) {}
 
-  // The caustic guide's pre-pass: `n` light paths from the emissive triangles (PCG32 numbers from
-  // a fixed seed), each followed through specular surfaces to its first non-specular one, which
-  // is a photon where the path met at least one specular surface.
-  std::vector<CausticPhoton> caustic_photons(uint32_t n);
+  // Chunk `chunk` of the caustic guide's pre-pass of `n` light paths (its paths [chunk *
+  // kGuideChunk, (chunk + 1) * kGuideChunk) below n) from the emissive triangles, PCG32 numbers
+  // from the chunk's own stream, each followed through specular surfaces to its first non-specular
+  // one, which is a photon where the path met at least one specular surface. In path order.
+  std::vector<CausticPhoton> caustic_photons(uint32_t chunk, uint32_t n);
 
   // Samples [first, first + count) of the batch (count <= kWavefront): their subpaths walked
   // side by side, then each sample's connections in order. Radiance and AOVs go to `out` at the
@@ -2385,12 +2390,16 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
   }
 }
 
-std::vector<CausticPhoton> BdptTracer::caustic_photons(uint32_t n) {
+std::vector<CausticPhoton> BdptTracer::caustic_photons(uint32_t chunk, uint32_t n) {
   std::vector<CausticPhoton> photons;
   std::vector<Vertex> path(kInitialSubpathVertices);
   const int max_vertices = it_.settings_.max_depth + 1;
-  Pcg32 rng(0x70686f746f6e73ull, 0);
-  for (uint32_t i = 0; i < n; ++i) {
+  // The chunk's stream: a PCG32 sequence (stream selector and start both keyed by the chunk), so
+  // no chunk's numbers depend on another's having been drawn.
+  Pcg32 rng(hash_words(0x70686f746f6e73ull, chunk), chunk);
+  const uint64_t first = static_cast<uint64_t>(chunk) * kGuideChunk;
+  const uint64_t end = std::min<uint64_t>(n, first + kGuideChunk);
+  for (uint64_t i = first; i < end; ++i) {
     std::array<glm::vec2, 3> u;
     for (glm::vec2& v : u) v = glm::vec2(rng.next_float(), rng.next_float());
     WalkState w;
@@ -2423,12 +2432,43 @@ std::vector<CausticPhoton> BdptTracer::caustic_photons(uint32_t n) {
 const CausticGuide* BdptIntegrator::caustic_guide(const Scene& scene, const Accel& accel) const {
   if (!wants_guide_) return nullptr;
   std::call_once(guide_->once, [&] {
-    BdptTracer tracer(*this, scene, accel);
-    const std::vector<CausticPhoton> photons =
-        tracer.caustic_photons(static_cast<uint32_t>(settings_.caustic_paths));
-    guide_->guide = CausticGuide(photons, guide_cell_);
+    // Fixed chunks of paths, each with its own stream, traced in parallel and their photons
+    // joined in chunk order: the photons (and so the guide) are the same for any thread count.
+    const auto n = static_cast<uint32_t>(settings_.caustic_paths);
+    const uint32_t chunks = (n + kGuideChunk - 1) / kGuideChunk;
+    std::vector<std::vector<CausticPhoton>> parts(chunks);
+    // Isolated: while this thread waits for the chunks it runs only them, never another task of
+    // the arena (such as a render tile, whose first radiance call would wait for this guide).
+    tbb::this_task_arena::isolate([&] {
+      parallel::for_range(tbb::blocked_range<uint32_t>(0, chunks, 1),
+                          [&](const tbb::blocked_range<uint32_t>& range) {
+                            BdptTracer tracer(*this, scene, accel);
+                            for (uint32_t c = range.begin(); c != range.end(); ++c) {
+                              parts[c] = tracer.caustic_photons(c, n);
+                            }
+                          });
+    });
+    size_t total = 0;
+    for (const std::vector<CausticPhoton>& part : parts) total += part.size();
+    std::vector<CausticPhoton> photons;
+    photons.reserve(total);
+    for (const std::vector<CausticPhoton>& part : parts) {
+      photons.insert(photons.end(), part.begin(), part.end());
+    }
+    guide_->guide = CausticGuide(photons, guide_->cell);
   });
   return guide_->guide.empty() ? nullptr : &guide_->guide;
+}
+
+bool BdptIntegrator::use_caustic_guide(const std::shared_ptr<GuideSlot>& slot) {
+  if (!slot || !wants_guide_ || slot->paths != guide_->paths ||
+      slot->max_depth != guide_->max_depth || slot->cell != guide_->cell ||
+      slot->offset.int_scale != guide_->offset.int_scale ||
+      slot->offset.float_scale != guide_->offset.float_scale) {
+    return false;
+  }
+  guide_ = slot;
+  return true;
 }
 
 bool camera_light_tracing(const Camera& camera) {
@@ -2556,11 +2596,15 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
   wants_guide_ = settings_.caustic_paths > 0 && !settings_.unweighted &&
                  !(settings_.only_s >= 0 && settings_.only_t >= 0) && !prims.empty() &&
                  any_not_diffuse;
+  guide_ = std::make_shared<GuideSlot>();
   if (wants_guide_) {
     const Bounds3 b = scene_bounds(scene);
     const float diagonal = glm::length(b.hi - b.lo);
     wants_guide_ = std::isfinite(diagonal) && diagonal > 0.0f;
-    guide_cell_ = diagonal / 128.0f;
+    guide_->paths = settings_.caustic_paths;
+    guide_->max_depth = settings_.max_depth;
+    guide_->cell = diagonal / 128.0f;
+    guide_->offset = offset_;
   }
 }
 

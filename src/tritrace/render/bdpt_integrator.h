@@ -140,8 +140,19 @@ class BdptIntegrator final : public Integrator {
 
   // The caustic guide (BdptSettings::caustic_paths), built by its pre-pass on the first call (or
   // the first radiance call) and kept; null where the settings or the scene have none (no
-  // emissive triangle, no material other than diffuse, or no photon found).
+  // emissive triangle, no material other than diffuse, or no photon found). The pre-pass runs on
+  // the calling thread's TBB arena (its threads help; the guide is the same for any number).
   const CausticGuide* caustic_guide(const Scene& scene, const Accel& accel) const;
+
+  // The caustic guide's storage (built or not), which integrators of one scene can share: the
+  // render job's `--light-paths auto` pilot builds the guide, and the render uses the same one.
+  struct GuideSlot;
+  std::shared_ptr<GuideSlot> shared_caustic_guide() const { return guide_; }
+  // Uses `slot` (another integrator's shared_caustic_guide()) as this one's guide, where the two
+  // build the same guide: the same settings for it (caustic_paths, max_depth, ray offsets, the cell
+  // from the scene's bounds), and the caller vouches for the same scene and accel. Returns whether
+  // it did (otherwise this integrator keeps its own).
+  bool use_caustic_guide(const std::shared_ptr<GuideSlot>& slot);
 
   // An emitter for light subpaths: a point, spot or directional light, an emissive triangle or the
   // environment.
@@ -167,14 +178,9 @@ class BdptIntegrator final : public Integrator {
   std::vector<uint32_t> emissive_prims_;  // sorted, for the density of choosing a hit emitter
   std::vector<uint32_t> emissive_index_;  // parallel: the emitter's index in emitters_
   float inverse_light_paths_ = 1.0f;      // 1 / settings_.light_paths
-  // The caustic guide, built once (shared by copies of the integrator).
-  struct GuideSlot {
-    std::once_flag once;
-    CausticGuide guide;
-  };
-  std::shared_ptr<GuideSlot> guide_ = std::make_shared<GuideSlot>();
+  // The caustic guide, built once (shared by copies of the integrator and use_caustic_guide).
+  std::shared_ptr<GuideSlot> guide_;
   bool wants_guide_ = false;  // the settings ask for one and the scene can have caustics
-  float guide_cell_ = 1.0f;   // its cells' edge: the scene's bounding box diagonal / 128
 
   // Appends the scene's spot and directional lights to emitters_ with their selection weights.
   void add_delta_lights(const Scene& scene, std::vector<float>& power);
@@ -201,6 +207,16 @@ class BdptIntegrator final : public Integrator {
   float environment_radius_ = 0.0f;
 
   friend class BdptTracer;
+};
+
+struct BdptIntegrator::GuideSlot {
+  std::once_flag once;
+  CausticGuide guide;
+  // What the guide is a function of, besides the scene and accel (use_caustic_guide compares).
+  int paths = 0;
+  int max_depth = 0;
+  float cell = 0.0f;
+  RayOffsetParams offset;
 };
 
 }  // namespace tritrace

@@ -132,6 +132,7 @@ LightPathsChoice choose_light_paths(const Scene& scene, const Accel& accel,
     }
   }
   choice.samples = count * spp;
+  choice.guide = integrator.shared_caustic_guide();
   const double samples = static_cast<double>(std::max<uint64_t>(1, choice.samples));
   double best = 0.0;
   for (size_t j = 0; j < kPilotCandidates; ++j) {

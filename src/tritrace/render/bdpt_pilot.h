@@ -14,6 +14,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <utility>
 
@@ -57,6 +58,9 @@ struct LightPathsChoice {
   std::array<double, kPilotCandidates> cost{};
   uint64_t samples = 0;  // the pilot's samples
   uint64_t rays = 0;     // the pilot's rays (camera, extension and shadow rays)
+  // The pilot's caustic guide, built: the render of the same scene and accel uses it too
+  // (BdptIntegrator::use_caustic_guide) instead of tracing its pre-pass again.
+  std::shared_ptr<BdptIntegrator::GuideSlot> guide;
 };
 
 // Runs the pilot over `scene` with `accel` (bdpt at F = 1 with `settings`' other fields) and
