@@ -224,28 +224,23 @@ RenderRecord merged_record(const RenderIdentity& identity, const Film& film, dou
   RenderRecord r;
   r.spp = identity.spp;
   r.render_seconds = seconds;
-  const std::string key = " noise_threshold=";
-  if (const size_t at = identity.settings.find(key); at != std::string::npos) {
-    r.noise_threshold = std::strtof(identity.settings.c_str() + at + key.size(), nullptr);
+  // The value of ` key=` in the identity's settings text (up to the next space), if it is there.
+  const auto value_of = [&](std::string_view key) -> std::optional<std::string_view> {
+    const size_t at = identity.settings.find(key);
+    if (at == std::string::npos) return std::nullopt;
+    const size_t from = at + key.size();
+    return std::string_view(identity.settings)
+        .substr(from, identity.settings.find(' ', from) - from);
+  };
+  if (const auto threshold = value_of(" noise_threshold=")) {
+    r.noise_threshold = std::strtof(std::string(*threshold).c_str(), nullptr);
     r.mean_spp = film_mean_spp(film);
   }
-  const std::string sampler_key = " sampler=";
-  if (const size_t at = identity.settings.find(sampler_key); at != std::string::npos) {
-    const size_t from = at + sampler_key.size();
-    r.sampler = parse_sampler(
-        std::string_view(identity.settings).substr(from, identity.settings.find(' ', from) - from));
-  }
+  if (const auto sampler = value_of(" sampler=")) r.sampler = parse_sampler(*sampler);
   // bdpt: the share the identity names (absent: 1). With auto every part made the pilot's choice,
   // which the parts do not carry: the merged header says auto and no share.
   if (identity.integrator == "bdpt") {
-    const std::string share_key = " light_paths=";
-    const size_t at = identity.settings.find(share_key);
-    const std::string_view share =
-        at == std::string::npos ? std::string_view("1")
-                                : std::string_view(identity.settings)
-                                      .substr(at + share_key.size(),
-                                              identity.settings.find(' ', at + share_key.size()) -
-                                                  (at + share_key.size()));
+    const std::string_view share = value_of(" light_paths=").value_or("1");
     r.light_paths_auto = share == "auto";
     if (!r.light_paths_auto) r.light_paths = std::strtof(std::string(share).c_str(), nullptr);
   }
@@ -433,6 +428,8 @@ void RenderJob::prepare(AccelInfo* info, const Accel* prebuilt, std::optional<do
 }
 
 void RenderJob::remake_integrator() {
+  // The job's threads, on which bdpt's caustic guide is built (its pre-pass is parallel).
+  const int guide_threads = options_.threads > 0 ? options_.threads : default_thread_count();
   if (spec_.kind == IntegratorSpec::Kind::kBdpt && spec_.light_paths_auto) {
     // The pilot's choice depends on the scene, the seed and the sampler only (bdpt_pilot.h), so
     // every part, pass and thread count of this render makes the same.
@@ -440,7 +437,6 @@ void RenderJob::remake_integrator() {
     BdptSettings settings;
     settings.max_depth = spec_.max_depth;
     // In the job's arena: the caustic guide's pre-pass (built by the pilot) runs on its threads.
-    const int guide_threads = options_.threads > 0 ? options_.threads : default_thread_count();
     LightPathsChoice choice;
     parallel::in_arena(guide_threads, [&] {
       choice = choose_light_paths(*scene_, *accel_, settings, spec_.seed, spec_.sampler);
@@ -462,7 +458,6 @@ void RenderJob::remake_integrator() {
   // bdpt's caustic guide, built here on the job's threads (its first radiance call would build
   // it inside one render task, where the other threads wait instead of helping).
   if (const auto* bdpt = dynamic_cast<const BdptIntegrator*>(integrator_.get())) {
-    const int guide_threads = options_.threads > 0 ? options_.threads : default_thread_count();
     parallel::in_arena(guide_threads, [&] { bdpt->caustic_guide(*scene_, *accel_); });
   }
 }
