@@ -62,8 +62,9 @@ struct alignas(32) ChildGroups {
 // the triangle's group when the ray heads into its outer side, by a cosine of at least
 // kSkipMinCosine (grazing rays, where rounding of the normal could turn the sign, skip nothing).
 inline constexpr float kSkipMinCosine = 1e-3f;
-inline uint32_t skip_group(std::span<const ConvexFace> faces, std::span<const uint8_t> flat,
-                           uint32_t prim, const float* dir) {
+[[gnu::always_inline]] inline uint32_t skip_group(std::span<const ConvexFace> faces,
+                                                  std::span<const uint8_t> flat, uint32_t prim,
+                                                  const float* dir) {
   if (prim >= faces.size()) return kNoGroup;
   const ConvexFace& f = faces[prim];
   if (f.group == kNoGroup) return kNoGroup;
