@@ -177,24 +177,35 @@ Hit closest_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray&
 
 // The closest hit of one ray. For the watertight kernel the ray's dominant axis picks one of three
 // instantiations, once per ray rather than once per leaf.
-template <Kernel K, bool kSkip = false>
+// With skip != bvh::kNoGroup, the children holding only that group are left out (groups: the
+// tree's bvh::child_groups). One function for both, called from one place per loop, so that the
+// per-ray set-up (traceable, prepare_watertight) stays inlined in the loop: with a call for each
+// case it was not, and a ray with no group to skip took a third longer on sky.json.
+template <Kernel K>
 Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
-                const bvh::ChildGroups* groups = nullptr, uint32_t skip = bvh::kNoGroup) {
+                [[maybe_unused]] const bvh::ChildGroups* groups = nullptr,
+                [[maybe_unused]] uint32_t skip = bvh::kNoGroup) {
   if (tree.nodes.empty() || !traceable(ray)) return Hit{};
   const PreparedRay<K> prepared(ray);
+  [[maybe_unused]] const bool skips = skip != bvh::kNoGroup;
 #if defined(__AVX2__)
   if constexpr (K == Kernel::kWatertight) {
     switch (prepared.watertight().kz) {
       case 0:
-        return closest_hit_from<K, 0, kSkip>(tree, tris, ray, prepared, groups, skip);
+        return skips ? closest_hit_from<K, 0, true>(tree, tris, ray, prepared, groups, skip)
+                     : closest_hit_from<K, 0>(tree, tris, ray, prepared);
       case 1:
-        return closest_hit_from<K, 1, kSkip>(tree, tris, ray, prepared, groups, skip);
+        return skips ? closest_hit_from<K, 1, true>(tree, tris, ray, prepared, groups, skip)
+                     : closest_hit_from<K, 1>(tree, tris, ray, prepared);
       default:
-        return closest_hit_from<K, 2, kSkip>(tree, tris, ray, prepared, groups, skip);
+        return skips ? closest_hit_from<K, 2, true>(tree, tris, ray, prepared, groups, skip)
+                     : closest_hit_from<K, 2>(tree, tris, ray, prepared);
     }
   }
 #endif
-  return closest_hit_from<K, -1, kSkip>(tree, tris, ray, prepared, groups, skip);
+  // Other kernels (for comparison only) skip nothing: fewer instantiations, so that the compiler
+  // keeps inlining the per-ray set-up above (GCC's inline-unit-growth limit).
+  return closest_hit_from<K, -1>(tree, tris, ray, prepared);
 }
 
 // Node and leaf-block visits of a traversal (BvhAccel's probe of its shadow rays).
@@ -204,14 +215,11 @@ struct StepCount {
 
 // Steps: the node and block visits are added to *steps (kCounted only; the same traversal). With
 // kSkip, as closest_hit_from: the children holding only group `skip` are left out.
-template <Kernel K, bool kCounted = false, bool kSkip = false>
-bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
-             [[maybe_unused]] StepCount* steps = nullptr,
-             [[maybe_unused]] const bvh::ChildGroups* groups = nullptr,
-             [[maybe_unused]] uint32_t skip = bvh::kNoGroup) {
-  if (tree.nodes.empty() || !traceable(ray)) return false;
+template <Kernel K, bool kCounted, bool kSkip>
+bool any_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
+                  const PreparedRay<K>& prepared, [[maybe_unused]] StepCount* steps,
+                  [[maybe_unused]] const bvh::ChildGroups* groups, [[maybe_unused]] uint32_t skip) {
   const RayBoxSetup setup = box_setup(ray);
-  const PreparedRay<K> prepared(ray);
   uint32_t stack[kStackSize];
   int sp = 0;
   uint32_t ref = 0;
@@ -235,6 +243,21 @@ bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
     if (sp == 0) return false;
     ref = stack[--sp];
   }
+}
+
+// As closest_hit: one function whether or not a group is skipped.
+template <Kernel K, bool kCounted = false>
+bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
+             StepCount* steps = nullptr, const bvh::ChildGroups* groups = nullptr,
+             uint32_t skip = bvh::kNoGroup) {
+  if (tree.nodes.empty() || !traceable(ray)) return false;
+  const PreparedRay<K> prepared(ray);
+  if constexpr (K == Kernel::kWatertight) {
+    if (skip != bvh::kNoGroup) {
+      return any_hit_from<K, kCounted, true>(tree, tris, ray, prepared, steps, groups, skip);
+    }
+  }
+  return any_hit_from<K, kCounted, false>(tree, tris, ray, prepared, steps, groups, skip);
 }
 
 // Trees at most this big trace incoherent queries as packets too (see intersect_incoherent). Not
@@ -726,18 +749,15 @@ void BvhAccel::intersect_incoherent_from(std::span<const Ray> rays,
 #endif
   with_kernel(kernel_, [&]<Kernel K>() {
     const TriangleArrays tris = mesh_.arrays();
-    if (skips(origins, rays.size())) {
-      const bvh::ChildGroups* groups =
-          closest_.nodes.empty() ? fine_groups_.data() : closest_groups_.data();
-      for (size_t i = 0; i < rays.size(); ++i) {
-        const uint32_t skip =
-            bvh::skip_group(convex_.faces, convex_.flat, origins[i], &rays[i].dir.x);
-        hits[i] = skip == bvh::kNoGroup ? closest_hit<K>(tree, tris, rays[i])
-                                        : closest_hit<K, true>(tree, tris, rays[i], groups, skip);
-      }
-      return;
+    const bool skipping = skips(origins, rays.size());
+    const bvh::ChildGroups* groups =
+        closest_.nodes.empty() ? fine_groups_.data() : closest_groups_.data();
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const uint32_t skip =
+          skipping ? bvh::skip_group(convex_.faces, convex_.flat, origins[i], &rays[i].dir.x)
+                   : bvh::kNoGroup;
+      hits[i] = closest_hit<K>(tree, tris, rays[i], groups, skip);
     }
-    for (size_t i = 0; i < rays.size(); ++i) hits[i] = closest_hit<K>(tree, tris, rays[i]);
   });
 }
 
@@ -780,20 +800,14 @@ void BvhAccel::occluded_incoherent_from(std::span<const Ray> rays,
 #endif
   with_kernel(kernel_, [&]<Kernel K>() {
     const TriangleArrays tris = mesh_.arrays();
-    if (skips(origins, rays.size())) {
-      const bvh::ChildGroups* groups = coarse ? closest_groups_.data() : fine_groups_.data();
-      for (size_t i = 0; i < rays.size(); ++i) {
-        const uint32_t skip =
-            bvh::skip_group(convex_.faces, convex_.flat, origins[i], &rays[i].dir.x);
-        occluded[i] = (skip == bvh::kNoGroup
-                           ? any_hit<K>(tree, tris, rays[i])
-                           : any_hit<K, false, true>(tree, tris, rays[i], nullptr, groups, skip))
-                          ? 1
-                          : 0;
-      }
-      return;
+    const bool skipping = skips(origins, rays.size());
+    const bvh::ChildGroups* groups = coarse ? closest_groups_.data() : fine_groups_.data();
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const uint32_t skip =
+          skipping ? bvh::skip_group(convex_.faces, convex_.flat, origins[i], &rays[i].dir.x)
+                   : bvh::kNoGroup;
+      occluded[i] = any_hit<K>(tree, tris, rays[i], nullptr, groups, skip) ? 1 : 0;
     }
-    for (size_t i = 0; i < rays.size(); ++i) occluded[i] = any_hit<K>(tree, tris, rays[i]) ? 1 : 0;
   });
 }
 
@@ -812,18 +826,11 @@ void BvhAccel::probe_occluded(std::span<const Ray> rays, std::span<const uint32_
       const uint32_t skip =
           skipping ? bvh::skip_group(convex_.faces, convex_.flat, origins[i], &rays[i].dir.x)
                    : bvh::kNoGroup;
-      if (skip == bvh::kNoGroup) {
-        occluded[i] = any_hit<K, true>(bvh_, tris, rays[i], &steps[0]) ? 1 : 0;
-        [[maybe_unused]] const bool same = any_hit<K, true>(closest_, tris, rays[i], &steps[1]);
-        assert(same == (occluded[i] != 0));
-      } else {
-        occluded[i] =
-            any_hit<K, true, true>(bvh_, tris, rays[i], &steps[0], fine_groups_.data(), skip) ? 1
-                                                                                              : 0;
-        [[maybe_unused]] const bool same = any_hit<K, true, true>(
-            closest_, tris, rays[i], &steps[1], closest_groups_.data(), skip);
-        assert(same == (occluded[i] != 0));
-      }
+      occluded[i] =
+          any_hit<K, true>(bvh_, tris, rays[i], &steps[0], fine_groups_.data(), skip) ? 1 : 0;
+      [[maybe_unused]] const bool same =
+          any_hit<K, true>(closest_, tris, rays[i], &steps[1], closest_groups_.data(), skip);
+      assert(same == (occluded[i] != 0));
     }
   });
   for (int t = 0; t < 2; ++t) {
