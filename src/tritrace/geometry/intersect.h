@@ -116,8 +116,8 @@ struct WatertightRay {
 
 // Per-ray work, done once and reused for every triangle. The paper also swaps kx and ky when
 // dir[kz] < 0 to keep each triangle's winding; both sides count as hits here and t, u, v do not
-// depend on it, so the swap is left out. Always inlined, as box_setup (bvh/ray_box.h).
-[[gnu::always_inline]] inline WatertightRay prepare_watertight(const Ray& ray) {
+// depend on it, so the swap is left out.
+inline WatertightRay prepare_watertight(const Ray& ray) {
   WatertightRay w;
   w.tmin = ray.tmin;
   w.tmax = ray.tmax;
@@ -287,7 +287,7 @@ class PreparedRay {
 template <>
 class PreparedRay<Kernel::kWatertight> {
  public:
-  [[gnu::always_inline]] explicit PreparedRay(const Ray& ray) : ray_(prepare_watertight(ray)) {}
+  explicit PreparedRay(const Ray& ray) : ray_(prepare_watertight(ray)) {}
   bool intersect(const TriangleArrays& tris, size_t i, TriangleHit& out) const {
     return intersect_watertight(ray_, tris.v0[i], tris.v1[i], tris.v2[i], out);
   }

@@ -178,9 +178,9 @@ Hit closest_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray&
 // The closest hit of one ray. For the watertight kernel the ray's dominant axis picks one of three
 // instantiations, once per ray rather than once per leaf.
 // With skip != bvh::kNoGroup, the children holding only that group are left out (groups: the
-// tree's bvh::child_groups). One function for both, called from one place per loop, so that the
-// per-ray set-up (traceable, prepare_watertight) stays inlined in the loop: with a call for each
-// case it was not, and a ray with no group to skip took a third longer on sky.json.
+// tree's bvh::child_groups). One function for both, called from one place per loop: with a call
+// for each case GCC's inline-unit-growth limit left the per-ray set-up out of line, and a ray with
+// no group to skip took a third longer on sky.json (docs/PERFORMANCE.md, issue 27).
 template <Kernel K>
 Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
                 [[maybe_unused]] const bvh::ChildGroups* groups = nullptr,
