@@ -5,7 +5,11 @@
 // replayed REPS times in the frame's batches, so that perf or callgrind sees that work alone.
 // Prints each pass's CPU ms, their median, and how many answers differ from the recorded ones.
 //
-//   tritrace_secondary_replay SCENE_FILE|BUILTIN SPP RAYS_FILE REPS closest|any ACCEL
+// The rays go with the triangles they leave, as the path tracer gives them (an accel may skip the
+// convex mesh a ray leaves); with a last argument `no-origins` without them, so that the answers
+// with and without can be compared (the recorded ones are the BVH's with them).
+//
+//   tritrace_secondary_replay SCENE_FILE|BUILTIN SPP RAYS_FILE REPS closest|any ACCEL [no-origins]
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
@@ -54,6 +58,8 @@ void save(const std::string& path, const RecordedRays& r) {
   write_vector(out, r.any.sizes);
   write_vector(out, r.any.groups);
   write_vector(out, r.occluded);
+  write_vector(out, r.closest.origins);
+  write_vector(out, r.any.origins);
 }
 
 RecordedRays load(const std::string& path) {
@@ -67,16 +73,21 @@ RecordedRays load(const std::string& path) {
   read_vector(in, r.any.sizes);
   read_vector(in, r.any.groups);
   read_vector(in, r.occluded);
+  // Files written before the origins were recorded end here: their rays replay without them.
+  if (in.peek() != std::char_traits<char>::eof()) {
+    read_vector(in, r.closest.origins);
+    read_vector(in, r.any.origins);
+  }
   return r;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 7) {
+  if (argc != 7 && !(argc == 8 && std::string(argv[7]) == "no-origins")) {
     std::fprintf(stderr,
                  "usage: tritrace_secondary_replay SCENE_FILE|BUILTIN SPP RAYS_FILE REPS "
-                 "closest|any ACCEL\n");
+                 "closest|any ACCEL [no-origins]\n");
     return 2;
   }
   try {
@@ -114,6 +125,10 @@ int main(int argc, char** argv) {
       job.render(&stats);
       recorded = recording.take();
       save(rays_file, recorded);
+    }
+    if (argc == 8) {
+      recorded.closest.origins.clear();
+      recorded.any.origins.clear();
     }
     const int reps = std::max(1, std::stoi(argv[4]));
     const bool closest = std::string(argv[5]) == "closest";

@@ -31,6 +31,22 @@ class Accel {
     this->occluded(rays, occluded);
   }
 
+  // The same with the triangle each ray leaves: origins[i] is ray i's origin triangle (a prim id of
+  // this accel's hits), or kNoHit. An accel may use it to skip geometry the ray provably cannot
+  // hit (BvhAccel: the rest of a convex mesh the ray leaves outwards, see bvh/convex_groups.h);
+  // the answers differ from the queries above at most by hits on that mesh within rounding
+  // distance of the origin (self-intersections). By default the queries above, origins ignored.
+  virtual void intersect_incoherent_from(std::span<const Ray> rays,
+                                         std::span<const uint32_t> /*origins*/,
+                                         std::span<Hit> hits) const {
+    intersect_incoherent(rays, hits);
+  }
+  virtual void occluded_incoherent_from(std::span<const Ray> rays,
+                                        std::span<const uint32_t> /*origins*/,
+                                        std::span<uint8_t> occluded) const {
+    occluded_incoherent(rays, occluded);
+  }
+
   // Single-ray conveniences for tests and tools.
   Hit intersect(const Ray& ray) const {
     Hit hit;

@@ -9,8 +9,13 @@
 namespace tritrace {
 namespace {
 
-void append(RayBatches& to, std::span<const Ray> rays) {
+void append(RayBatches& to, std::span<const Ray> rays, std::span<const uint32_t> origins) {
   to.rays.insert(to.rays.end(), rays.begin(), rays.end());
+  if (origins.size() == rays.size()) {
+    to.origins.insert(to.origins.end(), origins.begin(), origins.end());
+  } else {
+    to.origins.insert(to.origins.end(), rays.size(), kNoHit);
+  }
   to.sizes.push_back(static_cast<uint32_t>(rays.size()));
 }
 
@@ -53,6 +58,8 @@ void append_group(const Range& r, const std::vector<Answer>& answers, RayBatches
   const size_t first = (*r.offsets)[r.begin], last = (*r.offsets)[r.end];
   to.rays.insert(to.rays.end(), r.from->rays.begin() + static_cast<ptrdiff_t>(first),
                  r.from->rays.begin() + static_cast<ptrdiff_t>(last));
+  to.origins.insert(to.origins.end(), r.from->origins.begin() + static_cast<ptrdiff_t>(first),
+                    r.from->origins.begin() + static_cast<ptrdiff_t>(last));
   to.sizes.insert(to.sizes.end(), r.from->sizes.begin() + r.begin, r.from->sizes.begin() + r.end);
   to_answers.insert(to_answers.end(), answers.begin() + static_cast<ptrdiff_t>(first),
                     answers.begin() + static_cast<ptrdiff_t>(last));
@@ -70,7 +77,12 @@ void for_each_batch(const RayBatches& batches, int threads, const Trace& trace) 
          g = next.fetch_add(1, std::memory_order_relaxed)) {
       const size_t end = g + 1 < groups ? batches.groups[g + 1] : batches.sizes.size();
       for (size_t k = batches.groups[g]; k < end; ++k) {
-        trace(std::span<const Ray>(batches.rays.data() + offsets[k], batches.sizes[k]), offsets[k]);
+        const std::span<const uint32_t> origins =
+            batches.origins.size() == batches.rays.size()
+                ? std::span<const uint32_t>(batches.origins.data() + offsets[k], batches.sizes[k])
+                : std::span<const uint32_t>();
+        trace(std::span<const Ray>(batches.rays.data() + offsets[k], batches.sizes[k]), origins,
+              offsets[k]);
       }
     }
   };
@@ -110,20 +122,32 @@ void RecordingAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occl
 }
 
 void RecordingAccel::intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const {
-  inner_.intersect_incoherent(rays, hits);
-  Buffer& b = buffer();
-  if (b.groups.empty()) b.groups.emplace_back();  // before any coherent query
-  append(b.recorded.closest, rays);
-  b.recorded.hits.insert(b.recorded.hits.end(), hits.begin(),
-                         hits.begin() + static_cast<ptrdiff_t>(rays.size()));
+  intersect_incoherent_from(rays, {}, hits);
 }
 
 void RecordingAccel::occluded_incoherent(std::span<const Ray> rays,
                                          std::span<uint8_t> occluded) const {
-  inner_.occluded_incoherent(rays, occluded);
+  occluded_incoherent_from(rays, {}, occluded);
+}
+
+void RecordingAccel::intersect_incoherent_from(std::span<const Ray> rays,
+                                               std::span<const uint32_t> origins,
+                                               std::span<Hit> hits) const {
+  inner_.intersect_incoherent_from(rays, origins, hits);
+  Buffer& b = buffer();
+  if (b.groups.empty()) b.groups.emplace_back();  // before any coherent query
+  append(b.recorded.closest, rays, origins);
+  b.recorded.hits.insert(b.recorded.hits.end(), hits.begin(),
+                         hits.begin() + static_cast<ptrdiff_t>(rays.size()));
+}
+
+void RecordingAccel::occluded_incoherent_from(std::span<const Ray> rays,
+                                              std::span<const uint32_t> origins,
+                                              std::span<uint8_t> occluded) const {
+  inner_.occluded_incoherent_from(rays, origins, occluded);
   Buffer& b = buffer();
   if (b.groups.empty()) b.groups.emplace_back();
-  append(b.recorded.any, rays);
+  append(b.recorded.any, rays, origins);
   b.recorded.occluded.insert(b.recorded.occluded.end(), occluded.begin(),
                              occluded.begin() + static_cast<ptrdiff_t>(rays.size()));
 }
@@ -181,16 +205,19 @@ RecordedRays RecordingAccel::take() {
 
 void replay_closest(const Accel& accel, const RayBatches& batches, std::span<Hit> hits,
                     int threads) {
-  for_each_batch(batches, threads, [&](std::span<const Ray> rays, size_t first) {
-    accel.intersect_incoherent(rays, hits.subspan(first, rays.size()));
-  });
+  for_each_batch(batches, threads,
+                 [&](std::span<const Ray> rays, std::span<const uint32_t> origins, size_t first) {
+                   accel.intersect_incoherent_from(rays, origins, hits.subspan(first, rays.size()));
+                 });
 }
 
 void replay_any(const Accel& accel, const RayBatches& batches, std::span<uint8_t> occluded,
                 int threads) {
-  for_each_batch(batches, threads, [&](std::span<const Ray> rays, size_t first) {
-    accel.occluded_incoherent(rays, occluded.subspan(first, rays.size()));
-  });
+  for_each_batch(batches, threads,
+                 [&](std::span<const Ray> rays, std::span<const uint32_t> origins, size_t first) {
+                   accel.occluded_incoherent_from(rays, origins,
+                                                  occluded.subspan(first, rays.size()));
+                 });
 }
 
 }  // namespace tritrace

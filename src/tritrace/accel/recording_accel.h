@@ -23,6 +23,9 @@ namespace tritrace {
 // made them: group g is batches [groups[g], groups[g + 1]) (the last one up to the end).
 struct RayBatches {
   std::vector<Ray> rays;
+  // One per ray: the triangle it leaves, as given to the *_incoherent_from queries (kNoHit where
+  // none was given), which the replays pass on.
+  std::vector<uint32_t> origins;
   std::vector<uint32_t> sizes;
   std::vector<uint32_t> groups;
 };
@@ -55,6 +58,10 @@ class RecordingAccel final : public Accel {
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
   void intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const override;
   void occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
+  void intersect_incoherent_from(std::span<const Ray> rays, std::span<const uint32_t> origins,
+                                 std::span<Hit> hits) const override;
+  void occluded_incoherent_from(std::span<const Ray> rays, std::span<const uint32_t> origins,
+                                std::span<uint8_t> occluded) const override;
 
   // Everything recorded since the last take(), and forgets it. Each thread records into its own
   // buffers in call order, and starts a group at each coherent query (a tile's camera rays): the
@@ -93,10 +100,10 @@ class RecordingAccel final : public Accel {
   mutable std::atomic<uint64_t> coherent_rays_{0};
 };
 
-// Traces every batch of `batches` through accel.intersect_incoherent (closest) or
-// accel.occluded_incoherent (any), one call per batch as recorded, on `threads` threads that take
-// the groups in order, as the renderer's threads take tiles, each group's batches in order. `hits`
-// / `occluded` hold one answer per ray.
+// Traces every batch of `batches` through accel.intersect_incoherent_from (closest) or
+// accel.occluded_incoherent_from (any) with the recorded origins, one call per batch as recorded,
+// on `threads` threads that take the groups in order, as the renderer's threads take tiles, each
+// group's batches in order. `hits` / `occluded` hold one answer per ray.
 void replay_closest(const Accel& accel, const RayBatches& batches, std::span<Hit> hits,
                     int threads);
 void replay_any(const Accel& accel, const RayBatches& batches, std::span<uint8_t> occluded,

@@ -30,6 +30,7 @@ inline constexpr size_t kMaxShadowRays = 2 * kMaxBatch;
 
 struct Scratch {
   std::array<Ray, kMaxBatch> rays;
+  std::array<uint32_t, kMaxBatch> origins;  // the triangle each bounce ray leaves
   std::array<Ray, kMaxShadowRays> shadow_rays;
   std::array<Hit, kMaxBatch> hits;
   std::array<uint8_t, kMaxShadowRays> blocked;
@@ -61,13 +62,14 @@ struct ShadowRays {
 
   std::array<Ray, kMaxShadowRays>& rays;
   std::array<uint16_t, kMaxShadowRays> owner;
+  std::array<uint32_t, kMaxShadowRays> origin;  // the triangle the ray leaves
   std::array<glm::vec3, kMaxShadowRays> contribution;
   size_t count = 0;
 
   // Queues the ray from `from` (already off the surface at x, whose triangle's extent is
   // `extent`) to the light sample `ls` in direction wi; where nothing fits between the two
   // offsets, the contribution is added at once.
-  void add(const LightSample& ls, glm::vec3 wi, glm::vec3 from, float extent,
+  void add(const LightSample& ls, glm::vec3 wi, glm::vec3 from, uint32_t from_prim, float extent,
            glm::vec3 contribution_if_unblocked, uint16_t path, glm::vec3& radiance,
            const RayOffsetParams& offset) {
     glm::vec3 end;
@@ -92,6 +94,7 @@ struct ShadowRays {
     r.tmin = 0.0f;
     r.tmax = length;
     owner[count] = path;
+    origin[count] = from_prim;
     contribution[count] = contribution_if_unblocked;
     ++count;
   }
@@ -195,6 +198,10 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
   std::array<float, kMaxBatch> environment_pdf;
   std::array<uint16_t, kMaxBatch> path;  // active slot -> path index
   ShadowRays shadows(scratch.shadow_rays);
+  // The triangles the rays leave go to the accel with them (it may skip the convex mesh a ray
+  // leaves, bvh/convex_groups.h) where hits name the accel's own triangles: not through instances,
+  // whose hits name the scene's instanced triangles.
+  const bool origins_are_prims = !scene.has_instances();
   // The albedo and normal AOVs are those of the first surface that is not specular (every lobe a
   // delta), as Open Image Denoise and Cycles' denoising passes take them: through perfect mirrors
   // and smooth glass the path is followed on, the albedo multiplied by the tint of each delta
@@ -440,6 +447,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
             r.tmin = 0.0f;
             r.tmax = sh.shadow_length[l];
             shadows.owner[q] = i;
+            shadows.origin[q] = scratch.hits[k].prim;
             shadows.contribution[q] = contribution;
           } else {
             sink(i, depth >= 1) += contribution;
@@ -455,6 +463,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
           r.dir = vec(sh.wi);
           r.tmin = 0.0f;
           r.tmax = kRayTMax;
+          scratch.origins[next] = scratch.hits[k].prim;
           path[next] = i;
           ++next;
         }
@@ -621,7 +630,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
           const glm::vec3 contribution =
               light_contribution(ls, throughput[i] * f, std::abs(wi_local.z), dist2, mis,
                                  [&] { return bsdf.pdf(wo_local, wi_local); });
-          shadows.add(ls, wi, from, triangle_extent(tri.e1, tri.e2), contribution, i,
+          shadows.add(ls, wi, from, prim, triangle_extent(tri.e1, tri.e2), contribution, i,
                       sink(i, depth >= 1), offset_);
         };
         if (!lights_.empty() && !bsdf.all_delta()) {
@@ -663,6 +672,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
         r.dir = wi_world;
         r.tmin = 0.0f;
         r.tmax = kRayTMax;
+        scratch.origins[next] = prim;
         path[next] = i;
         ++next;
         continue;
@@ -696,7 +706,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
           const glm::vec3 contribution =
               light_contribution(ls, throughput[i] * f, cos_theta, dist2, mis,
                                  [&] { return cosine_hemisphere_pdf(cos_theta); });
-          shadows.add(ls, wi, start, triangle_extent(tri.e1, tri.e2), contribution, i,
+          shadows.add(ls, wi, start, prim, triangle_extent(tri.e1, tri.e2), contribution, i,
                       sink(i, depth >= 1), offset_);
         }
       }
@@ -709,7 +719,7 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
           const glm::vec3 contribution =
               light_contribution(ls, throughput[i] * f, cos_theta, 1.0f, mis,
                                  [&] { return cosine_hemisphere_pdf(cos_theta); });
-          shadows.add(ls, ls.wi, start, triangle_extent(tri.e1, tri.e2), contribution, i,
+          shadows.add(ls, ls.wi, start, prim, triangle_extent(tri.e1, tri.e2), contribution, i,
                       sink(i, depth >= 1), offset_);
         }
       }
@@ -738,13 +748,16 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
       r.dir = wi;
       r.tmin = 0.0f;
       r.tmax = kRayTMax;
+      scratch.origins[next] = prim;
       path[next] = i;
       ++next;
     }
 
     if (shadows.count > 0) {
-      accel.occluded_incoherent(std::span<const Ray>(scratch.shadow_rays.data(), shadows.count),
-                                std::span(scratch.blocked).first(shadows.count));
+      accel.occluded_incoherent_from(
+          std::span<const Ray>(scratch.shadow_rays.data(), shadows.count),
+          std::span<const uint32_t>(shadows.origin.data(), origins_are_prims ? shadows.count : 0),
+          std::span(scratch.blocked).first(shadows.count));
       traced += shadows.count;
       for (size_t s = 0; s < shadows.count; ++s) {
         if (!scratch.blocked[s]) sink(shadows.owner[s], depth >= 1) += shadows.contribution[s];
@@ -752,8 +765,10 @@ uint64_t PathIntegrator::trace(const SampleBatch& batch, const SampleOutput& out
     }
     active = next;
     if (active == 0) break;
-    accel.intersect_incoherent(std::span<const Ray>(scratch.rays.data(), active),
-                               std::span(scratch.hits).first(active));
+    accel.intersect_incoherent_from(
+        std::span<const Ray>(scratch.rays.data(), active),
+        std::span<const uint32_t>(scratch.origins.data(), origins_are_prims ? active : 0),
+        std::span(scratch.hits).first(active));
     traced += active;
   }
   if (clamp) {

@@ -4,6 +4,7 @@
 #include "tritrace/accel/bvh/bvh_accel.h"
 
 #include "tritrace/accel/bvh/block_kernels.h"
+#include "tritrace/accel/bvh/convex_groups.h"
 #include "tritrace/accel/bvh/packet_traversal.h"
 #include "tritrace/accel/bvh/ray_box.h"
 #include "tritrace/accel/bvh/traversal_stack.h"
@@ -107,9 +108,28 @@ template <Kernel K, int Kz = -1>
 
 #endif
 
-template <Kernel K, int Kz>
+// The children of a node (groups: its entry of bvh::child_groups) that hold only triangles of
+// group `skip`, as a mask of slots.
+[[gnu::always_inline]] inline uint32_t skipped_children(const bvh::ChildGroups& groups,
+                                                        uint32_t skip) {
+#if defined(__AVX2__)
+  const __m256i g = _mm256_load_si256(reinterpret_cast<const __m256i*>(groups.group));
+  return static_cast<uint32_t>(_mm256_movemask_ps(
+      _mm256_castsi256_ps(_mm256_cmpeq_epi32(g, _mm256_set1_epi32(static_cast<int>(skip))))));
+#else
+  uint32_t mask = 0;
+  for (int c = 0; c < kWidth; ++c) mask |= (groups.group[c] == skip ? 1u : 0u) << c;
+  return mask;
+#endif
+}
+
+// A ray leaving a convex group may skip it (bvh/convex_groups.h): with kSkip, the children that
+// hold only group `skip` (groups: the tree's bvh::child_groups) are left out at every node.
+template <Kernel K, int Kz, bool kSkip = false>
 Hit closest_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
-                     const PreparedRay<K>& prepared) {
+                     const PreparedRay<K>& prepared,
+                     [[maybe_unused]] const bvh::ChildGroups* groups = nullptr,
+                     [[maybe_unused]] uint32_t skip = bvh::kNoGroup) {
   Hit best;
   const RayBoxSetup setup = box_setup(ray);
   StackEntry stack[kStackSize];
@@ -123,6 +143,7 @@ Hit closest_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray&
       const WideNode& node = tree.nodes[ref];
       const float tmax = std::min(best.t, ray.tmax);
       uint32_t mask = intersect_boxes(node, setup, ray.tmin, tmax, tnear);
+      if constexpr (kSkip) mask &= ~skipped_children(groups[ref], skip);
       if (mask) {
         if (std::has_single_bit(mask)) {
           ref = node.child[std::countr_zero(mask)];
@@ -156,22 +177,34 @@ Hit closest_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray&
 
 // The closest hit of one ray. For the watertight kernel the ray's dominant axis picks one of three
 // instantiations, once per ray rather than once per leaf.
+// With skip != bvh::kNoGroup, the children holding only that group are left out (groups: the
+// tree's bvh::child_groups). One function for both, called from one place per loop: with a call
+// for each case GCC's inline-unit-growth limit left the per-ray set-up out of line, and a ray with
+// no group to skip took a third longer on sky.json (docs/PERFORMANCE.md, issue 27).
 template <Kernel K>
-Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray) {
+Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
+                [[maybe_unused]] const bvh::ChildGroups* groups = nullptr,
+                [[maybe_unused]] uint32_t skip = bvh::kNoGroup) {
   if (tree.nodes.empty() || !traceable(ray)) return Hit{};
   const PreparedRay<K> prepared(ray);
+  [[maybe_unused]] const bool skips = skip != bvh::kNoGroup;
 #if defined(__AVX2__)
   if constexpr (K == Kernel::kWatertight) {
     switch (prepared.watertight().kz) {
       case 0:
-        return closest_hit_from<K, 0>(tree, tris, ray, prepared);
+        return skips ? closest_hit_from<K, 0, true>(tree, tris, ray, prepared, groups, skip)
+                     : closest_hit_from<K, 0>(tree, tris, ray, prepared);
       case 1:
-        return closest_hit_from<K, 1>(tree, tris, ray, prepared);
+        return skips ? closest_hit_from<K, 1, true>(tree, tris, ray, prepared, groups, skip)
+                     : closest_hit_from<K, 1>(tree, tris, ray, prepared);
       default:
-        return closest_hit_from<K, 2>(tree, tris, ray, prepared);
+        return skips ? closest_hit_from<K, 2, true>(tree, tris, ray, prepared, groups, skip)
+                     : closest_hit_from<K, 2>(tree, tris, ray, prepared);
     }
   }
 #endif
+  // Other kernels (for comparison only) skip nothing: fewer instantiations, so that the compiler
+  // keeps inlining the per-ray set-up above (GCC's inline-unit-growth limit).
   return closest_hit_from<K, -1>(tree, tris, ray, prepared);
 }
 
@@ -180,13 +213,13 @@ struct StepCount {
   uint64_t nodes = 0, blocks = 0;
 };
 
-// Steps: the node and block visits are added to *steps (kCounted only; the same traversal).
-template <Kernel K, bool kCounted = false>
-bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
-             [[maybe_unused]] StepCount* steps = nullptr) {
-  if (tree.nodes.empty() || !traceable(ray)) return false;
+// Steps: the node and block visits are added to *steps (kCounted only; the same traversal). With
+// kSkip, as closest_hit_from: the children holding only group `skip` are left out.
+template <Kernel K, bool kCounted, bool kSkip>
+bool any_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
+                  const PreparedRay<K>& prepared, [[maybe_unused]] StepCount* steps,
+                  [[maybe_unused]] const bvh::ChildGroups* groups, [[maybe_unused]] uint32_t skip) {
   const RayBoxSetup setup = box_setup(ray);
-  const PreparedRay<K> prepared(ray);
   uint32_t stack[kStackSize];
   int sp = 0;
   uint32_t ref = 0;
@@ -200,6 +233,7 @@ bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
     } else {
       const WideNode& node = tree.nodes[ref];
       uint32_t mask = intersect_boxes(node, setup, ray.tmin, ray.tmax, tnear);
+      if constexpr (kSkip) mask &= ~skipped_children(groups[ref], skip);
       while (mask) {
         assert(sp < kStackSize);
         stack[sp++] = node.child[std::countr_zero(mask)];
@@ -209,6 +243,21 @@ bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
     if (sp == 0) return false;
     ref = stack[--sp];
   }
+}
+
+// As closest_hit: one function whether or not a group is skipped.
+template <Kernel K, bool kCounted = false>
+bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
+             StepCount* steps = nullptr, const bvh::ChildGroups* groups = nullptr,
+             uint32_t skip = bvh::kNoGroup) {
+  if (tree.nodes.empty() || !traceable(ray)) return false;
+  const PreparedRay<K> prepared(ray);
+  if constexpr (K == Kernel::kWatertight) {
+    if (skip != bvh::kNoGroup) {
+      return any_hit_from<K, kCounted, true>(tree, tris, ray, prepared, steps, groups, skip);
+    }
+  }
+  return any_hit_from<K, kCounted, false>(tree, tris, ray, prepared, steps, groups, skip);
 }
 
 // Trees at most this big trace incoherent queries as packets too (see intersect_incoherent). Not
@@ -621,6 +670,14 @@ BvhAccel::BvhAccel(const TriangleMesh& mesh, Kernel kernel, const bvh::BuildConf
     probes_packets_ = packets_;
     node_price_ = config.traversal_cost;
     block_price_ = config.block_cost;
+    // Rays leaving a convex mesh skip it (bvh/convex_groups.h): on scenes/sky.json two thirds of
+    // the bounce rays leave a sphere for the sky, and took the tree's depth in steps to find that
+    // they hit nothing, being inside the boxes of their own sphere's subtrees.
+    convex_ = bvh::find_convex_groups(mesh);
+    if (convex_.count() > 0) {
+      fine_groups_ = bvh::child_groups(bvh_, convex_.faces);
+      closest_groups_ = bvh::child_groups(closest_, convex_.faces);
+    }
   }
 }
 
@@ -664,6 +721,12 @@ void BvhAccel::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) 
 }
 
 void BvhAccel::intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const {
+  intersect_incoherent_from(rays, {}, hits);
+}
+
+void BvhAccel::intersect_incoherent_from(std::span<const Ray> rays,
+                                         std::span<const uint32_t> origins,
+                                         std::span<Hit> hits) const {
   // On closest_tree(), whose flags closest_packets_ and closest_interleave_ are.
   const bvh::WideBvh& tree = closest_tree();
   // A tree this small stays in L1, and packets of even unrelated rays share its few nodes and
@@ -686,11 +749,25 @@ void BvhAccel::intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hi
 #endif
   with_kernel(kernel_, [&]<Kernel K>() {
     const TriangleArrays tris = mesh_.arrays();
-    for (size_t i = 0; i < rays.size(); ++i) hits[i] = closest_hit<K>(tree, tris, rays[i]);
+    const bool skipping = skips(origins, rays.size());
+    const bvh::ChildGroups* groups =
+        closest_.nodes.empty() ? fine_groups_.data() : closest_groups_.data();
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const uint32_t skip =
+          skipping ? bvh::skip_group(convex_.faces, convex_.flat, origins[i], &rays[i].dir.x)
+                   : bvh::kNoGroup;
+      hits[i] = closest_hit<K>(tree, tris, rays[i], groups, skip);
+    }
   });
 }
 
 void BvhAccel::occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+  occluded_incoherent_from(rays, {}, occluded);
+}
+
+void BvhAccel::occluded_incoherent_from(std::span<const Ray> rays,
+                                        std::span<const uint32_t> origins,
+                                        std::span<uint8_t> occluded) const {
   if constexpr (bvh::kPacketSize > 0) {
     if (incoherent_packets_) {
       BvhAccel::occluded(rays, occluded);
@@ -700,7 +777,7 @@ void BvhAccel::occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t>
   if (probes_occluded_) {
     static thread_local uint64_t calls = 0;
     if (calls++ % kOccludedProbeEvery == 0) {
-      probe_occluded(rays, occluded);
+      probe_occluded(rays, origins, occluded);
       return;
     }
   }
@@ -723,7 +800,14 @@ void BvhAccel::occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t>
 #endif
   with_kernel(kernel_, [&]<Kernel K>() {
     const TriangleArrays tris = mesh_.arrays();
-    for (size_t i = 0; i < rays.size(); ++i) occluded[i] = any_hit<K>(tree, tris, rays[i]) ? 1 : 0;
+    const bool skipping = skips(origins, rays.size());
+    const bvh::ChildGroups* groups = coarse ? closest_groups_.data() : fine_groups_.data();
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const uint32_t skip =
+          skipping ? bvh::skip_group(convex_.faces, convex_.flat, origins[i], &rays[i].dir.x)
+                   : bvh::kNoGroup;
+      occluded[i] = any_hit<K>(tree, tris, rays[i], nullptr, groups, skip) ? 1 : 0;
+    }
   });
 }
 
@@ -731,13 +815,21 @@ void BvhAccel::occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t>
 // the work, and once kOccludedProbeRays rays have been counted (by any thread) chooses the way
 // whose work so far, priced as the SAH prices it, costs least; tree() one ray at a time on a tie.
 // Counts from threads that probe at once may land in either choice.
-void BvhAccel::probe_occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+void BvhAccel::probe_occluded(std::span<const Ray> rays, std::span<const uint32_t> origins,
+                              std::span<uint8_t> occluded) const {
   StepCount steps[2];
+  const bool skipping = skips(origins, rays.size());
   with_kernel(kernel_, [&]<Kernel K>() {
     const TriangleArrays tris = mesh_.arrays();
     for (size_t i = 0; i < rays.size(); ++i) {
-      occluded[i] = any_hit<K, true>(bvh_, tris, rays[i], &steps[0]) ? 1 : 0;
-      [[maybe_unused]] const bool same = any_hit<K, true>(closest_, tris, rays[i], &steps[1]);
+      // Counted as the single rays go: skipping what the ray leaves where it may.
+      const uint32_t skip =
+          skipping ? bvh::skip_group(convex_.faces, convex_.flat, origins[i], &rays[i].dir.x)
+                   : bvh::kNoGroup;
+      occluded[i] =
+          any_hit<K, true>(bvh_, tris, rays[i], &steps[0], fine_groups_.data(), skip) ? 1 : 0;
+      [[maybe_unused]] const bool same =
+          any_hit<K, true>(closest_, tris, rays[i], &steps[1], closest_groups_.data(), skip);
       assert(same == (occluded[i] != 0));
     }
   });

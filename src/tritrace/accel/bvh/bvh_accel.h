@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "tritrace/accel/accel.h"
+#include "tritrace/accel/bvh/convex_groups.h"
 #include "tritrace/accel/bvh/wide_bvh.h"
 #include "tritrace/geometry/intersect.h"
 
@@ -41,6 +42,15 @@ class BvhAccel final : public Accel {
   // L1 under kAuto, whose incoherent rays go as packets too (the same answers).
   void intersect_incoherent(std::span<const Ray> rays, std::span<Hit> hits) const override;
   void occluded_incoherent(std::span<const Ray> rays, std::span<uint8_t> occluded) const override;
+  // With the triangles the rays leave: a small mesh's single rays (those not traced as packets or
+  // interleaved) skip the subtrees holding only the convex group they leave outwards
+  // (bvh/convex_groups.h, computed at build for meshes with a second tree).
+  void intersect_incoherent_from(std::span<const Ray> rays, std::span<const uint32_t> origins,
+                                 std::span<Hit> hits) const override;
+  void occluded_incoherent_from(std::span<const Ray> rays, std::span<const uint32_t> origins,
+                                std::span<uint8_t> occluded) const override;
+  // The convex groups of the mesh (none for a mesh without a second tree).
+  const bvh::ConvexGroups& convex_groups() const { return convex_; }
 
   const bvh::WideBvh& tree() const { return bvh_; }
   // The tree of intersect_incoherent: tree() itself, or for a small mesh built with fine leaves a
@@ -95,8 +105,15 @@ class BvhAccel final : public Accel {
   mutable std::atomic<uint64_t> probe_nodes_[2] = {0, 0}, probe_blocks_[2] = {0, 0};
   mutable std::atomic<uint64_t> probe_box_tests_[2] = {0, 0}, probe_leaf_tests_[2] = {0, 0};
   float node_price_ = 1.0f, block_price_ = 1.0f;
+  // The mesh's convex groups and, per tree, the group below each node's children.
+  bvh::ConvexGroups convex_;
+  std::vector<bvh::ChildGroups> fine_groups_, closest_groups_;
+  bool skips(std::span<const uint32_t> origins, size_t rays) const {
+    return convex_.count() > 0 && origins.size() == rays;
+  }
 
-  void probe_occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const;
+  void probe_occluded(std::span<const Ray> rays, std::span<const uint32_t> origins,
+                      std::span<uint8_t> occluded) const;
 };
 
 }  // namespace tritrace

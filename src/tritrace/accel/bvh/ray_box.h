@@ -29,7 +29,9 @@ struct RayBoxSetup {
   int near_off[3], far_off[3];
 };
 
-inline RayBoxSetup box_setup(const Ray& ray) {
+// Always inlined: the single-ray traversals call it once per ray, and GCC's inline-unit-growth
+// limit left it out of line in bvh_accel.cpp once that file had a traversal variant more.
+[[gnu::always_inline]] inline RayBoxSetup box_setup(const Ray& ray) {
   RayBoxSetup s;
   const glm::vec3 mag = glm::abs(ray.origin);
   const float pad = bvh::origin_padding(std::max({mag.x, mag.y, mag.z}));
