@@ -33,7 +33,7 @@
 namespace tritrace {
 namespace {
 
-float mean(glm::vec3 c) {
+float channel_mean(glm::vec3 c) {
   return (c.x + c.y + c.z) / 3.0f;
 }
 
@@ -2513,7 +2513,7 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
   std::vector<float> power;
   for (uint32_t i = 0; i < scene.lights.size(); ++i) {
     const PointLight& l = scene.lights[i];
-    const float p = mean(l.power);
+    const float p = channel_mean(l.power);
     if (!(p > 0.0f)) continue;
     Emitter e;
     e.point = true;
@@ -2531,7 +2531,7 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
     const Material& m = scene.materials[t.material];
     if (!m.emits()) return;
     const float area = 0.5f * glm::length(glm::cross(t.e1, t.e2));
-    const float p = mean(m.emission) * area * kPi * (m.two_sided ? 2.0f : 1.0f);
+    const float p = channel_mean(m.emission) * area * kPi * (m.two_sided ? 2.0f : 1.0f);
     if (!(p > 0.0f) || !std::isfinite(p)) return;
     Emitter e;
     e.prim = prim;
@@ -2615,7 +2615,7 @@ void BdptIntegrator::add_delta_lights(const Scene& scene, std::vector<float>& po
   // (half, against the others' sum) is the same too.
   for (uint32_t i = 0; i < scene.spot_lights.size(); ++i) {
     const SpotLight& l = scene.spot_lights[i];
-    const float p = mean(spot_light_power(l));
+    const float p = channel_mean(spot_light_power(l));
     if (!(p > 0.0f) || !std::isfinite(p)) continue;
     Emitter e;
     e.spot = true;
