@@ -123,6 +123,16 @@ template <Kernel K, int Kz = -1>
 #endif
 }
 
+// The group ray i of a batch may skip (bvh::skip_group); kNoGroup for every ray where `skipping`
+// is false (the batch came without origins, or the mesh has no convex group: BvhAccel::skips).
+[[gnu::always_inline]] inline uint32_t batch_skip_group(const bvh::ConvexGroups& convex,
+                                                        bool skipping,
+                                                        std::span<const uint32_t> origins,
+                                                        std::span<const Ray> rays, size_t i) {
+  return skipping ? bvh::skip_group(convex.faces, convex.flat, origins[i], &rays[i].dir.x)
+                  : bvh::kNoGroup;
+}
+
 // A ray leaving a convex group may skip it (bvh/convex_groups.h): with kSkip, the children that
 // hold only group `skip` (groups: the tree's bvh::child_groups) are left out at every node.
 template <Kernel K, int Kz, bool kSkip = false>
@@ -753,9 +763,7 @@ void BvhAccel::intersect_incoherent_from(std::span<const Ray> rays,
     const bvh::ChildGroups* groups =
         closest_.nodes.empty() ? fine_groups_.data() : closest_groups_.data();
     for (size_t i = 0; i < rays.size(); ++i) {
-      const uint32_t skip =
-          skipping ? bvh::skip_group(convex_.faces, convex_.flat, origins[i], &rays[i].dir.x)
-                   : bvh::kNoGroup;
+      const uint32_t skip = batch_skip_group(convex_, skipping, origins, rays, i);
       hits[i] = closest_hit<K>(tree, tris, rays[i], groups, skip);
     }
   });
@@ -803,9 +811,7 @@ void BvhAccel::occluded_incoherent_from(std::span<const Ray> rays,
     const bool skipping = skips(origins, rays.size());
     const bvh::ChildGroups* groups = coarse ? closest_groups_.data() : fine_groups_.data();
     for (size_t i = 0; i < rays.size(); ++i) {
-      const uint32_t skip =
-          skipping ? bvh::skip_group(convex_.faces, convex_.flat, origins[i], &rays[i].dir.x)
-                   : bvh::kNoGroup;
+      const uint32_t skip = batch_skip_group(convex_, skipping, origins, rays, i);
       occluded[i] = any_hit<K>(tree, tris, rays[i], nullptr, groups, skip) ? 1 : 0;
     }
   });
@@ -823,9 +829,7 @@ void BvhAccel::probe_occluded(std::span<const Ray> rays, std::span<const uint32_
     const TriangleArrays tris = mesh_.arrays();
     for (size_t i = 0; i < rays.size(); ++i) {
       // Counted as the single rays go: skipping what the ray leaves where it may.
-      const uint32_t skip =
-          skipping ? bvh::skip_group(convex_.faces, convex_.flat, origins[i], &rays[i].dir.x)
-                   : bvh::kNoGroup;
+      const uint32_t skip = batch_skip_group(convex_, skipping, origins, rays, i);
       occluded[i] =
           any_hit<K, true>(bvh_, tris, rays[i], &steps[0], fine_groups_.data(), skip) ? 1 : 0;
       [[maybe_unused]] const bool same =
