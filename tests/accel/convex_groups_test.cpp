@@ -10,6 +10,8 @@
 #include <cmath>
 #include <cstring>
 #include <glm/geometric.hpp>
+#include <iterator>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -303,6 +305,75 @@ TEST(ConvexGroups, RaysLeavingTrianglesGetBruteForceAnswersWithTheirOrigins) {
   const TriangleMesh m = mixed_scene();
   expect_brute_force_answers(m, BvhTraversal::kSingle);
   expect_brute_force_answers(m, BvhTraversal::kAuto);
+}
+
+// BvhAccel screens each batch's rays against the root eight at a time (root_survivors in
+// bvh_accel.cpp) and traverses only those that meet a root box. On the open sky scene most rays
+// leave past every root box: they, rays that meet one, rays that cannot be traced (NaN, infinite or
+// zero directions, empty intervals), rays parallel to an axis and batches of every length up to
+// and past the screen's chunks must get brute force's answers, with and without origins.
+TEST(ConvexGroups, BatchesOfRaysPastTheRootGetBruteForceAnswers) {
+  const TriangleMesh m = sky_scene().scene.mesh;
+  const BvhAccel bvh(m, kDefaultKernel, bvh::default_build_config(m.size()));
+  const BruteForceAccel brute(m, kDefaultKernel);
+  LeavingRays in = leaving_rays(m, 3000, 17);
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<float> s(-1.0f, 1.0f), height(-3.0f, 0.9f);
+  for (int k = 0; k < 3000; ++k) {
+    // From above the ground (y < 1 is above: the scene's up is -y), anywhere around the spheres.
+    Ray r;
+    r.origin = glm::vec3(4.0f * s(rng), height(rng), 4.0f * s(rng));
+    r.dir = glm::vec3(s(rng), s(rng), s(rng));
+    if (k % 5 == 0) r.dir[k % 3] = 0.0f;  // parallel to an axis's slabs
+    if (k % 7 == 0) r.dir = glm::vec3(0.0f, k % 2 ? 1.0f : -1.0f, 0.0f);
+    r.tmax = k % 3 == 0 ? 2.0f : kRayTMax;
+    in.rays.push_back(r);
+    in.origins.push_back(kNoHit);
+  }
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  const glm::vec3 bad_dirs[4] = {glm::vec3(0.0f), glm::vec3(nan, 0.0f, 1.0f),
+                                 glm::vec3(0.0f, inf, 0.0f), glm::vec3(0.3f, -1.0f, 0.2f)};
+  for (int k = 0; k < 40; ++k) {
+    Ray r;
+    r.origin = k % 5 == 4 ? glm::vec3(nan, 0.0f, 0.0f) : glm::vec3(0.0f, 0.5f, -3.0f);
+    r.dir = bad_dirs[k % 4];
+    if (k % 4 == 3) r.tmin = 2.0f, r.tmax = 1.0f;  // an empty interval
+    in.rays.insert(in.rays.begin() + 37 * k, r);
+    in.origins.insert(in.origins.begin() + 37 * k, kNoHit);
+  }
+  std::vector<Hit> want(in.rays.size());
+  std::vector<uint8_t> want_blocked(in.rays.size());
+  brute.intersect(in.rays, want);
+  brute.occluded(in.rays, want_blocked);
+  size_t misses = 0;
+  for (const Hit& h : want) misses += !h.found();
+  EXPECT_GT(misses, in.rays.size() / 3);  // many rays leave past everything
+  EXPECT_LT(misses, in.rays.size() * 9 / 10);
+  for (const bool with_origins : {true, false}) {
+    std::vector<Hit> got(in.rays.size());
+    std::vector<uint8_t> blocked(in.rays.size(), 7);
+    const size_t lengths[] = {1, 3, 7, 8, 9, 15, 16, 17, 63, 64, 65, 130, 200};
+    size_t first = 0;
+    for (size_t b = 0; first < in.rays.size(); ++b) {
+      const size_t k = std::min(lengths[b % std::size(lengths)], in.rays.size() - first);
+      const std::span<const Ray> rays(in.rays.data() + first, k);
+      const std::span<const uint32_t> origins =
+          with_origins ? std::span<const uint32_t>(in.origins.data() + first, k)
+                       : std::span<const uint32_t>();
+      bvh.intersect_incoherent_from(rays, origins, std::span<Hit>(got.data() + first, k));
+      bvh.occluded_incoherent_from(rays, origins, std::span<uint8_t>(blocked.data() + first, k));
+      first += k;
+    }
+    for (size_t i = 0; i < in.rays.size(); ++i) {
+      EXPECT_EQ(got[i].prim, want[i].prim) << i << " " << with_origins;
+      EXPECT_EQ(got[i].t, want[i].t) << i;
+      EXPECT_EQ(got[i].u, want[i].u) << i;
+      EXPECT_EQ(got[i].v, want[i].v) << i;
+      EXPECT_EQ(blocked[i] != 0, want_blocked[i] != 0) << i << " " << with_origins;
+      EXPECT_LE(blocked[i], 1) << i;
+    }
+  }
 }
 
 TEST(ConvexGroups, RecordingAccelKeepsAndReplaysTheOrigins) {

@@ -9,11 +9,16 @@
 #include <bit>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <glm/glm.hpp>
 #include <optional>
 #include <string_view>
 
 #include "tritrace/math/ray.h"
+
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
 
 namespace tritrace {
 
@@ -117,17 +122,44 @@ struct WatertightRay {
 // Per-ray work, done once and reused for every triangle. The paper also swaps kx and ky when
 // dir[kz] < 0 to keep each triangle's winding; both sides count as hits here and t, u, v do not
 // depend on it, so the swap is left out.
+// Branch-free with SSE/AVX: the axis picks a lane permutation rather than an element, since rays
+// come in any direction and the compiler turned the scalar version's selects into branches that
+// mispredicted on most incoherent rays (docs/PERFORMANCE.md, issue 27). Both versions do the same
+// IEEE operations (one division, two products) on the same operands, so their bits are the same.
 inline WatertightRay prepare_watertight(const Ray& ray) {
   WatertightRay w;
-  w.tmin = ray.tmin;
-  w.tmax = ray.tmax;
   const std::array<float, 3> d = std::bit_cast<std::array<float, 3>>(ray.dir);
   const std::array<float, 3> o = std::bit_cast<std::array<float, 3>>(ray.origin);
-  // Written as selects rather than nested branches: rays come in any direction, and a mispredicted
-  // branch per ray costs more than the selects.
-  const float largest_xy = std::max(std::abs(d[0]), std::abs(d[1]));
-  w.kz = std::abs(d[1]) > std::abs(d[0]) ? 1 : 0;
-  w.kz = std::abs(d[2]) > largest_xy ? 2 : w.kz;
+  const float ax = std::abs(d[0]), ay = std::abs(d[1]), az = std::abs(d[2]);
+  // kz = 1 where |dy| > |dx|, else 0; 2 where |dz| exceeds both (ties go to the lower axis).
+  const int k01 = static_cast<int>(ay > ax);
+  const int z_wins = static_cast<int>(az > std::max(ax, ay));
+  w.kz = k01 + z_wins * (2 - k01);
+  bool finite;
+#if defined(__AVX__)
+  // Lane orders (kx, ky, kz, -) for kz = 0, 1, 2.
+  alignas(16) static constexpr int32_t kOrder[3][4] = {{1, 2, 0, 3}, {2, 0, 1, 3}, {0, 1, 2, 3}};
+  const __m128i order = _mm_load_si128(reinterpret_cast<const __m128i*>(kOrder[w.kz]));
+  const __m128 pd = _mm_permutevar_ps(_mm_setr_ps(d[0], d[1], d[2], 1.0f), order);
+  const __m128 po = _mm_permutevar_ps(_mm_setr_ps(o[0], o[1], o[2], 0.0f), order);
+  const float dz = _mm_cvtss_f32(_mm_movehl_ps(pd, pd));
+  w.sz = 1.0f / dz;
+  // (dx, dy) * sz in lanes 0 and 1; lane 2 gets sz itself and lane 3 stays 0.
+  const __m128 shear =
+      _mm_mul_ps(_mm_blend_ps(pd, _mm_setr_ps(0.0f, 0.0f, 1.0f, 0.0f), 0b1100), _mm_set1_ps(w.sz));
+  w.sx = _mm_cvtss_f32(shear);
+  w.sy = _mm_cvtss_f32(_mm_shuffle_ps(shear, shear, 1));
+  alignas(16) float origin[4];
+  _mm_store_ps(origin, po);
+  w.ox = origin[0];
+  w.oy = origin[1];
+  w.oz = origin[2];
+  // x - x is 0 for every finite x and NaN for infinities and NaN: the origin, sx, sy and sz are
+  // finite when every lane's difference equals zero (the fourth lanes hold zeros).
+  const __m128 ok = _mm_and_ps(_mm_cmpeq_ps(_mm_sub_ps(po, po), _mm_setzero_ps()),
+                               _mm_cmpeq_ps(_mm_sub_ps(shear, shear), _mm_setzero_ps()));
+  finite = _mm_movemask_ps(ok) == 0xF && w.sz != 0.0f;
+#else
   const int kx = w.kz == 2 ? 0 : w.kz + 1;
   const int ky = kx == 2 ? 0 : kx + 1;
   w.ox = o[kx];
@@ -136,15 +168,13 @@ inline WatertightRay prepare_watertight(const Ray& ray) {
   w.sz = 1.0f / d[w.kz];
   w.sx = d[kx] * w.sz;
   w.sy = d[ky] * w.sz;
-  const bool finite = std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]) &&
-                      std::isfinite(w.sx) && std::isfinite(w.sy) && std::isfinite(w.sz) &&
-                      w.sz != 0.0f;
+  finite = std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]) &&
+           std::isfinite(w.sx) && std::isfinite(w.sy) && std::isfinite(w.sz) && w.sz != 0.0f;
+#endif
   // A zero, infinite or NaN direction (or origin) hits nothing: an empty t interval says so
   // without a branch in the per-triangle test.
-  if (!finite) {
-    w.tmin = kRayTMax;
-    w.tmax = -kRayTMax;
-  }
+  w.tmin = finite ? ray.tmin : kRayTMax;
+  w.tmax = finite ? ray.tmax : -kRayTMax;
   return w;
 }
 

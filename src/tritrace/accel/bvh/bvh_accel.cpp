@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <utility>
 
 #if defined(__AVX2__)
@@ -133,6 +134,137 @@ template <Kernel K, int Kz = -1>
                   : bvh::kNoGroup;
 }
 
+#if defined(__AVX2__)
+// Rays are screened against the root in chunks of this many (see root_survivors).
+inline constexpr size_t kRootChunk = 64;
+
+// Eight rays' rows (origin, dir, tmin, tmax: a Ray is eight floats) in, their columns out: ox, oy,
+// oz, dx, dy, dz, tmin, tmax, one ray per lane.
+static_assert(sizeof(Ray) == 8 * sizeof(float));
+[[gnu::always_inline]] inline void transpose8(__m256 r[8]) {
+  const __m256 a0 = _mm256_unpacklo_ps(r[0], r[1]), a1 = _mm256_unpackhi_ps(r[0], r[1]);
+  const __m256 a2 = _mm256_unpacklo_ps(r[2], r[3]), a3 = _mm256_unpackhi_ps(r[2], r[3]);
+  const __m256 a4 = _mm256_unpacklo_ps(r[4], r[5]), a5 = _mm256_unpackhi_ps(r[4], r[5]);
+  const __m256 a6 = _mm256_unpacklo_ps(r[6], r[7]), a7 = _mm256_unpackhi_ps(r[6], r[7]);
+  const __m256 b0 = _mm256_shuffle_ps(a0, a2, 0x44), b1 = _mm256_shuffle_ps(a0, a2, 0xEE);
+  const __m256 b2 = _mm256_shuffle_ps(a1, a3, 0x44), b3 = _mm256_shuffle_ps(a1, a3, 0xEE);
+  const __m256 b4 = _mm256_shuffle_ps(a4, a6, 0x44), b5 = _mm256_shuffle_ps(a4, a6, 0xEE);
+  const __m256 b6 = _mm256_shuffle_ps(a5, a7, 0x44), b7 = _mm256_shuffle_ps(a5, a7, 0xEE);
+  r[0] = _mm256_permute2f128_ps(b0, b4, 0x20);
+  r[1] = _mm256_permute2f128_ps(b1, b5, 0x20);
+  r[2] = _mm256_permute2f128_ps(b2, b6, 0x20);
+  r[3] = _mm256_permute2f128_ps(b3, b7, 0x20);
+  r[4] = _mm256_permute2f128_ps(b0, b4, 0x31);
+  r[5] = _mm256_permute2f128_ps(b1, b5, 0x31);
+  r[6] = _mm256_permute2f128_ps(b2, b6, 0x31);
+  r[7] = _mm256_permute2f128_ps(b3, b7, 0x31);
+}
+
+// The rays in [begin, end) (at most kRootChunk) that meet a child box of the root, leaving out the
+// children of the group each ray may skip as its traversal leaves them out: their indices in
+// `survivors` and skip groups in `skips`; returns how many. Every other ray hits nothing, as its
+// traversal would find after the same root test. On an open scene most bounce and shadow rays
+// leave past every root box (scenes/sky.json: two thirds of its shadow rays), and each paid its
+// per-ray set-up and a root test of 150-200 instructions; here eight rays are tested at once, one
+// per lane, child after child (docs/PERFORMANCE.md, issue 27). Each lane does box_setup's and
+// intersect_boxes's operations in their order on the same operands (the near plane chosen by the
+// inverse direction's sign bit, the padded origins, max and min with the same NaN operand), so a
+// ray survives exactly when its own root test meets a child. kClosest: the interval the closest
+// hit tests, [tmin, min(Hit{}.t, tmax)]; else the any hit's [tmin, tmax]. Watertight kernel only
+// (the only one that skips groups).
+template <bool kClosest>
+size_t root_survivors(const WideBvh& tree, const bvh::ChildGroups* groups,
+                      const bvh::ConvexGroups& convex, bool skipping,
+                      std::span<const uint32_t> origins, std::span<const Ray> rays, size_t begin,
+                      size_t end, uint32_t* survivors, uint32_t* skips) {
+  const WideNode& root = tree.nodes[0];
+  const float* lo[3] = {root.lo_x, root.lo_y, root.lo_z};
+  const float* hi[3] = {root.hi_x, root.hi_y, root.hi_z};
+  const uint32_t* child_group = skipping ? groups[0].group : nullptr;
+  size_t n = 0;
+  for (size_t first = begin; first < end; first += 8) {
+    const size_t count = std::min<size_t>(8, end - first);
+    // A short chunk's missing rows repeat its last ray; their lanes are dropped below.
+    __m256 r[8];
+    for (size_t k = 0; k < 8; ++k) {
+      r[k] = _mm256_loadu_ps(&rays[first + std::min(k, count - 1)].origin.x);
+    }
+    transpose8(r);
+    alignas(32) uint32_t skip[8];
+    for (size_t k = 0; k < 8; ++k) {
+      skip[k] =
+          k < count ? batch_skip_group(convex, skipping, origins, rays, first + k) : bvh::kNoGroup;
+    }
+    const __m256i skip_v = _mm256_load_si256(reinterpret_cast<const __m256i*>(skip));
+    const __m256i no_group = _mm256_set1_epi32(static_cast<int>(bvh::kNoGroup));
+    const __m256 skips_any = _mm256_castsi256_ps(
+        _mm256_xor_si256(_mm256_cmpeq_epi32(skip_v, no_group), _mm256_set1_epi32(-1)));
+    // traceable(): a finite origin and direction (x - x is 0 exactly for finite x) and tmin <=
+    // tmax.
+    __m256 finite = _mm256_cmp_ps(r[6], r[7], _CMP_LE_OQ);
+    for (int a = 0; a < 6; ++a) {
+      finite = _mm256_and_ps(
+          finite, _mm256_cmp_ps(_mm256_sub_ps(r[a], r[a]), _mm256_setzero_ps(), _CMP_EQ_OQ));
+    }
+    // box_setup: the inverse direction, the padding 2^-20 max |o|, the origins moved by it.
+    const __m256 sign_bit = _mm256_set1_ps(-0.0f);
+    const __m256 largest = _mm256_max_ps(
+        _mm256_max_ps(_mm256_andnot_ps(sign_bit, r[0]), _mm256_andnot_ps(sign_bit, r[1])),
+        _mm256_andnot_ps(sign_bit, r[2]));
+    const __m256 pad = _mm256_mul_ps(_mm256_set1_ps(bvh::kOriginPadding), largest);
+    __m256 inv[3], origin_near[3], origin_far[3];
+    for (int a = 0; a < 3; ++a) {
+      inv[a] = _mm256_div_ps(_mm256_set1_ps(1.0f), r[3 + a]);
+      const __m256 signed_pad = _mm256_or_ps(pad, _mm256_and_ps(inv[a], sign_bit));
+      origin_near[a] = _mm256_add_ps(r[a], signed_pad);
+      origin_far[a] = _mm256_sub_ps(r[a], signed_pad);
+    }
+    const __m256 tmax = kClosest ? _mm256_min_ps(_mm256_set1_ps(Hit{}.t), r[7]) : r[7];
+    __m256 alive = _mm256_setzero_ps();
+    for (int c = 0; c < kWidth; ++c) {
+      __m256 tn = r[6], tf = tmax;
+      for (int a = 0; a < 3; ++a) {
+        const __m256 l = _mm256_set1_ps(lo[a][c]), h = _mm256_set1_ps(hi[a][c]);
+        const __m256 near_plane = _mm256_blendv_ps(l, h, inv[a]);
+        const __m256 far_plane = _mm256_blendv_ps(h, l, inv[a]);
+        const __m256 nd = _mm256_mul_ps(_mm256_sub_ps(near_plane, origin_near[a]), inv[a]);
+        const __m256 fd = _mm256_mul_ps(_mm256_sub_ps(far_plane, origin_far[a]), inv[a]);
+        tn = _mm256_max_ps(nd, tn);
+        tf = _mm256_min_ps(fd, tf);
+      }
+      tf = _mm256_mul_ps(tf, _mm256_set1_ps(bvh::kFarScale));
+      __m256 hit = _mm256_cmp_ps(tn, tf, _CMP_LE_OQ);
+      if (child_group != nullptr) {
+        const __m256 skipped = _mm256_and_ps(
+            skips_any, _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                           skip_v, _mm256_set1_epi32(static_cast<int>(child_group[c])))));
+        hit = _mm256_andnot_ps(skipped, hit);
+      }
+      alive = _mm256_or_ps(alive, hit);
+    }
+    const uint32_t bits = static_cast<uint32_t>(_mm256_movemask_ps(_mm256_and_ps(alive, finite))) &
+                          ((1u << count) - 1u);
+    for (size_t k = 0; k < count; ++k) {
+      survivors[n] = static_cast<uint32_t>(first + k);
+      skips[n] = skip[k];
+      n += (bits >> k) & 1u;
+    }
+    // Where the chunk's first eight rays all meet a root box, the rest most likely do too (rays
+    // starting inside a closed room, scenes/glass.json's): they are traversed unscreened, which
+    // costs their traversal nothing and spares the screen (glass.json's bounce rays took 5% longer
+    // screened).
+    if (first == begin && n == count) {
+      for (size_t i = first + count; i < end; ++i, ++n) {
+        survivors[n] = static_cast<uint32_t>(i);
+        skips[n] = batch_skip_group(convex, skipping, origins, rays, i);
+      }
+      return n;
+    }
+  }
+  return n;
+}
+#endif
+
 // A ray leaving a convex group may skip it (bvh/convex_groups.h): with kSkip, the children that
 // hold only group `skip` (groups: the tree's bvh::child_groups) are left out at every node.
 template <Kernel K, int Kz, bool kSkip = false>
@@ -227,17 +359,22 @@ struct StepCount {
 // kSkip, as closest_hit_from: the children holding only group `skip` are left out.
 template <Kernel K, bool kCounted, bool kSkip>
 bool any_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
-                  const PreparedRay<K>& prepared, [[maybe_unused]] StepCount* steps,
+                  [[maybe_unused]] StepCount* steps,
                   [[maybe_unused]] const bvh::ChildGroups* groups, [[maybe_unused]] uint32_t skip) {
   const RayBoxSetup setup = box_setup(ray);
   uint32_t stack[kStackSize];
   int sp = 0;
   uint32_t ref = 0;
   alignas(32) float tnear[kWidth];
+  // The kernel's per-ray work is done at the first leaf block: most shadow rays of an open scene
+  // (scenes/sky.json's) end in the nodes, and the set-up's division and permutation were a tenth
+  // of their time (docs/PERFORMANCE.md, issue 27).
+  std::optional<PreparedRay<K>> prepared;
   for (;;) {
     if constexpr (kCounted) ++((ref & kLeafBit) ? steps->blocks : steps->nodes);
     if (ref & kLeafBit) {
-      if (intersect_block<K>(tree.blocks[ref & ~kLeafBit], tris, ray, prepared, nullptr)) {
+      if (!prepared) prepared.emplace(ray);
+      if (intersect_block<K>(tree.blocks[ref & ~kLeafBit], tris, ray, *prepared, nullptr)) {
         return true;
       }
     } else {
@@ -261,13 +398,12 @@ bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
              StepCount* steps = nullptr, const bvh::ChildGroups* groups = nullptr,
              uint32_t skip = bvh::kNoGroup) {
   if (tree.nodes.empty() || !traceable(ray)) return false;
-  const PreparedRay<K> prepared(ray);
   if constexpr (K == Kernel::kWatertight) {
     if (skip != bvh::kNoGroup) {
-      return any_hit_from<K, kCounted, true>(tree, tris, ray, prepared, steps, groups, skip);
+      return any_hit_from<K, kCounted, true>(tree, tris, ray, steps, groups, skip);
     }
   }
-  return any_hit_from<K, kCounted, false>(tree, tris, ray, prepared, steps, groups, skip);
+  return any_hit_from<K, kCounted, false>(tree, tris, ray, steps, groups, skip);
 }
 
 // Trees at most this big trace incoherent queries as packets too (see intersect_incoherent). Not
@@ -762,6 +898,25 @@ void BvhAccel::intersect_incoherent_from(std::span<const Ray> rays,
     const bool skipping = skips(origins, rays.size());
     const bvh::ChildGroups* groups =
         closest_.nodes.empty() ? fine_groups_.data() : closest_groups_.data();
+#if defined(__AVX2__)
+    if constexpr (K == Kernel::kWatertight) {
+      if (tree.nodes.empty()) {
+        std::fill(hits.begin(), hits.end(), Hit{});
+        return;
+      }
+      uint32_t survivors[kRootChunk], skip[kRootChunk];
+      for (size_t begin = 0; begin < rays.size(); begin += kRootChunk) {
+        const size_t end = std::min(rays.size(), begin + kRootChunk);
+        const size_t n = root_survivors<true>(tree, groups, convex_, skipping, origins, rays, begin,
+                                              end, survivors, skip);
+        std::fill(hits.begin() + begin, hits.begin() + end, Hit{});
+        for (size_t j = 0; j < n; ++j) {
+          hits[survivors[j]] = closest_hit<K>(tree, tris, rays[survivors[j]], groups, skip[j]);
+        }
+      }
+      return;
+    }
+#endif
     for (size_t i = 0; i < rays.size(); ++i) {
       const uint32_t skip = batch_skip_group(convex_, skipping, origins, rays, i);
       hits[i] = closest_hit<K>(tree, tris, rays[i], groups, skip);
@@ -810,6 +965,26 @@ void BvhAccel::occluded_incoherent_from(std::span<const Ray> rays,
     const TriangleArrays tris = mesh_.arrays();
     const bool skipping = skips(origins, rays.size());
     const bvh::ChildGroups* groups = coarse ? closest_groups_.data() : fine_groups_.data();
+#if defined(__AVX2__)
+    if constexpr (K == Kernel::kWatertight) {
+      if (tree.nodes.empty()) {
+        std::fill(occluded.begin(), occluded.end(), uint8_t{0});
+        return;
+      }
+      uint32_t survivors[kRootChunk], skip[kRootChunk];
+      for (size_t begin = 0; begin < rays.size(); begin += kRootChunk) {
+        const size_t end = std::min(rays.size(), begin + kRootChunk);
+        const size_t n = root_survivors<false>(tree, groups, convex_, skipping, origins, rays,
+                                               begin, end, survivors, skip);
+        std::fill(occluded.begin() + begin, occluded.begin() + end, uint8_t{0});
+        for (size_t j = 0; j < n; ++j) {
+          occluded[survivors[j]] =
+              any_hit<K>(tree, tris, rays[survivors[j]], nullptr, groups, skip[j]) ? 1 : 0;
+        }
+      }
+      return;
+    }
+#endif
     for (size_t i = 0; i < rays.size(); ++i) {
       const uint32_t skip = batch_skip_group(convex_, skipping, origins, rays, i);
       occluded[i] = any_hit<K>(tree, tris, rays[i], nullptr, groups, skip) ? 1 : 0;

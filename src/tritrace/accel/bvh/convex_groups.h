@@ -11,6 +11,7 @@
 // in one plane holds for both signs.
 #pragma once
 
+#include <bit>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -68,8 +69,12 @@ inline constexpr float kSkipMinCosine = 1e-3f;
   if (prim >= faces.size()) return kNoGroup;
   const ConvexFace& f = faces[prim];
   if (f.group == kNoGroup) return kNoGroup;
-  float cosine = f.n[0] * dir[0] + f.n[1] * dir[1] + f.n[2] * dir[2];
-  if (flat[f.group]) cosine = cosine < 0.0f ? -cosine : cosine;
+  // A flat group skips both ways: its cosine's sign bit is cleared. Without a branch, which was
+  // a coin toss where rays leave both flat and curved groups (scenes/sky.json's ground and
+  // spheres).
+  const float signed_cosine = f.n[0] * dir[0] + f.n[1] * dir[1] + f.n[2] * dir[2];
+  const uint32_t keep = 0xffffffffu >> (flat[f.group] != 0 ? 1 : 0);
+  const float cosine = std::bit_cast<float>(std::bit_cast<uint32_t>(signed_cosine) & keep);
   // |d|_1 >= |d|_2: the bound only grows with it.
   const float length = (dir[0] < 0.0f ? -dir[0] : dir[0]) + (dir[1] < 0.0f ? -dir[1] : dir[1]) +
                        (dir[2] < 0.0f ? -dir[2] : dir[2]);

@@ -74,8 +74,8 @@ struct RayBoxSetup {
 
 // Bit i set when child i's box meets [tmin, tmax]; tnear[i] is where. A NaN slab distance (origin
 // on the slab plane of a parallel ray) drops out of the max/min, which keeps the test conservative.
-inline uint32_t intersect_boxes(const WideNode& node, const RayBoxSetup& s, float tmin, float tmax,
-                                float* tnear) {
+[[gnu::always_inline]] inline uint32_t intersect_boxes(const WideNode& node, const RayBoxSetup& s,
+                                                       float tmin, float tmax, float* tnear) {
   const float* base = node.lo_x;
 #if defined(__AVX2__)
   __m256 tn = _mm256_set1_ps(tmin);
