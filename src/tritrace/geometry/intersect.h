@@ -119,6 +119,15 @@ struct WatertightRay {
   float tmax = kRayTMax;
 };
 
+// The watertight kernel's dominant axis of `dir` (WatertightRay::kz): 1 where |dy| > |dx|, else
+// 0; 2 where |dz| exceeds both (ties go to the lower axis; 0 for NaN).
+inline int watertight_axis(const glm::vec3& dir) {
+  const float ax = std::abs(dir.x), ay = std::abs(dir.y), az = std::abs(dir.z);
+  const int k01 = static_cast<int>(ay > ax);
+  const int z_wins = static_cast<int>(az > std::max(ax, ay));
+  return k01 + z_wins * (2 - k01);
+}
+
 // Per-ray work, done once and reused for every triangle. The paper also swaps kx and ky when
 // dir[kz] < 0 to keep each triangle's winding; both sides count as hits here and t, u, v do not
 // depend on it, so the swap is left out.
@@ -130,11 +139,7 @@ inline WatertightRay prepare_watertight(const Ray& ray) {
   WatertightRay w;
   const std::array<float, 3> d = std::bit_cast<std::array<float, 3>>(ray.dir);
   const std::array<float, 3> o = std::bit_cast<std::array<float, 3>>(ray.origin);
-  const float ax = std::abs(d[0]), ay = std::abs(d[1]), az = std::abs(d[2]);
-  // kz = 1 where |dy| > |dx|, else 0; 2 where |dz| exceeds both (ties go to the lower axis).
-  const int k01 = static_cast<int>(ay > ax);
-  const int z_wins = static_cast<int>(az > std::max(ax, ay));
-  w.kz = k01 + z_wins * (2 - k01);
+  w.kz = watertight_axis(ray.dir);
   bool finite;
 #if defined(__AVX__)
   // Lane orders (kx, ky, kz, -) for kz = 0, 1, 2.

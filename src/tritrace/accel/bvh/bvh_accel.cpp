@@ -350,6 +350,20 @@ Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
   return closest_hit_from<K, -1>(tree, tris, ray, prepared);
 }
 
+#if defined(__AVX2__)
+// closest_hit of the watertight kernel for a ray whose dominant axis (watertight_axis) is Kz, with
+// kSkip where it has a group to skip: for loops that sort their rays by both, so that choosing
+// the instantiation is not a branch per ray that the predictor cannot learn.
+template <int Kz, bool kSkip>
+Hit closest_hit_axis(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
+                     const bvh::ChildGroups* groups, uint32_t skip) {
+  if (!traceable(ray)) return Hit{};
+  const PreparedRay<Kernel::kWatertight> prepared(ray);
+  assert(prepared.watertight().kz == Kz);
+  return closest_hit_from<Kernel::kWatertight, Kz, kSkip>(tree, tris, ray, prepared, groups, skip);
+}
+#endif
+
 // Node and leaf-block visits of a traversal (BvhAccel's probe of its shadow rays).
 struct StepCount {
   uint64_t nodes = 0, blocks = 0;
@@ -910,9 +924,28 @@ void BvhAccel::intersect_incoherent_from(std::span<const Ray> rays,
         const size_t n = root_survivors<true>(tree, groups, convex_, skipping, origins, rays, begin,
                                               end, survivors, skip);
         std::fill(hits.begin() + begin, hits.begin() + end, Hit{});
+        // The survivors sorted by dominant axis and by whether they skip a group (six
+        // instantiations of the traversal), each ray's answer its own whatever the order.
+        uint32_t sorted[6][kRootChunk];
+        size_t sizes[6] = {};
         for (size_t j = 0; j < n; ++j) {
-          hits[survivors[j]] = closest_hit<K>(tree, tris, rays[survivors[j]], groups, skip[j]);
+          const int b = 2 * watertight_axis(rays[survivors[j]].dir) + (skip[j] != bvh::kNoGroup);
+          sorted[b][sizes[b]++] = static_cast<uint32_t>(j);
         }
+        const auto trace = [&]<int Kz, bool kSkip>() {
+          constexpr int b = 2 * Kz + (kSkip ? 1 : 0);
+          for (size_t q = 0; q < sizes[b]; ++q) {
+            const uint32_t j = sorted[b][q];
+            hits[survivors[j]] =
+                closest_hit_axis<Kz, kSkip>(tree, tris, rays[survivors[j]], groups, skip[j]);
+          }
+        };
+        trace.template operator()<0, false>();
+        trace.template operator()<0, true>();
+        trace.template operator()<1, false>();
+        trace.template operator()<1, true>();
+        trace.template operator()<2, false>();
+        trace.template operator()<2, true>();
       }
       return;
     }
