@@ -4,8 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <random>
+#include <vector>
 
 namespace tritrace {
 namespace {
@@ -188,6 +192,74 @@ TEST(KernelNames, RoundTripAndRejectUnknown) {
   EXPECT_EQ(parse_kernel("watertight"), Kernel::kWatertight);
   EXPECT_FALSE(parse_kernel("Cramer").has_value());
   EXPECT_FALSE(parse_kernel("").has_value());
+}
+
+// prepare_watertight_axis<Kz> (the BVH's closest hit, which divides once for the box test and the
+// kernel) against prepare_watertight, field for field and bit for bit.
+WatertightRay prepared_with_axis(const Ray& ray) {
+  const int kz = watertight_axis(ray.dir);
+  const float sz = 1.0f / ray.dir[kz];
+  if (kz == 0) return prepare_watertight_axis<0>(ray, sz);
+  if (kz == 1) return prepare_watertight_axis<1>(ray, sz);
+  return prepare_watertight_axis<2>(ray, sz);
+}
+
+void expect_same_bits(const WatertightRay& a, const WatertightRay& b) {
+  EXPECT_EQ(a.kz, b.kz);
+  const float fa[] = {a.ox, a.oy, a.oz, a.sx, a.sy, a.sz, a.tmin, a.tmax};
+  const float fb[] = {b.ox, b.oy, b.oz, b.sx, b.sy, b.sz, b.tmin, b.tmax};
+  for (int i = 0; i < 8; ++i) {
+    EXPECT_EQ(std::bit_cast<uint32_t>(fa[i]), std::bit_cast<uint32_t>(fb[i])) << "field " << i;
+  }
+}
+
+TEST(WatertightPrepare, FixedAxisVersionHandComputed) {
+  Ray ray;
+  ray.origin = {1.0f, 2.0f, 3.0f};
+  ray.dir = {1.0f, -2.0f, 4.0f};
+  const WatertightRay w = prepare_watertight_axis<2>(ray, 0.25f);
+  EXPECT_EQ(w.kz, 2);
+  EXPECT_EQ(w.ox, 1.0f);  // kx = 0, ky = 1
+  EXPECT_EQ(w.oy, 2.0f);
+  EXPECT_EQ(w.oz, 3.0f);
+  EXPECT_EQ(w.sx, 0.25f);
+  EXPECT_EQ(w.sy, -0.5f);
+  EXPECT_EQ(w.sz, 0.25f);
+  EXPECT_EQ(w.tmin, ray.tmin);
+  EXPECT_EQ(w.tmax, ray.tmax);
+}
+
+TEST(WatertightPrepare, FixedAxisVersionGivesTheRunTimeAxisBits) {
+  std::mt19937 rng(2711);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> exponent(-140, 30);
+  std::vector<Ray> rays;
+  for (int i = 0; i < 20000; ++i) {
+    Ray r;
+    for (int a = 0; a < 3; ++a) {
+      r.origin[a] = std::ldexp(unit(rng), exponent(rng) / 4);
+      r.dir[a] = std::ldexp(unit(rng), exponent(rng));  // magnitudes down to denormals
+    }
+    rays.push_back(r);
+  }
+  // Ties between axes, zero components of either sign, a zero direction, a denormal dominant
+  // component (1 / dz overflows: the interval is emptied), non-finite origins and directions.
+  const float inf = std::numeric_limits<float>::infinity();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float tiny = std::numeric_limits<float>::denorm_min();
+  const glm::vec3 dirs[] = {{1, 1, 1},     {-1, 1, -1},  {0, 0, 0},     {-0.0f, 0, 0},
+                            {0, -0.0f, 2}, {tiny, 0, 0}, {0, 0, -tiny}, {1, inf, 0},
+                            {nan, 1, 0},   {3, -3, 0},   {0, 5, -5}};
+  for (const glm::vec3& d : dirs) {
+    Ray r;
+    r.dir = d;
+    rays.push_back(r);
+    r.origin = {inf, 0, 0};
+    rays.push_back(r);
+    r.origin = {0, nan, 1};
+    rays.push_back(r);
+  }
+  for (const Ray& r : rays) expect_same_bits(prepared_with_axis(r), prepare_watertight(r));
 }
 
 }  // namespace

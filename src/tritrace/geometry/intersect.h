@@ -183,6 +183,30 @@ inline WatertightRay prepare_watertight(const Ray& ray) {
   return w;
 }
 
+// prepare_watertight for a ray whose dominant axis (watertight_axis) is Kz, given sz = 1.0f /
+// ray.dir[Kz] already divided by the caller (the BVH's box test divides the same, so the
+// traversal divides once): the same operations on the same operands, so the same bits, without
+// the permutation of a run-time axis.
+template <int Kz>
+inline WatertightRay prepare_watertight_axis(const Ray& ray, float sz) {
+  constexpr int kKx = (Kz + 1) % 3, kKy = (Kz + 2) % 3;
+  WatertightRay w;
+  w.kz = Kz;
+  w.ox = ray.origin[kKx];
+  w.oy = ray.origin[kKy];
+  w.oz = ray.origin[Kz];
+  w.sz = sz;
+  w.sx = ray.dir[kKx] * sz;
+  w.sy = ray.dir[kKy] * sz;
+  // & rather than &&: no branches (the rays come in any direction).
+  const bool finite = std::isfinite(w.ox) & std::isfinite(w.oy) & std::isfinite(w.oz) &
+                      std::isfinite(w.sx) & std::isfinite(w.sy) & std::isfinite(w.sz) &
+                      (w.sz != 0.0f);
+  w.tmin = finite ? ray.tmin : kRayTMax;
+  w.tmax = finite ? ray.tmax : -kRayTMax;
+  return w;
+}
+
 namespace detail {
 // The sheared position of a vertex relative to the ray origin.
 struct Sheared {
@@ -323,6 +347,7 @@ template <>
 class PreparedRay<Kernel::kWatertight> {
  public:
   explicit PreparedRay(const Ray& ray) : ray_(prepare_watertight(ray)) {}
+  explicit PreparedRay(const WatertightRay& prepared) : ray_(prepared) {}
   bool intersect(const TriangleArrays& tris, size_t i, TriangleHit& out) const {
     return intersect_watertight(ray_, tris.v0[i], tris.v1[i], tris.v2[i], out);
   }

@@ -269,11 +269,10 @@ size_t root_survivors(const WideBvh& tree, const bvh::ChildGroups* groups,
 // hold only group `skip` (groups: the tree's bvh::child_groups) are left out at every node.
 template <Kernel K, int Kz, bool kSkip = false>
 Hit closest_hit_from(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
-                     const PreparedRay<K>& prepared,
+                     const RayBoxSetup& setup, const PreparedRay<K>& prepared,
                      [[maybe_unused]] const bvh::ChildGroups* groups = nullptr,
                      [[maybe_unused]] uint32_t skip = bvh::kNoGroup) {
   Hit best;
-  const RayBoxSetup setup = box_setup(ray);
   StackEntry stack[kStackSize];
   int sp = 0;
   uint32_t ref = 0;
@@ -329,25 +328,26 @@ Hit closest_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
                 [[maybe_unused]] uint32_t skip = bvh::kNoGroup) {
   if (tree.nodes.empty() || !traceable(ray)) return Hit{};
   const PreparedRay<K> prepared(ray);
+  const RayBoxSetup setup = box_setup(ray);
   [[maybe_unused]] const bool skips = skip != bvh::kNoGroup;
 #if defined(__AVX2__)
   if constexpr (K == Kernel::kWatertight) {
     switch (prepared.watertight().kz) {
       case 0:
-        return skips ? closest_hit_from<K, 0, true>(tree, tris, ray, prepared, groups, skip)
-                     : closest_hit_from<K, 0>(tree, tris, ray, prepared);
+        return skips ? closest_hit_from<K, 0, true>(tree, tris, ray, setup, prepared, groups, skip)
+                     : closest_hit_from<K, 0>(tree, tris, ray, setup, prepared);
       case 1:
-        return skips ? closest_hit_from<K, 1, true>(tree, tris, ray, prepared, groups, skip)
-                     : closest_hit_from<K, 1>(tree, tris, ray, prepared);
+        return skips ? closest_hit_from<K, 1, true>(tree, tris, ray, setup, prepared, groups, skip)
+                     : closest_hit_from<K, 1>(tree, tris, ray, setup, prepared);
       default:
-        return skips ? closest_hit_from<K, 2, true>(tree, tris, ray, prepared, groups, skip)
-                     : closest_hit_from<K, 2>(tree, tris, ray, prepared);
+        return skips ? closest_hit_from<K, 2, true>(tree, tris, ray, setup, prepared, groups, skip)
+                     : closest_hit_from<K, 2>(tree, tris, ray, setup, prepared);
     }
   }
 #endif
   // Other kernels (for comparison only) skip nothing: fewer instantiations, so that the compiler
   // keeps inlining the per-ray set-up above (GCC's inline-unit-growth limit).
-  return closest_hit_from<K, -1>(tree, tris, ray, prepared);
+  return closest_hit_from<K, -1>(tree, tris, ray, setup, prepared);
 }
 
 #if defined(__AVX2__)
@@ -358,9 +358,13 @@ template <int Kz, bool kSkip>
 Hit closest_hit_axis(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
                      const bvh::ChildGroups* groups, uint32_t skip) {
   if (!traceable(ray)) return Hit{};
-  const PreparedRay<Kernel::kWatertight> prepared(ray);
-  assert(prepared.watertight().kz == Kz);
-  return closest_hit_from<Kernel::kWatertight, Kz, kSkip>(tree, tris, ray, prepared, groups, skip);
+  // One division for both set-ups: the box test's inverse direction is the kernel's 1 / dir[Kz].
+  const RayBoxSetup setup = box_setup(ray);
+  const PreparedRay<Kernel::kWatertight> prepared(
+      prepare_watertight_axis<Kz>(ray, setup.inv_dir[Kz]));
+  assert(watertight_axis(ray.dir) == Kz);
+  return closest_hit_from<Kernel::kWatertight, Kz, kSkip>(tree, tris, ray, setup, prepared, groups,
+                                                          skip);
 }
 #endif
 
@@ -419,6 +423,35 @@ bool any_hit(const WideBvh& tree, const TriangleArrays& tris, const Ray& ray,
   }
   return any_hit_from<K, kCounted, false>(tree, tris, ray, steps, groups, skip);
 }
+
+#if defined(__AVX2__)
+// Calls trace.template operator()<Kz, kSkip>(j) for each survivor j < n of a chunk
+// (root_survivors), sorted into six lists by the watertight kernel's dominant axis Kz of its ray
+// and by whether it skips a group (skip[j] != bvh::kNoGroup), so that choosing one of the six
+// instantiations of a traversal is not a branch per ray, which the predictor cannot learn on
+// incoherent rays. Each ray's answer is its own whatever the order.
+template <typename Trace>
+[[gnu::always_inline]] inline void for_each_by_axis(std::span<const Ray> rays,
+                                                    const uint32_t* survivors, const uint32_t* skip,
+                                                    size_t n, const Trace& trace) {
+  uint32_t sorted[6][kRootChunk];
+  size_t sizes[6] = {};
+  for (size_t j = 0; j < n; ++j) {
+    const int b = 2 * watertight_axis(rays[survivors[j]].dir) + (skip[j] != bvh::kNoGroup);
+    sorted[b][sizes[b]++] = static_cast<uint32_t>(j);
+  }
+  const auto run = [&]<int Kz, bool kSkip>() {
+    constexpr int b = 2 * Kz + (kSkip ? 1 : 0);
+    for (size_t q = 0; q < sizes[b]; ++q) trace.template operator()<Kz, kSkip>(sorted[b][q]);
+  };
+  run.template operator()<0, false>();
+  run.template operator()<0, true>();
+  run.template operator()<1, false>();
+  run.template operator()<1, true>();
+  run.template operator()<2, false>();
+  run.template operator()<2, true>();
+}
+#endif
 
 // Trees at most this big trace incoherent queries as packets too (see intersect_incoherent). Not
 // tuned: cornell-area's 6 KiB tree was measured, nothing between that and 1 MiB.
@@ -924,28 +957,10 @@ void BvhAccel::intersect_incoherent_from(std::span<const Ray> rays,
         const size_t n = root_survivors<true>(tree, groups, convex_, skipping, origins, rays, begin,
                                               end, survivors, skip);
         std::fill(hits.begin() + begin, hits.begin() + end, Hit{});
-        // The survivors sorted by dominant axis and by whether they skip a group (six
-        // instantiations of the traversal), each ray's answer its own whatever the order.
-        uint32_t sorted[6][kRootChunk];
-        size_t sizes[6] = {};
-        for (size_t j = 0; j < n; ++j) {
-          const int b = 2 * watertight_axis(rays[survivors[j]].dir) + (skip[j] != bvh::kNoGroup);
-          sorted[b][sizes[b]++] = static_cast<uint32_t>(j);
-        }
-        const auto trace = [&]<int Kz, bool kSkip>() {
-          constexpr int b = 2 * Kz + (kSkip ? 1 : 0);
-          for (size_t q = 0; q < sizes[b]; ++q) {
-            const uint32_t j = sorted[b][q];
-            hits[survivors[j]] =
-                closest_hit_axis<Kz, kSkip>(tree, tris, rays[survivors[j]], groups, skip[j]);
-          }
-        };
-        trace.template operator()<0, false>();
-        trace.template operator()<0, true>();
-        trace.template operator()<1, false>();
-        trace.template operator()<1, true>();
-        trace.template operator()<2, false>();
-        trace.template operator()<2, true>();
+        for_each_by_axis(rays, survivors, skip, n, [&]<int Kz, bool kSkip>(uint32_t j) {
+          hits[survivors[j]] =
+              closest_hit_axis<Kz, kSkip>(tree, tris, rays[survivors[j]], groups, skip[j]);
+        });
       }
       return;
     }
