@@ -401,7 +401,7 @@ def render(
     Frame.spp_map. aperture and focus: a thin lens's radius and the distance of the plane in
     focus, as --aperture and --focus. light_paths (bdpt only): the share of samples, in (0, 1],
     that also trace a light subpath, as `tritrace render --light-paths`, or "auto" (the default):
-    a pilot chooses it for the scene among 1, 1/2, 1/4, 1/8 and 1/16 (Frame.light_paths says
+    a pilot chooses it for the scene among 1, 1/2, 1/4, ..., 1/64 (Frame.light_paths says
     which). Bad values raise ValueError with the
     CLI's message, wrong types TypeError.
     """

@@ -131,7 +131,7 @@ void add_scene_flags(CLI::App& app, JobSettings& flags) {
                  "most 1 (default: the scene's, auto): the others keep the camera subpath, its "
                  "emitter hits and next-event estimation; the rest is divided by the share, so "
                  "the image stays unbiased; auto: a pilot of 16384 samples chooses it for the "
-                 "scene among 1, 1/2, 1/4, 1/8 and 1/16 by estimated variance x counted work, "
+                 "scene among 1, 1/2, 1/4, ..., 1/64 by estimated variance x counted work, "
                  "the same for every part, thread count and pass of the render (docs/BDPT.md)")
       ->type_name("F|auto")
       ->check(rule("--light-paths"));

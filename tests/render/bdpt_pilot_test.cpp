@@ -17,16 +17,17 @@
 namespace tritrace {
 namespace {
 
-// kPilotShares: 1, 1/2, 1/4, 1/8, 1/16.
+// kPilotShares: 1, 1/2, 1/4, 1/8, 1/16, 1/32, 1/64.
 TEST(BdptPilot, WeighsEachShareByThePowerHeuristicWithCounts) {
   // A camera-side strategy (s <= 1) that sampled the path, and one light strategy whose density
   // is twice its own: r = (p_k / p_i)^2 = 4. With n_k = F: w_i = 1 / (1 + F^2 4).
   LightPathsTally::Sample a;
   const std::vector<std::pair<float, bool>> camera_first = {{1.0f, false}, {4.0f, true}};
   add_pilot_contribution(a, 2.0, false, camera_first);
-  EXPECT_DOUBLE_EQ(a.always[0], 2.0 * 0.2);             // 1 / 5
-  EXPECT_DOUBLE_EQ(a.always[1], 2.0 * 0.5);             // 1 / (1 + 1)
-  EXPECT_DOUBLE_EQ(a.always[4], 2.0 * 1.0 / 1.015625);  // 1 / (1 + 4 / 256)
+  EXPECT_DOUBLE_EQ(a.always[0], 2.0 * 0.2);                         // 1 / 5
+  EXPECT_DOUBLE_EQ(a.always[1], 2.0 * 0.5);                         // 1 / (1 + 1)
+  EXPECT_DOUBLE_EQ(a.always[4], 2.0 * 1.0 / 1.015625);              // 1 / (1 + 4 / 256)
+  EXPECT_DOUBLE_EQ(a.always[6], 2.0 * 1.0 / (1.0 + 4.0 / 4096.0));  // F = 1/64
   EXPECT_EQ(a.light[0], 0.0);
   EXPECT_EQ(a.splat2[0], 0.0);
   // The light strategy's own view of the same path: r = 1/4 for the camera's. w = F^2 / (F^2 +
@@ -37,6 +38,7 @@ TEST(BdptPilot, WeighsEachShareByThePowerHeuristicWithCounts) {
   EXPECT_DOUBLE_EQ(b.light[0], 3.0 * 0.8);
   EXPECT_DOUBLE_EQ(b.light[1], 3.0 * 0.5);
   EXPECT_DOUBLE_EQ(b.light[2], 3.0 * 0.0625 / (0.0625 + 0.25));
+  EXPECT_DOUBLE_EQ(b.light[5], 3.0 * (1.0 / 1024.0) / (1.0 / 1024.0 + 0.25));  // F = 1/32
   // A light-tracing splat: its square.
   LightPathsTally::Sample c;
   add_pilot_contribution(c, 3.0, true, light_first);

@@ -29,9 +29,9 @@ namespace tritrace {
 // luminance of its contributions at F = 1 weighted as a render at each candidate share F
 // (kPilotShares) would weigh them (add_pilot_contribution), split by whether they need the light
 // subpath past its first vertex, and its counted work.
-inline constexpr int kPilotCandidates = 5;
-inline constexpr std::array<float, kPilotCandidates> kPilotShares = {1.0f, 0.5f, 0.25f, 0.125f,
-                                                                     0.0625f};
+inline constexpr int kPilotCandidates = 7;
+inline constexpr std::array<float, kPilotCandidates> kPilotShares = {
+    1.0f, 0.5f, 0.25f, 0.125f, 0.0625f, 0.03125f, 0.015625f};
 struct LightPathsTally {
   struct Sample {
     std::array<double, kPilotCandidates> always{};  // s <= 1, t >= 2: every sample has them

@@ -1,5 +1,5 @@
 // `--light-paths auto`: a short pilot that chooses bdpt's share F of samples that trace a light
-// subpath (BdptSettings::light_paths) for a scene, among kPilotShares {1, 1/2, 1/4, 1/8, 1/16}, by
+// subpath (BdptSettings::light_paths) for a scene, among kPilotShares {1, 1/2, ..., 1/64}, by
 // the smallest estimated variance x cost (Grittmann, Yazici, Georgiev and Slusallek 2022,
 // "Efficiency-aware multiple importance sampling for bidirectional rendering algorithms", choose
 // the light path count per scene with one pilot, each candidate's MIS weights evaluated on its
