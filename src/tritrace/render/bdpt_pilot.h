@@ -32,12 +32,9 @@ struct Scene;
 inline constexpr uint32_t kPilotPixels = 2048;
 inline constexpr uint32_t kPilotSpp = 8;
 // F = 1's variance is estimated with each sample clamped at this many times the mean
-// (choose_light_paths says why). At 10 the clamp cut half of scenes/caustics.json's
-// share-independent variance (its unclamped F = 1 spread was 80 against 41 clamped, on most
-// seeds), so the pilot overrated what smaller shares add: it predicted 1.35 / 1.74 / 2.09 times
-// F = 1/2's variance at 1/4, 1/8, 1/16 where 16 seeds' renders measured 1.17 / 1.36 / 1.55, and
-// chose 1/2 (30: 1.26 / 1.54 / 1.80, and 1/4 on every seed; 100 let one seed's rare path decide:
-// docs/PERFORMANCE.md, 2026-11-28, seventh session).
+// (choose_light_paths says why). Too low a clamp cuts variance that every share has, so the
+// differences between shares look larger than they are and small shares lose; too high lets one
+// rare path decide (docs/BDPT.md, "Choosing F per scene").
 inline constexpr double kPilotClamp = 30.0;
 
 // Counted work per sample in the pilot's cost model: a subpath vertex (an extension ray, the
