@@ -5,6 +5,7 @@
 // docs/PERFORMANCE.md, so the cost decides); and its determinism.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <numbers>
 #include <string>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "tritrace/accel/make_accel.h"
+#include "tritrace/parallel.h"
 #include "tritrace/render/bdpt_pilot.h"
 #include "tritrace/scene/cornell_box.h"
 #include "tritrace/scene/io/scene_loader.h"
@@ -132,17 +134,40 @@ TEST(BdptPilot, ChoosesASmallShareInADiffuseBox) {
   }
 }
 
-// The same scene, seed and sampler make the same choice with the same numbers (one thread, sums in
-// sample order); the render job's tests check it across thread counts and parts.
-TEST(BdptPilot, IsDeterministic) {
-  const Scene scene = make_cornell_area({.width = 20, .height = 12});
-  const auto bvh = make_accel(AccelKind::kBvh, scene, Kernel::kWatertight);
-  const LightPathsChoice a = choose_light_paths(scene, *bvh, {}, 7, SamplerKind::kSobol);
-  const LightPathsChoice b = choose_light_paths(scene, *bvh, {}, 7, SamplerKind::kSobol);
-  EXPECT_EQ(a.light_paths, b.light_paths);
-  EXPECT_EQ(a.variance, b.variance);
-  EXPECT_EQ(a.cost, b.cost);
-  EXPECT_EQ(a.rays, b.rays);
+// The same scene, seed and sampler make the same choice with the same numbers, bit for bit, on
+// any number of threads (its batches run in parallel, its sums in sample order); the render
+// job's tests check it across parts and passes. scenes/caustics.json has a caustic guide, which
+// the pilot builds and shares.
+TEST(BdptPilot, IsDeterministicOnAnyThreadCount) {
+  SceneOverrides size;
+  size.width = 24;
+  size.height = 20;
+  const Scene caustics =
+      load_scene(std::string(TRITRACE_SOURCE_DIR) + "/scenes/caustics.json", size).scene;
+  const Scene box = make_cornell_area({.width = 20, .height = 12});
+  for (const Scene* scene : {&box, &caustics}) {
+    const auto bvh = make_accel(AccelKind::kBvh, *scene, Kernel::kWatertight);
+    const auto choose = [&](int threads) {
+      LightPathsChoice c;
+      parallel::in_arena(threads, [&] {
+        c = choose_light_paths(*scene, *bvh, {}, 7, SamplerKind::kSobol, kPilotSpp, 256);
+      });
+      return c;
+    };
+    const LightPathsChoice a = choose(1);
+    for (int threads : {1, 2, 3}) {
+      const LightPathsChoice b = choose(threads);
+      EXPECT_EQ(a.light_paths, b.light_paths) << threads;
+      EXPECT_EQ(a.variance, b.variance) << threads;
+      EXPECT_EQ(a.cost, b.cost) << threads;
+      EXPECT_EQ(a.rays, b.rays) << threads;
+      EXPECT_EQ(a.samples, b.samples) << threads;
+    }
+    const uint64_t pixels = static_cast<uint64_t>(scene->camera.width()) *
+                            static_cast<uint64_t>(scene->camera.height());
+    EXPECT_EQ(a.samples, std::min<uint64_t>(pixels, 256) * kPilotSpp);
+    EXPECT_GT(a.variance[0], 0.0);
+  }
 }
 
 // scenes/caustics.json (a glass sphere in the lit box): 16 seeds' renders at 48 x 48, 256 spp,

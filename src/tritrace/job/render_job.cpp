@@ -436,7 +436,7 @@ void RenderJob::remake_integrator() {
     const auto start = std::chrono::steady_clock::now();
     BdptSettings settings;
     settings.max_depth = spec_.max_depth;
-    // In the job's arena: the caustic guide's pre-pass (built by the pilot) runs on its threads.
+    // In the job's arena: the pilot's samples and its caustic guide's pre-pass run on its threads.
     LightPathsChoice choice;
     parallel::in_arena(guide_threads, [&] {
       choice = choose_light_paths(*scene_, *accel_, settings, spec_.seed, spec_.sampler);

@@ -529,9 +529,10 @@ void draw_groups(Sampler* const* samplers, size_t count,
 // The per-sample work, with the integrator's data at hand.
 class BdptTracer {
  public:
+  // `tally`: the pilot's (BdptIntegrator::pilot_radiance), or null for a render.
   BdptTracer(const BdptIntegrator& integrator, const Scene& scene, const Accel& accel,
-             const CausticGuide* guide = nullptr)
-      : it_(integrator), scene_(scene), accel_(accel), guide_(guide) {}
+             const CausticGuide* guide = nullptr, LightPathsTally* tally = nullptr)
+      : it_(integrator), scene_(scene), accel_(accel), guide_(guide), tally_(tally) {}
 
   // Chunk `chunk` of the caustic guide's pre-pass of `n` light paths (its paths [chunk *
   // kGuideChunk, (chunk + 1) * kGuideChunk) below n) from the emissive triangles, PCG32 numbers
@@ -762,6 +763,8 @@ class BdptTracer {
   const Scene& scene_;
   const Accel& accel_;
   const CausticGuide* guide_ = nullptr;
+  // The pilot's tally: each sample's contributions and work go there instead of the image.
+  LightPathsTally* tally_ = nullptr;
   uint64_t traced_ = 0;
   size_t first_ = 0;  // the wavefront's first sample in the batch
   // Per wavefront sample: its vertex counts, whether its camera subpath escaped, its radiance so
@@ -1421,7 +1424,7 @@ void BdptTracer::flush() {
   const bool unweighted = it_.settings_.unweighted;
   for (int k = 0; k < pending_count_; ++k) {
     const Pending& p = pending_[static_cast<size_t>(k)];
-    if (it_.settings_.pilot != nullptr) {
+    if (tally_ != nullptr) {
       pilot_record(p);  // the pilot connects every sample with the general code
       continue;
     }
@@ -1451,7 +1454,7 @@ void BdptTracer::flush() {
 }
 
 void BdptTracer::pilot_record(const Pending& p) {
-  LightPathsTally::Sample& rec = it_.settings_.pilot->samples[first_ + p.sample];
+  LightPathsTally::Sample& rec = tally_->samples[first_ + p.sample];
   const bool light = p.s >= 2;  // light tracing's t = 1 has s >= 2 too
   if (p.ray >= 0) ++(light ? rec.light_rays : rec.always_rays);
   if (p.ray >= 0 && blocked_[static_cast<size_t>(p.ray)]) return;
@@ -1903,7 +1906,7 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
   pending_count_ = ray_count_ = 0;
   for (size_t k = 0; k < count; ++k) {
     state_[k].nl = walks[k].count;
-    if (LightPathsTally* tally = settings.pilot) {
+    if (LightPathsTally* tally = tally_) {
       LightPathsTally::Sample& rec = tally->samples[first + k];
       rec.camera_vertices = static_cast<uint32_t>(state_[k].nc);
       rec.light_vertices = static_cast<uint32_t>(std::max(0, state_[k].nl - 1));
@@ -2203,7 +2206,7 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
         if (!pt.emits) continue;
         contribution = pt.beta * emission(scene_, pt, pt.wo);
         const float q = caustic_q(0, t, camera[0].p);
-        if (q > 0.0f && settings.pilot == nullptr) {
+        if (q > 0.0f && tally_ == nullptr) {
           if (max_component(contribution) > 0.0f) queue_caustic_s0(t, contribution, q);
           continue;
         }
@@ -2333,7 +2336,7 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
       while (count < max_vertices) {
         const Hit hit = trace_one(ray);
         ++traced_;
-        if (LightPathsTally* tally = it_.settings_.pilot) ++tally->samples[first_ + k].always_rays;
+        if (LightPathsTally* tally = tally_) ++tally->samples[first_ + k].always_rays;
         if (!hit.found()) break;
         if (static_cast<size_t>(count) >= path.size()) {
           path.resize(std::min(2 * path.size(), static_cast<size_t>(max_vertices)));
@@ -2349,7 +2352,7 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
         ++count;
         if (specular_met && x.emits) {
           const glm::vec3 le = emission(scene_, x, x.wo);
-          if (LightPathsTally* tally = it_.settings_.pilot; tally && max_component(le) > 0.0f) {
+          if (LightPathsTally* tally = tally_; tally && max_component(le) > 0.0f) {
             // The pilot weighs the term at each share itself: the other strategies' densities
             // relative to this one's are the walk's relative to s = 0 over q.
             pilot_strategies_.assign(2, {1.0f, false});  // this strategy, then s = 0
@@ -2667,9 +2670,23 @@ float BdptIntegrator::origin_pdf(uint32_t prim) const {
 
 uint64_t BdptIntegrator::radiance(const SampleBatch& batch, const SampleOutput& out,
                                   const Scene& scene, const Accel& accel) const {
+  return trace_batch(batch, out, scene, accel, nullptr);
+}
+
+uint64_t BdptIntegrator::pilot_radiance(const SampleBatch& batch, const SampleOutput& out,
+                                        const Scene& scene, const Accel& accel,
+                                        LightPathsTally& tally) const {
+  assert(settings_.light_paths == 1.0f && !settings_.camera_only_connect &&
+         tally.samples.size() == batch.rays.size());
+  return trace_batch(batch, out, scene, accel, &tally);
+}
+
+uint64_t BdptIntegrator::trace_batch(const SampleBatch& batch, const SampleOutput& out,
+                                     const Scene& scene, const Accel& accel,
+                                     LightPathsTally* tally) const {
   const size_t n = batch.rays.size();
   assert(n <= kMaxBatch && batch.samplers.size() == n && out.radiance.size() == n);
-  BdptTracer tracer(*this, scene, accel, caustic_guide(scene, accel));
+  BdptTracer tracer(*this, scene, accel, caustic_guide(scene, accel), tally);
   // The camera rays together, as the path tracer traces them (packets where the accel has them;
   // the same hits as one at a time, bit for bit).
   std::array<Hit, kMaxBatch> first_hits;

@@ -25,7 +25,7 @@
 namespace tritrace {
 
 // What the pilot of `--light-paths auto` (render/bdpt_pilot.h) reads off each sample of a
-// BdptIntegrator::radiance call made with BdptSettings::pilot set: per sample of the batch, the
+// BdptIntegrator::pilot_radiance call: per sample of the batch, the
 // luminance of its contributions at F = 1 weighted as a render at each candidate share F
 // (kPilotShares) would weigh them (add_pilot_contribution), split by whether they need the light
 // subpath past its first vertex, and its counted work.
@@ -92,10 +92,6 @@ struct BdptSettings {
   // For tests: false walks every camera vertex with the scalar code, which the SIMD lanes for flat
   // Lambert vertices (where the build has AVX2) must match bit for bit.
   bool lanes = true;
-  // For `--light-paths auto`'s pilot only (render/bdpt_pilot.h): with light_paths 1, each sample's
-  // contributions and work go to this tally instead of the image (no splats are added). Not
-  // thread-safe: one radiance call at a time.
-  LightPathsTally* pilot = nullptr;
   // For tests: false connects the samples whose light subpath is its first vertex only (most of
   // them where light_paths < 1) with the general code too, whose image the dedicated one
   // (s = 0 and s = 1 only, each connection weighted as it is made) must match bit for bit.
@@ -135,6 +131,13 @@ class BdptIntegrator final : public Integrator {
                     const Accel& accel) const override;
 
   bool splats() const override { return settings_.light_tracing; }
+
+  // `--light-paths auto`'s pilot (render/bdpt_pilot.h): radiance with each sample's contributions
+  // and work going to tally.samples (one per sample of the batch, sized by the caller) instead of
+  // the image (no splats are added), for a BdptSettings with light_paths 1 and
+  // camera_only_connect false. Calls with distinct tallies may run at once.
+  uint64_t pilot_radiance(const SampleBatch& batch, const SampleOutput& out, const Scene& scene,
+                          const Accel& accel, LightPathsTally& tally) const;
 
   const BdptSettings& settings() const { return settings_; }
 
@@ -181,6 +184,10 @@ class BdptIntegrator final : public Integrator {
   // The caustic guide, built once (shared by copies of the integrator and use_caustic_guide).
   std::shared_ptr<GuideSlot> guide_;
   bool wants_guide_ = false;  // the settings ask for one and the scene can have caustics
+
+  // radiance, and pilot_radiance with its tally.
+  uint64_t trace_batch(const SampleBatch& batch, const SampleOutput& out, const Scene& scene,
+                       const Accel& accel, LightPathsTally* tally) const;
 
   // Appends the scene's spot and directional lights to emitters_ with their selection weights.
   void add_delta_lights(const Scene& scene, std::vector<float>& power);

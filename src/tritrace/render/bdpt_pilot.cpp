@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "tritrace/accel/accel.h"
+#include "tritrace/parallel.h"
 #include "tritrace/render/film.h"
 #include "tritrace/render/sampler.h"
 #include "tritrace/scene/scene.h"
@@ -15,15 +16,15 @@ namespace tritrace {
 LightPathsChoice choose_light_paths(const Scene& scene, const Accel& accel,
                                     const BdptSettings& settings, uint64_t seed,
                                     SamplerKind sampler_kind, uint32_t spp, uint64_t max_pixels) {
-  spp = std::max<uint32_t>(2, spp);
-  LightPathsTally tally;
+  spp = std::clamp<uint32_t>(spp, 2, static_cast<uint32_t>(kMaxBatch));
   BdptSettings pilot_settings = settings;
   pilot_settings.light_paths = 1.0f;
-  pilot_settings.pilot = &tally;
   // pilot_record reads each connection's vertices, which only the general connect queues.
   pilot_settings.camera_only_connect = false;
   pilot_settings.weight_check = nullptr;
   const BdptIntegrator integrator(scene, pilot_settings);
+  // Its caustic guide first, with every thread of the arena (the batches below only read it).
+  integrator.caustic_guide(scene, accel);
 
   const Camera& camera = scene.camera;
   const uint64_t width = static_cast<uint64_t>(camera.width());
@@ -35,50 +36,60 @@ LightPathsChoice choose_light_paths(const Scene& scene, const Accel& accel,
   const bool lens = camera.has_lens();
   const PixelFilter filter(FilterKind::kBox);
 
-  // Batches of whole pixels' samples, at most kMaxBatch each.
-  const size_t pixels_per_batch = kMaxBatch / spp;
-  std::vector<Ray> rays;
-  std::vector<Sampler> samplers;
-  std::vector<uint32_t> batch_pixels;
-  std::vector<glm::vec3> radiance;
-  SplatBuffer no_splats(1, 1);  // the pilot adds none (BdptSettings::pilot)
+  // Batches of whole pixels' samples, at most kMaxBatch each, traced on the arena's threads. Each
+  // sample's tally depends on that sample alone, and the tallies are kept in sample order, so the
+  // choice is the same for any thread count.
+  const uint64_t pixels_per_batch = std::max<uint64_t>(1, kMaxBatch / spp);
+  const uint64_t batches = (count + pixels_per_batch - 1) / pixels_per_batch;
+  std::vector<LightPathsTally::Sample> all(count * spp);
+  std::vector<uint64_t> batch_rays(batches, 0);
+  parallel::for_range(
+      tbb::blocked_range<uint64_t>(0, batches, 1), [&](const tbb::blocked_range<uint64_t>& range) {
+        std::vector<Ray> rays;
+        std::vector<Sampler> samplers;
+        std::vector<uint32_t> batch_pixels;
+        std::vector<glm::vec3> radiance;
+        SplatBuffer no_splats(1, 1);  // the pilot adds none
+        LightPathsTally tally;
+        for (uint64_t b = range.begin(); b != range.end(); ++b) {
+          const uint64_t first = b * pixels_per_batch;
+          const uint64_t end = std::min<uint64_t>(count, first + pixels_per_batch);
+          rays.clear();
+          samplers.clear();
+          batch_pixels.clear();
+          for (uint64_t i = first; i < end; ++i) {
+            // An even spread over the image's pixels in row-major order.
+            const uint64_t pixel = (2 * i + 1) * pixels / (2 * count);
+            const int x = static_cast<int>(pixel % width), y = static_cast<int>(pixel / width);
+            for (uint32_t s = 0; s < spp; ++s) {
+              Sampler sampler(pilot_seed, sampler_kind);
+              sampler.start_pixel_sample(x, y, s);
+              const glm::vec2 u = sampler.get_pixel_2d();
+              const PixelFilter::Sample f = filter.sample(u.x, u.y);
+              const float px = static_cast<float>(x) + f.x, py = static_cast<float>(y) + f.y;
+              rays.push_back(lens ? camera.lens_ray(px, py, sampler.get_lens_2d())
+                                  : camera.ray_through(px, py));
+              samplers.push_back(sampler);
+              batch_pixels.push_back(static_cast<uint32_t>(pixel));
+            }
+          }
+          const size_t n = rays.size();
+          radiance.assign(n, glm::vec3(0.0f));
+          tally.samples.assign(n, LightPathsTally::Sample{});
+          SampleOutput out;
+          out.radiance = radiance;
+          out.splats = &no_splats;
+          batch_rays[b] = integrator.pilot_radiance(
+              SampleBatch{rays, samplers, std::span<const uint32_t>(batch_pixels)}, out, scene,
+              accel, tally);
+          std::copy(tally.samples.begin(), tally.samples.end(), all.begin() + first * spp);
+        }
+      });
 
   LightPathsChoice choice;
+  for (const uint64_t r : batch_rays) choice.rays += r;
   std::array<double, kPilotCandidates> moment{};
   std::array<double, kPilotCandidates> cost{};
-  std::vector<LightPathsTally::Sample> all;
-  all.reserve(count * spp);
-  for (uint64_t first = 0; first < count; first += pixels_per_batch) {
-    const uint64_t end = std::min<uint64_t>(count, first + pixels_per_batch);
-    rays.clear();
-    samplers.clear();
-    batch_pixels.clear();
-    for (uint64_t i = first; i < end; ++i) {
-      // An even spread over the image's pixels in row-major order.
-      const uint64_t pixel = (2 * i + 1) * pixels / (2 * count);
-      const int x = static_cast<int>(pixel % width), y = static_cast<int>(pixel / width);
-      for (uint32_t s = 0; s < spp; ++s) {
-        Sampler sampler(pilot_seed, sampler_kind);
-        sampler.start_pixel_sample(x, y, s);
-        const glm::vec2 u = sampler.get_pixel_2d();
-        const PixelFilter::Sample f = filter.sample(u.x, u.y);
-        const float px = static_cast<float>(x) + f.x, py = static_cast<float>(y) + f.y;
-        rays.push_back(lens ? camera.lens_ray(px, py, sampler.get_lens_2d())
-                            : camera.ray_through(px, py));
-        samplers.push_back(sampler);
-        batch_pixels.push_back(static_cast<uint32_t>(pixel));
-      }
-    }
-    const size_t n = rays.size();
-    radiance.assign(n, glm::vec3(0.0f));
-    tally.samples.assign(n, LightPathsTally::Sample{});
-    SampleOutput out;
-    out.radiance = radiance;
-    out.splats = &no_splats;
-    choice.rays += integrator.radiance(
-        SampleBatch{rays, samplers, std::span<const uint32_t>(batch_pixels)}, out, scene, accel);
-    all.insert(all.end(), tally.samples.begin(), tally.samples.end());
-  }
   // The mean of a sample's estimate (F = 1's; every share's has the same mean).
   double mean = 0.0;
   for (const LightPathsTally::Sample& r : all) mean += r.always[0] + r.light[0];

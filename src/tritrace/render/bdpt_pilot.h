@@ -7,8 +7,9 @@
 // variance estimate, from each pixel's samples: docs/BDPT.md).
 //
 // Deterministic: the pilot's pixels, samples and seed depend only on the image size, the render's
-// seed and sampler kind and the scene; it runs on one thread and sums in a fixed order, and its
-// cost is counted work (vertices and connections), never time. So every part of a split render
+// seed and sampler kind and the scene; its samples are traced in parallel, each sample's tally
+// depending on that sample alone, and summed in a fixed order, and its cost is counted work
+// (vertices and connections), never time. So every part of a split render
 // (--spp-range, MPI), every thread count and every pass choose the same F.
 #pragma once
 
@@ -65,10 +66,10 @@ struct LightPathsChoice {
   std::shared_ptr<BdptIntegrator::GuideSlot> guide;
 };
 
-// Runs the pilot over `scene` with `accel` (bdpt at F = 1 with `settings`' other fields) and
-// returns the share with the smallest variance x cost (ties: the larger share): `spp` (at least 2)
-// samples in each of at most `max_pixels` pixels. Throws Error as BdptIntegrator's constructor
-// does.
+// Runs the pilot over `scene` with `accel` (bdpt at F = 1 with `settings`' other fields), on the
+// threads of the calling task arena, and returns the share with the smallest variance x cost
+// (ties: the larger share): `spp` (clamped to [2, kMaxBatch]) samples in each of at most
+// `max_pixels` pixels. Throws Error as BdptIntegrator's constructor does.
 LightPathsChoice choose_light_paths(const Scene& scene, const Accel& accel,
                                     const BdptSettings& settings, uint64_t seed,
                                     SamplerKind sampler, uint32_t spp = kPilotSpp,
