@@ -111,10 +111,11 @@ ASAN_ENV = ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 # force, the BVH's packet path and Embree's three modes; the threads it runs; whole images), the
 # parallel SAH and Morton builds (serial against parallel) and the Embree
 # backend, whose build runs on TBB threads; the wide BVH's build (BvhInvariants.*) and the path
-# tracer's multi-threaded renders (PathRender.*); and the task group's own hand-overs
-# (ParallelTsan.*, tests/parallel/parallel_tsan_test.cpp).
-TSAN_TESTS = ParallelTsan.*:Renderer.*:Placements/*:BinnedSahBuilder.ParallelBuildMakesTheSerialTree:MortonBuilder.ParallelBuildMakesTheSerialTree:Modes/EmbreeVsBrute.*:EmbreeAccel.*:BvhInvariants.*:PathRender.*
-# They live in eight test files, which tests/CMakeLists.txt builds alone as tritrace_tsan_tests.
+# tracer's multi-threaded renders (PathRender.*); bdpt's `--light-paths auto` pilot, whose batches
+# run on the arena's threads (BdptPilot.IsDeterministicOnAnyThreadCount); and the task group's own
+# hand-overs (ParallelTsan.*, tests/parallel/parallel_tsan_test.cpp).
+TSAN_TESTS = ParallelTsan.*:Renderer.*:Placements/*:BinnedSahBuilder.ParallelBuildMakesTheSerialTree:MortonBuilder.ParallelBuildMakesTheSerialTree:Modes/EmbreeVsBrute.*:EmbreeAccel.*:BvhInvariants.*:PathRender.*:BdptPilot.IsDeterministicOnAnyThreadCount
+# They live in the test files that tests/CMakeLists.txt builds alone as tritrace_tsan_tests.
 
 # The portable build (TRITRACE_NATIVE=OFF: -march=x86-64-v3, AVX2) compiles the AVX2 code paths,
 # which a -march=native build on an AVX-512 machine does not; only the tests of the code that
