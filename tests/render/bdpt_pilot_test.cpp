@@ -134,16 +134,20 @@ TEST(BdptPilot, ChoosesASmallShareInADiffuseBox) {
   }
 }
 
+// scenes/caustics.json (a glass sphere in the lit box) at width x height.
+Scene caustics_scene(int width, int height) {
+  SceneOverrides size;
+  size.width = width;
+  size.height = height;
+  return load_scene(std::string(TRITRACE_SOURCE_DIR) + "/scenes/caustics.json", size).scene;
+}
+
 // The same scene, seed and sampler make the same choice with the same numbers, bit for bit, on
 // any number of threads (its batches run in parallel, its sums in sample order); the render
 // job's tests check it across parts and passes. scenes/caustics.json has a caustic guide, which
 // the pilot builds and shares.
 TEST(BdptPilot, IsDeterministicOnAnyThreadCount) {
-  SceneOverrides size;
-  size.width = 24;
-  size.height = 20;
-  const Scene caustics =
-      load_scene(std::string(TRITRACE_SOURCE_DIR) + "/scenes/caustics.json", size).scene;
+  const Scene caustics = caustics_scene(24, 20);
   const Scene box = make_cornell_area({.width = 20, .height = 12});
   for (const Scene* scene : {&box, &caustics}) {
     const auto bvh = make_accel(AccelKind::kBvh, *scene, Kernel::kWatertight);
@@ -176,11 +180,7 @@ TEST(BdptPilot, IsDeterministicOnAnyThreadCount) {
 // (docs/PERFORMANCE.md, 2026-11-28, seventh session). With F = 1's variance clamped at 10 times
 // the mean the pilot chose 1/2 on every seed.
 TEST(BdptPilot, ChoosesAShareBelowAHalfForCausticsThroughGlass) {
-  SceneOverrides size;
-  size.width = 48;
-  size.height = 48;
-  const Scene scene =
-      load_scene(std::string(TRITRACE_SOURCE_DIR) + "/scenes/caustics.json", size).scene;
+  const Scene scene = caustics_scene(48, 48);
   const auto accel = make_accel(AccelKind::kBvh, scene, Kernel::kWatertight);
   for (uint64_t seed : {1u, 2u}) {
     const LightPathsChoice c = choose_light_paths(scene, *accel, {}, seed, SamplerKind::kSobol);
