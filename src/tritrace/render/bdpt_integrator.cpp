@@ -2181,7 +2181,8 @@ void BdptTracer::run_lane_jobs() {}
 
 void BdptTracer::connect(size_t k, Sampler& sampler) {
   const BdptSettings& settings = it_.settings_;
-  if (settings.camera_only_connect && state_[k].nl <= 1 &&
+  // (The pilot's tally reads each connection's vertices, which only the general code queues.)
+  if (settings.camera_only_connect && tally_ == nullptr && state_[k].nl <= 1 &&
       !(settings.only_s >= 0 && settings.only_t >= 0)) {
     connect_camera_only(k);
     return;
@@ -2676,8 +2677,7 @@ uint64_t BdptIntegrator::radiance(const SampleBatch& batch, const SampleOutput& 
 uint64_t BdptIntegrator::pilot_radiance(const SampleBatch& batch, const SampleOutput& out,
                                         const Scene& scene, const Accel& accel,
                                         LightPathsTally& tally) const {
-  assert(settings_.light_paths == 1.0f && !settings_.camera_only_connect &&
-         tally.samples.size() == batch.rays.size());
+  assert(settings_.light_paths == 1.0f && tally.samples.size() == batch.rays.size());
   return trace_batch(batch, out, scene, accel, &tally);
 }
 

@@ -134,8 +134,9 @@ class BdptIntegrator final : public Integrator {
 
   // `--light-paths auto`'s pilot (render/bdpt_pilot.h): radiance with each sample's contributions
   // and work going to tally.samples (one per sample of the batch, sized by the caller) instead of
-  // the image (no splats are added), for a BdptSettings with light_paths 1 and
-  // camera_only_connect false. Calls with distinct tallies may run at once.
+  // the image (no splats are added), for a BdptSettings with light_paths 1; every sample is
+  // connected by the general code (camera_only_connect is not used). Calls with distinct tallies
+  // may run at once.
   uint64_t pilot_radiance(const SampleBatch& batch, const SampleOutput& out, const Scene& scene,
                           const Accel& accel, LightPathsTally& tally) const;
 

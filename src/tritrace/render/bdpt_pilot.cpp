@@ -19,8 +19,6 @@ LightPathsChoice choose_light_paths(const Scene& scene, const Accel& accel,
   spp = std::clamp<uint32_t>(spp, 2, static_cast<uint32_t>(kMaxBatch));
   BdptSettings pilot_settings = settings;
   pilot_settings.light_paths = 1.0f;
-  // pilot_record reads each connection's vertices, which only the general connect queues.
-  pilot_settings.camera_only_connect = false;
   pilot_settings.weight_check = nullptr;
   const BdptIntegrator integrator(scene, pilot_settings);
   // Its caustic guide first, with every thread of the arena (the batches below only read it).
@@ -39,7 +37,7 @@ LightPathsChoice choose_light_paths(const Scene& scene, const Accel& accel,
   // Batches of whole pixels' samples, at most kMaxBatch each, traced on the arena's threads. Each
   // sample's tally depends on that sample alone, and the tallies are kept in sample order, so the
   // choice is the same for any thread count.
-  const uint64_t pixels_per_batch = std::max<uint64_t>(1, kMaxBatch / spp);
+  const uint64_t pixels_per_batch = kMaxBatch / spp;  // at least 1: spp <= kMaxBatch
   const uint64_t batches = (count + pixels_per_batch - 1) / pixels_per_batch;
   std::vector<LightPathsTally::Sample> all(count * spp);
   std::vector<uint64_t> batch_rays(batches, 0);
