@@ -1840,6 +1840,19 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
     escaped[k] = false;
     walk_begin(sub.camera, w);
   }
+  // The light subpaths' first three groups (the emitter and side, the point, the emission
+  // direction), drawn by every sample before its camera walk, so that they are the same dimensions
+  // in every sample of a pixel (the camera walk's length varies): the Sobol sampler stratifies
+  // the light vertex that next-event estimation (s = 1) connects to across the pixel's samples,
+  // as the path tracer's light sample at each vertex is.
+  std::array<Sampler*, kWavefront> all{};
+  std::array<bool, kWavefront> walk_light{};
+  for (size_t k = 0; k < count; ++k) {
+    all[k] = &samplers[k];
+    walk_light[k] = traces_light_subpath(samplers[k], settings.light_paths);
+  }
+  std::array<std::array<glm::vec2, 3>, kWavefront> u_light;
+  draw_groups<3>(all.data(), count, u_light);
   {
     std::array<Sampler*, kWavefront> drawing{};
     std::array<std::array<glm::vec2, 2>, kWavefront> u{};
@@ -1861,29 +1874,6 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
     step_bounce(paths.data(), walks.data(), index.data(), hits.data(), n, u.data(), escaped.data());
   }
   walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
-  // The light subpaths. Their third group (the emission direction) only where the subpath goes on
-  // past its first vertex, or starts at the environment (whose first vertex is a direction): a
-  // sample outside light_paths' share draws nothing after it, so leaving the group undrawn moves
-  // no other number (get_2d_groups<2> then <1> draws what get_2d_groups<3> does).
-  std::array<Sampler*, kWavefront> all{};
-  std::array<bool, kWavefront> walk_light{};
-  for (size_t k = 0; k < count; ++k) {
-    all[k] = &samplers[k];
-    walk_light[k] = traces_light_subpath(samplers[k], settings.light_paths);
-  }
-  std::array<std::array<glm::vec2, 2>, kWavefront> u_start;
-  draw_groups<2>(all.data(), count, u_start);
-  std::array<bool, kWavefront> needs_dir{};
-  size_t m = 0;
-  for (size_t k = 0; k < count; ++k) {
-    needs_dir[k] =
-        walk_light[k] || (it_.has_environment_ && !it_.table_.empty() &&
-                          it_.emitters_[it_.table_.sample(u_start[k][0].x).index].environment);
-    if (needs_dir[k]) all[m++] = &samplers[k];
-  }
-  std::array<std::array<glm::vec2, 1>, kWavefront> u_dir;
-  draw_groups<1>(all.data(), m, u_dir);
-  m = 0;
   for (size_t k = 0; k < count; ++k) {
     Subpaths& sub = subs[k];
     SampleState& st = state_[k];
@@ -1895,10 +1885,8 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
       sub.camera[1].pdf_fwd =
           light_tracing_camera_pdf(camera_area_pdf(sub.camera[0], sub.camera[1]), st.pixel_ratio);
     }
-    const std::array<glm::vec2, 3> u_light{u_start[k][0], u_start[k][1],
-                                           needs_dir[k] ? u_dir[m++][0] : glm::vec2(0.0f)};
     // A sample outside light_paths' share keeps only the light subpath's first vertex (for s = 1).
-    light_subpath(sub.light, max_light, u_light, walk_light[k], walks[k]);
+    light_subpath(sub.light, max_light, u_light[k], walk_light[k], walks[k]);
     paths[k] = &sub.light;
   }
   walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
