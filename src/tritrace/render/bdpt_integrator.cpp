@@ -1846,11 +1846,7 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
   // the light vertex that next-event estimation (s = 1) connects to across the pixel's samples,
   // as the path tracer's light sample at each vertex is.
   std::array<Sampler*, kWavefront> all{};
-  std::array<bool, kWavefront> walk_light{};
-  for (size_t k = 0; k < count; ++k) {
-    all[k] = &samplers[k];
-    walk_light[k] = traces_light_subpath(samplers[k], settings.light_paths);
-  }
+  for (size_t k = 0; k < count; ++k) all[k] = &samplers[k];
   std::array<std::array<glm::vec2, 3>, kWavefront> u_light;
   draw_groups<3>(all.data(), count, u_light);
   {
@@ -1886,7 +1882,8 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
           light_tracing_camera_pdf(camera_area_pdf(sub.camera[0], sub.camera[1]), st.pixel_ratio);
     }
     // A sample outside light_paths' share keeps only the light subpath's first vertex (for s = 1).
-    light_subpath(sub.light, max_light, u_light[k], walk_light[k], walks[k]);
+    light_subpath(sub.light, max_light, u_light[k],
+                  traces_light_subpath(samplers[k], settings.light_paths), walks[k]);
     paths[k] = &sub.light;
   }
   walk_all(paths.data(), walks.data(), samplers, escaped.data(), count);
