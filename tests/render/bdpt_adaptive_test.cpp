@@ -15,29 +15,24 @@
 #include <string>
 #include <vector>
 
+#include "example_scene.h"
 #include "mean_and_error.h"
 #include "tritrace/accel/bvh/bvh_accel.h"
 #include "tritrace/render/bdpt_integrator.h"
 #include "tritrace/render/path_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/cornell_box.h"
-#include "tritrace/scene/io/scene_loader.h"
 
 namespace tritrace {
 namespace {
+
+using testing_scenes::example_scene;
 
 using testing_mc::expect_same_mean;
 using testing_mc::mean_of;
 
 using testing_mc::luminance_mean;
 using testing_mc::same_bits;
-
-Scene example(const char* file, int side) {
-  SceneOverrides size;
-  size.width = side;
-  size.height = side;
-  return load_scene(std::string(TRITRACE_SOURCE_DIR) + "/scenes/" + file, size).scene;
-}
 
 // Renders into `film` in passes of the given sample counts, continuing one adaptive state (as
 // --time-limit renders), each pass on `threads` threads.
@@ -97,7 +92,7 @@ TEST(BdptAdaptive, SameBitsForOneAndSevenThreadsTilesAndPassesAndTheSppAovShowsT
 TEST(BdptAdaptive, ImageMeanOverSeedsAgreesWithUniformBdptAndThePathTracer) {
   const std::vector<std::pair<const char*, Scene>> scenes = {
       {"cornell-area", make_cornell_area({.width = 16, .height = 16})},
-      {"glass.json", example("glass.json", 16)}};
+      {"glass.json", example_scene("glass.json", 16)}};
   for (const auto& [name, scene] : scenes) {
     SCOPED_TRACE(name);
     const BvhAccel accel(scene.mesh, kDefaultKernel);
@@ -143,7 +138,7 @@ TEST(BdptAdaptive, WeightRecursionEqualsTheRatioWalkWithCountRatios) {
   const std::vector<std::pair<const char*, Scene>> scenes = {
       {"cornell-area", make_cornell_area({.width = 12, .height = 12})},
       {"point light box", make_cornell_box({.width = 12, .height = 12})},
-      {"glass.json", example("glass.json", 12)},
+      {"glass.json", example_scene("glass.json", 12)},
       {"thin lens", lens},
       {"orthographic with a lens", ortho_lens}};
   for (const auto& [name, scene] : scenes) {
@@ -175,7 +170,7 @@ TEST(BdptAdaptive, WeightRecursionEqualsTheRatioWalkWithCountRatios) {
 TEST(BdptAdaptive, WeightsStayAPartitionOfUnityForCountRatiosOtherThanOne) {
   for (const bool glass : {false, true}) {
     const Scene scene =
-        glass ? example("glass.json", 16) : make_cornell_area({.width = 16, .height = 16});
+        glass ? example_scene("glass.json", 16) : make_cornell_area({.width = 16, .height = 16});
     const BvhAccel accel(scene.mesh, kDefaultKernel);
     const BdptIntegrator plain(scene);
     std::vector<double> plain_means;
@@ -208,7 +203,7 @@ TEST(BdptAdaptive, WeightsStayAPartitionOfUnityForCountRatiosOtherThanOne) {
 TEST(BdptAdaptive, LightPathShareWeightsAndBitsWithCountRatios) {
   for (const bool glass : {false, true}) {
     const Scene scene =
-        glass ? example("glass.json", 12) : make_cornell_area({.width = 12, .height = 12});
+        glass ? example_scene("glass.json", 12) : make_cornell_area({.width = 12, .height = 12});
     const BvhAccel accel(scene.mesh, kDefaultKernel);
     for (const float scale : {0.05f, 20.0f}) {
       SCOPED_TRACE(std::string(glass ? "glass.json" : "cornell-area") + " scale " +

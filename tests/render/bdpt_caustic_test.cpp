@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "example_scene.h"
 #include "mean_and_error.h"
 #include "tritrace/accel/bvh/bvh_accel.h"
 #include "tritrace/parallel.h"
@@ -16,7 +17,6 @@
 #include "tritrace/render/path_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/cornell_box.h"
-#include "tritrace/scene/io/scene_loader.h"
 
 namespace tritrace {
 namespace {
@@ -28,10 +28,7 @@ using testing_mc::same_bits;
 // scenes/caustics.json: a glass sphere on the floor of a box lit by a small area light high on
 // its left wall, the caustic on the floor beside the sphere.
 Scene caustics(int side) {
-  SceneOverrides size;
-  size.width = side;
-  size.height = side;
-  return load_scene(std::string(TRITRACE_SOURCE_DIR) + "/scenes/caustics.json", size).scene;
+  return testing_scenes::example_scene("caustics.json", side);
 }
 
 testing_mc::MeanAndError mean_of_renders(const Scene& scene, const Accel& accel,

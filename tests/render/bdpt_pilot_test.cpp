@@ -12,14 +12,16 @@
 #include <utility>
 #include <vector>
 
+#include "example_scene.h"
 #include "tritrace/accel/make_accel.h"
 #include "tritrace/parallel.h"
 #include "tritrace/render/bdpt_pilot.h"
 #include "tritrace/scene/cornell_box.h"
-#include "tritrace/scene/io/scene_loader.h"
 
 namespace tritrace {
 namespace {
+
+using testing_scenes::example_scene;
 
 // kPilotShares: 1, 1/2, 1/4, 1/8, 1/16, 1/32, 1/64.
 TEST(BdptPilot, WeighsEachShareByThePowerHeuristicWithCounts) {
@@ -134,20 +136,12 @@ TEST(BdptPilot, ChoosesASmallShareInADiffuseBox) {
   }
 }
 
-// scenes/caustics.json (a glass sphere in the lit box) at width x height.
-Scene caustics_scene(int width, int height) {
-  SceneOverrides size;
-  size.width = width;
-  size.height = height;
-  return load_scene(std::string(TRITRACE_SOURCE_DIR) + "/scenes/caustics.json", size).scene;
-}
-
 // The same scene, seed and sampler make the same choice with the same numbers, bit for bit, on
 // any number of threads (its batches run in parallel, its sums in sample order); the render
 // job's tests check it across parts and passes. scenes/caustics.json has a caustic guide, which
 // the pilot builds and shares.
 TEST(BdptPilot, IsDeterministicOnAnyThreadCount) {
-  const Scene caustics = caustics_scene(24, 20);
+  const Scene caustics = example_scene("caustics.json", 24, 20);
   const Scene box = make_cornell_area({.width = 20, .height = 12});
   for (const Scene* scene : {&box, &caustics}) {
     const auto bvh = make_accel(AccelKind::kBvh, *scene, Kernel::kWatertight);
@@ -180,7 +174,7 @@ TEST(BdptPilot, IsDeterministicOnAnyThreadCount) {
 // (docs/PERFORMANCE.md, 2026-11-28, seventh session). With F = 1's variance clamped at 10 times
 // the mean the pilot chose 1/2 on every seed.
 TEST(BdptPilot, ChoosesAShareBelowAHalfForCausticsThroughGlass) {
-  const Scene scene = caustics_scene(48, 48);
+  const Scene scene = example_scene("caustics.json", 48);
   const auto accel = make_accel(AccelKind::kBvh, scene, Kernel::kWatertight);
   for (uint64_t seed : {1u, 2u}) {
     const LightPathsChoice c = choose_light_paths(scene, *accel, {}, seed, SamplerKind::kSobol);

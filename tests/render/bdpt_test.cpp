@@ -5,6 +5,7 @@
 // light leaves through delta refractions: the adjoint's classic 1/eta^2 mistake would show), the
 // strategies against each other (each alone, unweighted, estimates the same paths; weighted, they
 // add up to the whole image), and images independent of threads and tiles.
+#include "example_scene.h"
 #include "mean_and_error.h"
 #include "tritrace/render/bdpt_integrator.h"
 
@@ -24,10 +25,11 @@
 #include "tritrace/render/path_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/cornell_box.h"
-#include "tritrace/scene/io/scene_loader.h"
 
 namespace tritrace {
 namespace {
+
+using testing_scenes::example_scene;
 
 double luminance_mean(const Image& image) {
   double sum = 0.0;
@@ -415,14 +417,6 @@ TEST(Bdpt, BalanceAndPowerHeuristicsAgree) {
   EXPECT_NEAR(balance / power, 1.0, 0.01);
 }
 
-// Glass and rough metal spheres (faceted meshes) in the box: both integrators agree.
-Scene example(const char* file, int side) {
-  SceneOverrides size;
-  size.width = side;
-  size.height = side;
-  return load_scene(std::string(TRITRACE_SOURCE_DIR) + "/scenes/" + file, size).scene;
-}
-
 // The wavefronts (docs/BDPT.md): a batch's samples are walked side by side, 64 at a time, their
 // shadow rays queued across samples. The oracle is the same samples given one per call, where no
 // sample has a neighbour: radiance, AOVs and the light image must be the same bits, for a batch
@@ -432,7 +426,7 @@ TEST(Bdpt, BatchOfSamplesIsItsSamplesOneAtATime) {
   for (const bool glass : {true, false}) {
     SCOPED_TRACE(glass ? "glass.json" : "cornell-area");
     const Scene scene =
-        glass ? example("glass.json", 16) : make_cornell_area({.width = 16, .height = 16});
+        glass ? example_scene("glass.json", 16) : make_cornell_area({.width = 16, .height = 16});
     const BvhAccel accel(scene.mesh, kDefaultKernel);
     const BdptIntegrator bdpt(scene);
     constexpr size_t n = 200;
@@ -478,10 +472,11 @@ TEST(Bdpt, BatchOfSamplesIsItsSamplesOneAtATime) {
   }
 }
 
+// Glass and rough metal spheres (faceted meshes) in the box: both integrators agree.
 TEST(Bdpt, AgreesWithThePathTracerOnGlassAndRoughMetal) {
   for (const char* file : {"glass.json", "rough_metal.json"}) {
     SCOPED_TRACE(file);
-    const Scene scene = example(file, 32);
+    const Scene scene = example_scene(file, 32);
     const BvhAccel accel(scene.mesh, kDefaultKernel);
     const Image bdpt = render_bdpt(scene, accel, {}, {.spp = 128, .seed = 1});
     const Image path = render_path(scene, accel, {.spp = 1024, .seed = 2});
@@ -508,7 +503,7 @@ TEST(Bdpt, AovsAreThePathTracers) {
   EXPECT_TRUE(same_bits(bdpt.resolve_normal(), path.resolve_normal()));
   EXPECT_TRUE(same_bits(bdpt.resolve_depth(), path.resolve_depth()));
 
-  const Scene glass = example("glass.json", 32);
+  const Scene glass = example_scene("glass.json", 32);
   const Image bdpt_albedo = film_of(glass, BdptIntegrator(glass), 64).resolve_albedo();
   const Image path_albedo = film_of(glass, PathIntegrator(glass), 64).resolve_albedo();
   expect_agree(bdpt_albedo, path_albedo, 0.005, 16, 0.03, 0.99);
@@ -617,7 +612,7 @@ TEST(Bdpt, AgreesWithThePathTracerWithNormalMapsAndVertexColours) {
 
 // Instanced geometry under the lab's point light (scenes/instances.json).
 TEST(Bdpt, AgreesWithThePathTracerOnInstances) {
-  const Scene scene = example("instances.json", 32);
+  const Scene scene = example_scene("instances.json", 32);
   ASSERT_FALSE(scene.instances.empty());
   const auto accel = make_accel(AccelKind::kBvh, scene, Kernel::kWatertight);
   const Image bdpt = render_bdpt(scene, *accel, {}, {.spp = 128, .seed = 1});
@@ -691,7 +686,7 @@ TEST(Bdpt, UnweightedEnvironmentStrategiesAgree) {
 TEST(Bdpt, AgreesWithThePathTracerUnderEnvironments) {
   Scene open = make_cornell_area({.width = 32, .height = 32});
   open.environment = glm::vec3(0.4f, 0.5f, 0.6f);
-  const Scene sky = example("sky.json", 32);
+  const Scene sky = example_scene("sky.json", 32);
   for (const Scene* scene : {static_cast<const Scene*>(&open), &sky}) {
     const BvhAccel accel(scene->mesh, kDefaultKernel);
     const Image bdpt = render_bdpt(*scene, accel, {}, {.spp = 128, .seed = 1});
@@ -703,7 +698,7 @@ TEST(Bdpt, AgreesWithThePathTracerUnderEnvironments) {
 // spot_and_sun.json (the lab's box under a spot light and a low sun through its open front) with
 // only its spot light, only its sun, or both.
 Scene spot_and_sun(int side, bool spot, bool sun) {
-  Scene scene = example("spot_and_sun.json", side);
+  Scene scene = example_scene("spot_and_sun.json", side);
   if (!spot) scene.spot_lights.clear();
   if (!sun) scene.directional_lights.clear();
   return scene;
@@ -753,10 +748,10 @@ TEST(Bdpt, WeightRecursionEqualsTheRatioWalk) {
   const std::vector<std::pair<const char*, Scene>> scenes = {
       {"cornell-area", make_cornell_area({.width = 12, .height = 12})},
       {"point light box", make_cornell_box({.width = 12, .height = 12})},
-      {"glass.json", example("glass.json", 12)},
+      {"glass.json", example_scene("glass.json", 12)},
       {"coat and rough glass", coated},
       {"open to a uniform sky", open},
-      {"sky.json", example("sky.json", 12)},
+      {"sky.json", example_scene("sky.json", 12)},
       {"spot and sun", spot_and_sun(12, true, true)},
       {"thin lens", lensed_cornell_area(12)},
       {"orthographic", orthographic_cornell_area(12)},
@@ -866,8 +861,8 @@ TEST(Bdpt, WeightRecursionEqualsTheRatioWalkWithALightPathShare) {
   const std::vector<std::pair<const char*, Scene>> scenes = {
       {"cornell-area", make_cornell_area({.width = 12, .height = 12})},
       {"point light box", make_cornell_box({.width = 12, .height = 12})},
-      {"glass.json", example("glass.json", 12)},
-      {"sky.json", example("sky.json", 12)},
+      {"glass.json", example_scene("glass.json", 12)},
+      {"sky.json", example_scene("sky.json", 12)},
       {"spot and sun", spot_and_sun(12, true, true)},
       {"orthographic lens", orthographic_lens_cornell_area(12)}};
   for (const auto& [name, scene] : scenes) {
@@ -917,7 +912,7 @@ TEST(Bdpt, AgreesWithThePathTracerWithALightPathShare) {
     expect_agree_with_a_light_path_share(make_cornell_area({.width = 32, .height = 32}), 0.005);
   }
   SCOPED_TRACE("glass.json");
-  expect_agree_with_a_light_path_share(example("glass.json", 32), 0.01);
+  expect_agree_with_a_light_path_share(example_scene("glass.json", 32), 0.01);
 }
 
 TEST(Bdpt, AgreesWithThePathTracerUnderThePointLightWithALightPathShare) {

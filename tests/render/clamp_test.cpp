@@ -10,22 +10,17 @@
 #include <cmath>
 #include <string>
 
+#include "example_scene.h"
 #include "tritrace/accel/bvh/bvh_accel.h"
 #include "tritrace/distributed/render_identity.h"
 #include "tritrace/render/path_integrator.h"
 #include "tritrace/render/renderer.h"
 #include "tritrace/scene/cornell_box.h"
-#include "tritrace/scene/io/scene_loader.h"
 
 namespace tritrace {
 namespace {
 
-Scene glass_scene(int side) {
-  SceneOverrides size;
-  size.width = side;
-  size.height = side;
-  return load_scene(std::string(TRITRACE_SOURCE_DIR) + "/scenes/glass.json", size).scene;
-}
+using testing_scenes::example_scene;
 
 Image render_with(const Scene& scene, const Accel& accel, PathSettings settings,
                   const RenderOptions& options) {
@@ -72,7 +67,7 @@ ClampCounts expect_clamped_like_the_oracle(const Scene& scene, float clamp) {
 }
 
 TEST(ClampIndirect, GlassCausticSamplesAreScaledToTheClampAndNoOthers) {
-  const ClampCounts counts = expect_clamped_like_the_oracle(glass_scene(128), 0.5f);
+  const ClampCounts counts = expect_clamped_like_the_oracle(example_scene("glass.json", 128), 0.5f);
   // Both kinds occur, so the test tells a clamp that does nothing from one that clamps all (at
   // one sample per pixel, a few dozen of the 16384 samples go through the sphere to the light
   // with more than 0.5, up to about 13).
