@@ -24,6 +24,10 @@ For each scene:
      reference than in a path render of the scene without its glass objects: diffuse surfaces
      seen directly that get light focused by the glass) and "rest". Each region's share of each
      integrator's squared error, and its RMSE ratio, in the equal-time pair.
+  6. The k pixels (1, 5, 20, 100) with the largest squared error in bdpt's render of the pair:
+     their share of its squared error, their MSE in bdpt's render over path's at equal spp, and
+     their regions (a few pixels holding much of the error, at a per-sample ratio near 1, are a
+     part that bdpt's strategies do not sample better than path's).
 
 --light-paths F [F ...] (default 1) measures bdpt with a light subpath in the share F of its
 samples (`tritrace render --light-paths F`), each F as its own bdpt with its own cost c, beside
@@ -372,7 +376,27 @@ def main():
                 print("equal-time RMSE ratio without %s (reference's noise subtracted): %.2f"
                       % (" and ".join(drop), ratio))
                 reg["ratio_without_" + "_".join(drop)] = ratio
-            per_f[bdpt] = dict(cost=cost, rows=rows, regions=reg)
+            # 6. the pixels that hold bdpt's error: the k worst of its equal-time render (mean over
+            # seeds of the squared error), their share of its total and path's error in the same
+            # pixels at equal spp (a strategy-independent part, the same per sample in both
+            # integrators, shows as a ratio near 1 there).
+            sq_spp = sum(r[3] for r in runs[("path", bmax)]) / len(runs[("path", bmax)])
+            order = np.argsort(-sq["bdpt"].ravel())
+            names = np.full(sq["bdpt"].size, "", dtype=object)
+            for name, mask in masks.items():
+                names[mask.ravel()] = name
+            top = []
+            print("\nbdpt's worst pixels at %d spp | share of bdpt's squared error | their MSE, "
+                  "bdpt / path at equal spp | regions" % bmax)
+            for k in (1, 5, 20, 100):
+                idx = order[:k]
+                share_b = sq["bdpt"].ravel()[idx].sum() / sq["bdpt"].sum()
+                per_spp = sq["bdpt"].ravel()[idx].sum() / max(sq_spp.ravel()[idx].sum(), 1e-300)
+                where = ", ".join("%s %d" % (n, c) for n, c in
+                                  zip(*np.unique(names[idx].astype(str), return_counts=True)))
+                top.append(dict(pixels=k, share_bdpt=float(share_b), m=float(per_spp)))
+                print("| %d | %.1f%% | %.2f | %s |" % (k, 100 * share_b, per_spp, where))
+            per_f[bdpt] = dict(cost=cost, rows=rows, regions=reg, worst_pixels=top)
         smallest = min(m[0] for m in med.values())
         print("reference noise / smallest RMSE compared: %.2f" % (ref_noise / smallest))
         # images

@@ -25,8 +25,9 @@ packages=(
   # Distributed rendering (docs/DISTRIBUTED.md): Open MPI for the optional --mpi mode
   # (TRITRACE_WITH_MPI), and a single-node Slurm with munge for the job-array test.
   libopenmpi-dev openmpi-bin slurmctld slurmd slurm-client munge
-  # The sanitizer runtimes for make test-asan / test-tsan (g++ pulls them in; named for clarity).
-  libasan8 libubsan1 libtsan2
+  # The sanitizer runtimes for make test-asan / test-tsan (g++ pulls them in; named for clarity),
+  # and clang 14 with its own, which compiles the ASan + UBSan build (Makefile: ASAN_COMPILERS).
+  libasan8 libubsan1 libtsan2 clang-14 libclang-rt-14-dev
 )
 
 missing=()

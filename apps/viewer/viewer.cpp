@@ -571,7 +571,7 @@ class Viewer {
       // adaptive sample cheaper than a uniform frame's), else the uniform frames'.
       const double ms_per_sample =
           level_ms_per_sample_ > 0.0 ? level_ms_per_sample_ : schedule_->ms_per_sample();
-      level_.emplace();
+      level_ = Level{};
       level_->spp = spp;
       // Light tracing (bdpt) splats onto every tile, so its levels cannot be split into tile
       // parts: a level is one render (longer frames while it refines).

@@ -198,10 +198,11 @@ inline WatertightRay prepare_watertight_axis(const Ray& ray, float sz) {
   w.sz = sz;
   w.sx = ray.dir[kKx] * sz;
   w.sy = ray.dir[kKy] * sz;
-  // & rather than &&: no branches (the rays come in any direction).
-  const bool finite = std::isfinite(w.ox) & std::isfinite(w.oy) & std::isfinite(w.oz) &
-                      std::isfinite(w.sx) & std::isfinite(w.sy) & std::isfinite(w.sz) &
-                      (w.sz != 0.0f);
+  // & rather than &&: no branches (the rays come in any direction); on ints, which & is for.
+  const bool finite =
+      (int{std::isfinite(w.ox)} & int{std::isfinite(w.oy)} & int{std::isfinite(w.oz)} &
+       int{std::isfinite(w.sx)} & int{std::isfinite(w.sy)} & int{std::isfinite(w.sz)} &
+       int{w.sz != 0.0f}) != 0;
   w.tmin = finite ? ray.tmin : kRayTMax;
   w.tmax = finite ? ray.tmax : -kRayTMax;
   return w;

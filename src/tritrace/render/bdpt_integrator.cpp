@@ -2298,7 +2298,9 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
       Pcg32 rng(hash_words(sampler.pixel_key(), sampler.sample_index(), i, j, 0x63617573746963ull),
                 0);
       const float u_pick = rng.next_float();
-      const glm::vec2 u_dir(rng.next_float(), rng.next_float());
+      // Braces: the two numbers are drawn left to right by any compiler (a constructor's
+      // arguments in parentheses are evaluated in an unspecified order: GCC and clang differ).
+      const glm::vec2 u_dir{rng.next_float(), rng.next_float()};
       const glm::vec3 w = CausticGuide::sample(cell, u_pick, u_dir);
       const float pg = CausticGuide::pdf(cell, w);
       if (!(pg > 0.0f)) continue;
@@ -2363,7 +2365,7 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
         if (!agrees(x, x.wo)) break;
         const glm::vec3 wo_local = x.frame.to_local(x.wo);
         const float u_lobe = rng.next_float();
-        const glm::vec2 u(rng.next_float(), rng.next_float());
+        const glm::vec2 u{rng.next_float(), rng.next_float()};
         const BsdfSample bs = bsdf_sample(x, wo_local, u_lobe, u);
         if (!bs.valid()) break;
         const glm::vec3 w_next = x.frame.to_world(bs.wi);
@@ -2385,12 +2387,13 @@ std::vector<CausticPhoton> BdptTracer::caustic_photons(uint32_t chunk, uint32_t 
   const int max_vertices = it_.settings_.max_depth + 1;
   // The chunk's stream: a PCG32 sequence (stream selector and start both keyed by the chunk), so
   // no chunk's numbers depend on another's having been drawn.
+  // (Pairs drawn in braces: in the same order by any compiler.)
   Pcg32 rng(hash_words(0x70686f746f6e73ull, chunk), chunk);
   const uint64_t first = static_cast<uint64_t>(chunk) * kGuideChunk;
   const uint64_t end = std::min<uint64_t>(n, first + kGuideChunk);
   for (uint64_t i = first; i < end; ++i) {
     std::array<glm::vec2, 3> u;
-    for (glm::vec2& v : u) v = glm::vec2(rng.next_float(), rng.next_float());
+    for (glm::vec2& v : u) v = glm::vec2{rng.next_float(), rng.next_float()};
     WalkState w;
     light_subpath(path, max_vertices, u, true, w);
     if (w.count == 0) continue;
@@ -2411,7 +2414,7 @@ std::vector<CausticPhoton> BdptTracer::caustic_photons(uint32_t chunk, uint32_t 
       specular_met = true;
       if (!more) break;
       std::array<glm::vec2, 2> us;
-      for (glm::vec2& v : us) v = glm::vec2(rng.next_float(), rng.next_float());
+      for (glm::vec2& v : us) v = glm::vec2{rng.next_float(), rng.next_float()};
       walk_scatter(path, w, us);
     }
   }

@@ -136,6 +136,9 @@ struct NoEmit {
 
 // Crossings of one ray are few: insertion sort by (t, prim).
 void sort_by_t(Hit* first, Hit* last) {
+  // (first + 1 is not a pointer into, or just past, fewer than one element: for none, first may
+  // be null, an empty vector's data.)
+  if (last - first < 2) return;
   for (Hit* i = first + 1; i < last; ++i) {
     const Hit h = *i;
     Hit* j = i;
