@@ -134,7 +134,7 @@ TSAN_TESTS = ParallelTsan.*:Renderer.*:Placements/*:BinnedSahBuilder.ParallelBui
 # build and traversals, kernels, leak counts, ray offsets, the Sobol sampler, the camera, the lab
 # integrator, the path tracer and the renderer.
 PORTABLE_FLAGS = -DCMAKE_BUILD_TYPE=Release -DTRITRACE_NATIVE=OFF -DTRITRACE_BUILD_BENCH=OFF \
-  -DTRITRACE_VIEWER=OFF -DTRITRACE_WERROR=ON -DTRITRACE_UNITY=ON -DTRITRACE_TEST_OPTIMIZE=-O1
+  -DTRITRACE_VIEWER=OFF -DTRITRACE_WERROR=ON -DTRITRACE_UNITY=ON
 
 .PHONY: all deps configure build run test test-asan test-tsan test-portable leaks bench format \
   lint install clean
