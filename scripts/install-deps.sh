@@ -26,7 +26,8 @@ packages=(
   # (TRITRACE_WITH_MPI), and a single-node Slurm with munge for the job-array test.
   libopenmpi-dev openmpi-bin slurmctld slurmd slurm-client munge
   # The sanitizer runtimes for make test-asan / test-tsan (g++ pulls them in; named for clarity),
-  # and clang 14 with its own, which compiles the ASan + UBSan build (Makefile: ASAN_COMPILERS).
+  # and clang 14 with its own, which compiles the ASan + UBSan and TSan builds (Makefile:
+  # SANITIZE_COMPILERS).
   libasan8 libubsan1 libtsan2 clang-14 libclang-rt-14-dev
 )
 
