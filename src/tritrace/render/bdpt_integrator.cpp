@@ -547,6 +547,8 @@ class BdptTracer {
   void wavefront(const SampleBatch& batch, const SampleOutput& out, const Hit* first_hits,
                  size_t first, size_t count);
   uint64_t traced() const { return traced_; }
+  // The pixels where samples take BdptSettings::specular_view_rays (null: none).
+  void set_specular_mask(const BdptIntegrator::SpecularMask* mask) { mask_ = mask; }
 
  private:
   // The albedo and normal AOVs of sample k's camera subpath, as the path tracer writes them
@@ -741,6 +743,29 @@ class BdptTracer {
   // stream of the sample's own (pixel key and sample index), not from the sampler's dimensions, so
   // that nothing else the sample draws moves.
   void caustic_strategy(size_t k, const Sampler& sampler);
+  // BdptSettings::specular_view_rays for the wavefront's samples [0, count) that take them (their
+  // `views`): each sample's rays from its own sampler of the pixel (a second seed, sample index
+  // i n + j for its ray j of n), followed through specular surfaces only, traced a bounce of all of
+  // them at a time; every emitter met after at least one specular surface (and the environment,
+  // where a ray escapes after one) adds its term over n + 1 to the sample's radiance.
+  void specular_views(const SampleBatch& batch, size_t first, size_t count);
+  // Adds view ray term `term` of wavefront sample k (the pilot's tally: as an estimate every share
+  // weighs alike).
+  void add_view_term(size_t k, glm::vec3 term);
+  Vertex view_vertex_;  // specular_views' scratch vertex
+  // Whether camera vertices [1, t - 1) of the selected sample are all specular surfaces, at least
+  // one: a path E S+ L ending at camera vertex t - 1, which specular_views samples too.
+  bool seen_through_specular(int t) const {
+    if (t < 3) return false;
+    for (int i = 1; i < t - 1; ++i) {
+      if (camera_[i].type != VertexType::kSurface || !camera_[i].specular) return false;
+    }
+    return true;
+  }
+  // The share of its estimate that a sample's own s = 0 term of an E S+ L path keeps.
+  float view_share() const {
+    return 1.0f / static_cast<float>(1 + it_.settings_.specular_view_rays);
+  }
   // One incoherent ray (Accel::intersect's single ray takes the batch path, packets on small
   // trees).
   Hit trace_one(const Ray& ray) const {
@@ -765,6 +790,7 @@ class BdptTracer {
   const CausticGuide* guide_ = nullptr;
   // The pilot's tally: each sample's contributions and work go there instead of the image.
   LightPathsTally* tally_ = nullptr;
+  const BdptIntegrator::SpecularMask* mask_ = nullptr;
   uint64_t traced_ = 0;
   size_t first_ = 0;  // the wavefront's first sample in the batch
   // Per wavefront sample: its vertex counts, whether its camera subpath escaped, its radiance so
@@ -773,6 +799,7 @@ class BdptTracer {
   struct SampleState {
     int nc = 0, nl = 0;
     bool camera_escaped = false;
+    bool views = false;  // takes specular_view_rays (its pixel is in the mask)
     glm::vec3 total{0.0f};
     float u_round = 0.0f;
     glm::vec2 lens_offset{0.0f};
@@ -1815,6 +1842,11 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
     SampleState& st = state_[k];
     st.camera_escaped = false;
     st.total = glm::vec3(0.0f);
+    st.views = false;
+    if (mask_ != nullptr && !batch.pixels.empty()) {
+      const uint32_t pixel = batch.pixels[first + k];
+      st.views = pixel < mask_->pixels.size() && mask_->pixels[pixel] != 0;
+    }
     const Ray& camera_ray = batch.rays[first + k];
     Vertex& c0 = sub.camera[0];
     c0.type = VertexType::kCamera;
@@ -1899,6 +1931,7 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
     connect(k, samplers[k]);
   }
   flush();
+  if (mask_ != nullptr) specular_views(batch, first, count);
   for (size_t k = 0; k < count; ++k) {
     if (!out.albedo.empty() || !out.normal.empty()) {
       glm::vec3 albedo, normal;
@@ -1951,7 +1984,8 @@ void BdptTracer::connect_camera_only(size_t k) {
     const Vertex& pt = camera[t - 1];
     // s = 0 (t <= nc <= max_depth + 2).
     if (pt.emits) {
-      const glm::vec3 contribution = pt.beta * emission(scene_, pt, pt.wo);
+      glm::vec3 contribution = pt.beta * emission(scene_, pt, pt.wo);
+      if (current_->views && seen_through_specular(t)) contribution *= view_share();
       if (max_component(contribution) > 0.0f) {
         const float q = caustic_q(0, t, camera[0].p);
         if (q > 0.0f) {
@@ -2191,6 +2225,7 @@ void BdptTracer::connect(size_t k, Sampler& sampler) {
       if (s == 0) {
         if (!pt.emits) continue;
         contribution = pt.beta * emission(scene_, pt, pt.wo);
+        if (current_->views && seen_through_specular(t)) contribution *= view_share();
         const float q = caustic_q(0, t, camera[0].p);
         if (q > 0.0f && tally_ == nullptr) {
           if (max_component(contribution) > 0.0f) queue_caustic_s0(t, contribution, q);
@@ -2379,6 +2414,116 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
       }
     }
   }
+}
+
+void BdptTracer::specular_views(const SampleBatch& batch, size_t first, size_t count) {
+  const int n_rays = it_.settings_.specular_view_rays;
+  const int max_vertices = it_.settings_.max_depth + 2;
+  const float share = view_share();
+  const Camera& camera = scene_.camera;
+  const int width = camera.width();
+  const bool lens = camera.has_lens();
+  // A view ray between bounces: its sampler (the pixel's second sequence), its ray and
+  // throughput, its sample and the path's vertices so far (the camera's included).
+  struct View {
+    Sampler sampler;
+    Ray ray;
+    glm::vec3 beta{1.0f};
+    uint32_t k = 0;
+    int count = 1;
+  };
+  thread_local std::vector<View> views;
+  thread_local std::vector<Ray> rays;
+  thread_local std::vector<Hit> hits;
+  views.clear();
+  for (size_t k = 0; k < count; ++k) {
+    if (!state_[k].views) continue;
+    const Sampler& own = batch.samplers[first + k];
+    const uint32_t pixel = batch.pixels[first + k];
+    const int x = static_cast<int>(pixel % static_cast<uint32_t>(width));
+    const int y = static_cast<int>(pixel / static_cast<uint32_t>(width));
+    for (int j = 0; j < n_rays; ++j) {
+      View& v = views.emplace_back();
+      // The second sequence: the pixel's samples' view rays are the first n_rays x spp points of
+      // a Sobol sequence of their own (stratified together), as the pixel's own samples are of
+      // theirs; the box filter (bdpt's only one with light tracing) puts a sample at (x, y) + u.
+      v.sampler = Sampler(hash_combine(own.seed(), 0x73706563756c6172ull), own.kind());
+      v.sampler.start_pixel_sample(
+          x, y, own.sample_index() * static_cast<uint32_t>(n_rays) + static_cast<uint32_t>(j));
+      const glm::vec2 u = v.sampler.get_2d();
+      const float px = static_cast<float>(x) + u.x, py = static_cast<float>(y) + u.y;
+      v.ray = lens ? camera.lens_ray(px, py, v.sampler.get_2d()) : camera.ray_through(px, py);
+      v.k = static_cast<uint32_t>(k);
+    }
+  }
+  Vertex& x = view_vertex_;
+  size_t n = views.size();
+  while (n > 0) {
+    rays.resize(n);
+    hits.resize(n);
+    for (size_t j = 0; j < n; ++j) rays[j] = views[j].ray;
+    accel_.intersect_incoherent(std::span<const Ray>(rays.data(), n),
+                                std::span<Hit>(hits.data(), n));
+    traced_ += n;
+    size_t still = 0;
+    for (size_t j = 0; j < n; ++j) {
+      View& v = views[j];
+      const size_t k = v.k;
+      if (LightPathsTally* tally = tally_) ++tally->samples[first_ + k].always_rays;
+      const bool after_specular = v.count >= 2;
+      glm::vec3 le(0.0f);
+      bool goes_on = false;
+      if (!hits[j].found()) {
+        if (after_specular && it_.has_environment_) {
+          le = it_.environment_radiance(glm::normalize(v.ray.dir));
+        }
+      } else if (const uint8_t kind = it_.view_materials_[scene_.material_of(hits[j].prim)];
+                 kind &
+                 (after_specular ? BdptIntegrator::kMayBeSpecular | BdptIntegrator::kViewEmitter
+                                 : BdptIntegrator::kMayBeSpecular)) {
+        // (Only a surface that may be specular, or an emitter after a specular one, needs its
+        // vertex: the others end the ray with nothing.)
+        make_surface(x, v.ray, hits[j]);
+        ++v.count;
+        if (after_specular && x.emits) le = emission(scene_, x, x.wo);
+        if (x.specular && v.count < max_vertices && agrees(x, x.wo)) {
+          // The scattering as the camera walk's walk_scatter samples it (the delta lobe chosen by
+          // its probability), without Russian roulette.
+          const glm::vec3 wo_local = x.frame.to_local(x.wo);
+          const glm::vec2 u_choice = v.sampler.get_2d();
+          const glm::vec2 u_dir = v.sampler.get_2d();
+          const BsdfSample bs = bsdf_sample(x, wo_local, u_choice.x, u_dir);
+          const glm::vec3 w_next = bs.valid() ? x.frame.to_world(bs.wi) : glm::vec3(0.0f);
+          if (bs.valid() && agrees(x, w_next)) {
+            const glm::vec3 beta_next = v.beta * bs.weight;
+            goes_on = max_component(beta_next) > 0.0f && std::isfinite(max_component(beta_next));
+            if (goes_on) {
+              // (le is this vertex's, with the throughput that reached it.)
+              if (max_component(le) > 0.0f) add_view_term(k, v.beta * le * share);
+              le = glm::vec3(0.0f);
+              v.beta = beta_next;
+              v.ray = Ray{ray_start(x, w_next, it_.offset_), w_next, 0.0f, kRayTMax};
+            }
+          }
+        }
+      }
+      if (max_component(le) > 0.0f) add_view_term(k, v.beta * le * share);
+      if (goes_on) views[still++] = v;
+    }
+    n = still;
+    views.resize(n);
+  }
+}
+
+void BdptTracer::add_view_term(size_t k, glm::vec3 term) {
+  if (!std::isfinite(term.x + term.y + term.z)) return;
+  if (LightPathsTally* tally = tally_) {
+    const double v = luminance(term);
+    pilot_strategies_.assign(1, {1.0f, false});  // the only strategy of an E S+ L path
+    if (v > 0.0) add_pilot_contribution(tally->samples[first_ + k], v, false, pilot_strategies_);
+    return;
+  }
+  state_[k].total += term;
 }
 
 std::vector<CausticPhoton> BdptTracer::caustic_photons(uint32_t chunk, uint32_t n) {
@@ -2588,6 +2733,28 @@ BdptIntegrator::BdptIntegrator(const Scene& scene, const BdptSettings& settings,
   wants_guide_ = settings_.caustic_paths > 0 && !settings_.unweighted &&
                  !(settings_.only_s >= 0 && settings_.only_t >= 0) && !prims.empty() &&
                  any_not_diffuse;
+  mask_ = std::make_shared<MaskSlot>();
+  if (settings_.specular_view_rays > 0 && settings_.light_tracing && !settings_.unweighted &&
+      !(settings_.only_s >= 0 && settings_.only_t >= 0)) {
+    view_materials_.assign(scene.materials.size(), 0);
+    for (size_t m = 0; m < scene.materials.size(); ++m) {
+      const Material& mat = scene.materials[m];
+      const bool specular = !mat.is_diffuse() && (mat.has_parameter_textures() ||
+                                                  Bsdf(mat, glm::vec3(1.0f)).all_delta());
+      view_materials_[m] =
+          static_cast<uint8_t>((specular ? kMayBeSpecular : 0) | (mat.emits() ? kViewEmitter : 0));
+    }
+    const auto may_be_specular = [&](uint32_t m) { return view_materials_[m] & kMayBeSpecular; };
+    for (uint32_t prim = 0; prim < scene.mesh.size(); ++prim) {
+      if (may_be_specular(scene.mesh.material()[prim])) specular_prims_.push_back(prim);
+    }
+    for (const Instance& inst : scene.instances) {
+      const TriangleMesh& proto = scene.prototypes[inst.prototype];
+      for (uint32_t k = 0; k < proto.size(); ++k) {
+        if (may_be_specular(proto.material()[k])) specular_prims_.push_back(inst.first_prim + k);
+      }
+    }
+  }
   guide_ = std::make_shared<GuideSlot>();
   if (wants_guide_) {
     const Bounds3 b = scene_bounds(scene);
@@ -2657,6 +2824,83 @@ float BdptIntegrator::origin_pdf(uint32_t prim) const {
   return e.pmf / e.area;
 }
 
+namespace {
+
+bool same_view(const Camera& a, const Camera& b) {
+  return a.width() == b.width() && a.height() == b.height() && a.position() == b.position() &&
+         a.right() == b.right() && a.down() == b.down() && a.forward() == b.forward() &&
+         a.focal_px() == b.focal_px() && a.lens_radius() == b.lens_radius() &&
+         a.focus_distance() == b.focus_distance() && a.ortho_scale() == b.ortho_scale();
+}
+
+}  // namespace
+
+std::shared_ptr<const BdptIntegrator::SpecularMask> BdptIntegrator::specular_mask(
+    const Scene& scene) const {
+  if (specular_prims_.empty()) return nullptr;
+  const Camera& camera = scene.camera;
+  std::lock_guard<std::mutex> lock(mask_->mutex);
+  if (mask_->mask && same_view(mask_->mask->camera, camera)) return mask_->mask;
+  auto mask = std::make_shared<SpecularMask>(SpecularMask{camera, {}});
+  const int width = camera.width(), height = camera.height();
+  mask->pixels.assign(static_cast<size_t>(width) * static_cast<size_t>(height), 0);
+  // Each triangle's projected bounds, a pixel wider, and with a lens the circle of confusion of
+  // its corners wider still (f R |1/z - 1/focus| pixels for a thin lens at depth z). A triangle
+  // reaching behind the camera covers every pixel. The mask only decides where the extra rays
+  // are spent: a pixel left out keeps the sample's own estimate, unbiased either way.
+  const glm::vec3 eye = camera.position();
+  const float half_w = static_cast<float>(width / 2), half_h = static_cast<float>(height / 2);
+  const bool ortho = camera.is_orthographic();
+  for (const uint32_t prim : specular_prims_) {
+    const SurfaceTriangle tri = scene.triangle(prim);
+    const std::array<glm::vec3, 3> corners = {tri.v0, tri.v0 + tri.e1, tri.v0 + tri.e2};
+    float x0 = std::numeric_limits<float>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+    bool everywhere = false;
+    for (const glm::vec3& c : corners) {
+      const glm::vec3 d = c - eye;
+      const float z = glm::dot(d, camera.forward());
+      float px, py, margin = 1.0f;
+      if (ortho) {
+        px = glm::dot(d, camera.right()) / camera.ortho_scale();
+        py = glm::dot(d, camera.down()) / camera.ortho_scale();
+        if (camera.has_lens()) everywhere = true;
+      } else {
+        if (!(z > 1e-6f)) {
+          everywhere = true;
+          break;
+        }
+        px = camera.focal_px() * glm::dot(d, camera.right()) / z;
+        py = camera.focal_px() * glm::dot(d, camera.down()) / z;
+        if (camera.has_lens()) {
+          margin += camera.focal_px() * camera.lens_radius() *
+                    std::abs(1.0f / z - 1.0f / camera.focus_distance());
+        }
+      }
+      x0 = std::min(x0, half_w + px - margin);
+      x1 = std::max(x1, half_w + px + margin);
+      y0 = std::min(y0, half_h + py - margin);
+      y1 = std::max(y1, half_h + py + margin);
+    }
+    if (everywhere || !std::isfinite(x0 + x1 + y0 + y1)) {
+      std::fill(mask->pixels.begin(), mask->pixels.end(), uint8_t{1});
+      break;
+    }
+    // (Clamped as floats first: a far corner's coordinate may not fit an int.)
+    const auto pixel = [](float v, int size) {
+      return static_cast<int>(std::clamp(std::floor(v), -1.0f, static_cast<float>(size)));
+    };
+    const int ix0 = std::max(0, pixel(x0, width)), ix1 = std::min(width - 1, pixel(x1, width));
+    const int iy0 = std::max(0, pixel(y0, height)), iy1 = std::min(height - 1, pixel(y1, height));
+    if (ix0 > ix1) continue;
+    for (int y = iy0; y <= iy1; ++y) {
+      std::fill_n(mask->pixels.begin() + static_cast<ptrdiff_t>(y) * width + ix0, ix1 - ix0 + 1,
+                  uint8_t{1});
+    }
+  }
+  mask_->mask = mask;
+  return mask;
+}
+
 uint64_t BdptIntegrator::radiance(const SampleBatch& batch, const SampleOutput& out,
                                   const Scene& scene, const Accel& accel) const {
   return trace_batch(batch, out, scene, accel, nullptr);
@@ -2675,6 +2919,8 @@ uint64_t BdptIntegrator::trace_batch(const SampleBatch& batch, const SampleOutpu
   const size_t n = batch.rays.size();
   assert(n <= kMaxBatch && batch.samplers.size() == n && out.radiance.size() == n);
   BdptTracer tracer(*this, scene, accel, caustic_guide(scene, accel), tally);
+  const std::shared_ptr<const SpecularMask> mask = specular_mask(scene);
+  tracer.set_specular_mask(mask.get());
   // The camera rays together, as the path tracer traces them (packets where the accel has them;
   // the same hits as one at a time, bit for bit).
   std::array<Hit, kMaxBatch> first_hits;

@@ -103,6 +103,18 @@ struct BdptSettings {
   // them (which the light subpath's strategies then leave out). 0: no guide. Off, whatever its
   // value, where only_s and only_t or `unweighted` are set (they test the other strategies).
   int caustic_paths = 1 << 17;
+  // Extra camera rays per sample for the light seen through specular surfaces only (E S+ L: an
+  // emitter, or the environment, reached from the camera through smooth glass or mirrors with no
+  // other vertex). No connection reaches those paths through a pinhole, so the camera subpath
+  // (s = 0) is their only strategy, and a pixel that a small piece of a light's refracted image
+  // covers in part is noisy: each of these rays, at its own stratified position in the pixel
+  // (a second Sobol sequence of the pixel's samples), follows specular surfaces only and adds
+  // those paths' emission, and the sample's own s = 0 term of such a path counts as one of the
+  // 1 + specular_view_rays estimates it is averaged with. Taken only in the pixels that
+  // non-diffuse triangles may cover (their projected bounds; elsewhere there are no such paths)
+  // and only with light tracing on (the box filter); off with only_s / only_t or `unweighted`.
+  // 0: none.
+  int specular_view_rays = 3;
 };
 
 // The smallest BdptSettings::light_paths accepted (smaller shares divide contributions by
@@ -185,6 +197,20 @@ class BdptIntegrator final : public Integrator {
   // The caustic guide, built once (shared by copies of the integrator and use_caustic_guide).
   std::shared_ptr<GuideSlot> guide_;
   bool wants_guide_ = false;  // the settings ask for one and the scene can have caustics
+  // The triangles (scene numbering) whose material may be specular (not diffuse, and a Bsdf of
+  // delta lobes only or parameter textures), for specular_view_rays' pixels; empty where the
+  // settings take no such rays.
+  std::vector<uint32_t> specular_prims_;
+  // Per material: kMayBeSpecular where it may be specular (as specular_prims_), kViewEmitter
+  // where it emits.
+  static constexpr uint8_t kMayBeSpecular = 1, kViewEmitter = 2;
+  std::vector<uint8_t> view_materials_;
+  // The pixels that specular_view_rays' rays are taken in, for the camera they were made for
+  // (made again when the camera moves: the viewer keeps its integrator).
+  struct SpecularMask;
+  struct MaskSlot;
+  std::shared_ptr<MaskSlot> mask_;
+  std::shared_ptr<const SpecularMask> specular_mask(const Scene& scene) const;
 
   // radiance, and pilot_radiance with its tally.
   uint64_t trace_batch(const SampleBatch& batch, const SampleOutput& out, const Scene& scene,
@@ -215,6 +241,16 @@ class BdptIntegrator final : public Integrator {
   float environment_radius_ = 0.0f;
 
   friend class BdptTracer;
+};
+
+// The pixels (y * width + x) that specular surfaces' projected bounds may cover, for `camera`.
+struct BdptIntegrator::SpecularMask {
+  Camera camera;
+  std::vector<uint8_t> pixels;
+};
+struct BdptIntegrator::MaskSlot {
+  std::mutex mutex;
+  std::shared_ptr<const SpecularMask> mask;
 };
 
 struct BdptIntegrator::GuideSlot {
