@@ -133,8 +133,9 @@ TSAN_TESTS = ParallelTsan.*:Renderer.*:Placements/*:BinnedSahBuilder.ParallelBui
 # differs between the two are built and run (tritrace_portable_tests, tests/CMakeLists.txt): BVH
 # build and traversals, kernels, leak counts, ray offsets, the Sobol sampler, the camera, the lab
 # integrator, the path tracer and the renderer.
+# The test files at -O1 here too (TRITRACE_TEST_OPTIMIZE), the library at the Release build's -O3.
 PORTABLE_FLAGS = -DCMAKE_BUILD_TYPE=Release -DTRITRACE_NATIVE=OFF -DTRITRACE_BUILD_BENCH=OFF \
-  -DTRITRACE_VIEWER=OFF -DTRITRACE_WERROR=ON -DTRITRACE_UNITY=ON
+  -DTRITRACE_VIEWER=OFF -DTRITRACE_WERROR=ON -DTRITRACE_UNITY=ON -DTRITRACE_TEST_OPTIMIZE=-O1
 
 .PHONY: all deps configure build run test test-asan test-tsan test-portable leaks bench format \
   lint install clean
