@@ -22,21 +22,13 @@ namespace tritrace {
 namespace {
 
 using testing_mc::expect_same_mean;
-using testing_mc::luminance_mean;
+using testing_mc::mean_of_renders;
 using testing_mc::same_bits;
 
 // scenes/caustics.json: a glass sphere on the floor of a box lit by a small area light high on
 // its left wall, the caustic on the floor beside the sphere.
 Scene caustics(int side) {
   return testing_scenes::example_scene("caustics.json", side);
-}
-
-testing_mc::MeanAndError mean_of_renders(const Scene& scene, const Accel& accel,
-                                         const Integrator& integrator, uint32_t spp, uint64_t seed,
-                                         int k) {
-  return testing_mc::mean_of(k, [&](int i) {
-    return luminance_mean(render(scene, accel, integrator, {.spp = spp, .seed = seed + i}));
-  });
 }
 
 // Where the guide has a cell on the floor, its directions lead back to the glass: a ray from the

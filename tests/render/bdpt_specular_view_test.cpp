@@ -21,6 +21,7 @@ namespace {
 
 using testing_mc::expect_same_mean;
 using testing_mc::luminance_mean;
+using testing_mc::mean_of_renders;
 using testing_mc::same_bits;
 
 constexpr int kSide = 32;
@@ -159,15 +160,10 @@ TEST(BdptViews, ViewRaysCutTheVarianceOfLightSeenThroughGlass) {
 TEST(BdptViews, CausticsSceneAgreesWithThePathTracerAndWithoutViewRays) {
   const Scene scene = testing_scenes::example_scene("caustics.json", 24);
   const BvhAccel accel(scene.mesh, kDefaultKernel);
-  const auto mean_of_renders = [&](const Integrator& integrator, uint32_t spp, uint64_t seed) {
-    return testing_mc::mean_of(6, [&](int i) {
-      return luminance_mean(render(scene, accel, integrator, {.spp = spp, .seed = seed + i}));
-    });
-  };
   const BdptIntegrator with(scene), without(scene, BdptSettings{.specular_view_rays = 0});
-  const testing_mc::MeanAndError a = mean_of_renders(with, 64, 10);
-  expect_same_mean(a, mean_of_renders(PathIntegrator(scene), 256, 20), 0.02);
-  expect_same_mean(a, mean_of_renders(without, 64, 30), 0.02);
+  const testing_mc::MeanAndError a = mean_of_renders(scene, accel, with, 64, 10, 6);
+  expect_same_mean(a, mean_of_renders(scene, accel, PathIntegrator(scene), 256, 20, 6), 0.02);
+  expect_same_mean(a, mean_of_renders(scene, accel, without, 64, 30, 6), 0.02);
 }
 
 // The pixels that take view rays follow the camera: an integrator kept across a camera move (as the

@@ -29,13 +29,8 @@
 namespace tritrace {
 namespace {
 
+using testing_mc::luminance_mean;
 using testing_scenes::example_scene;
-
-double luminance_mean(const Image& image) {
-  double sum = 0.0;
-  for (const glm::vec3& p : image.pixels()) sum += (p.x + p.y + p.z) / 3.0;
-  return sum / static_cast<double>(image.pixels().size());
-}
 
 // Mean of the channel means over block (bx, by) of size `block`.
 double block_mean(const Image& image, int bx, int by, int block) {
@@ -220,16 +215,8 @@ TEST(Bdpt, CameraOnlyConnectionsGiveTheGeneralCodesImage) {
 }
 
 using testing_mc::expect_same_mean;
+using testing_mc::mean_of_renders;
 using testing_mc::MeanAndError;
-
-// The mean of K independent renders' image means (seeds seed, seed + 1, ...) with its standard
-// error from their spread.
-MeanAndError mean_of_renders(const Scene& scene, const Accel& accel, const Integrator& integrator,
-                             uint32_t spp, uint64_t seed, int k) {
-  return testing_mc::mean_of(k, [&](int i) {
-    return luminance_mean(render(scene, accel, integrator, {.spp = spp, .seed = seed + i}));
-  });
-}
 
 // --max-depth means what it means for the path tracer: 0 is the emitters the camera sees (the
 // same image to the bit: same camera samples, Le with weight 1), 1 adds light reaching the first

@@ -1,6 +1,6 @@
 // Test helpers for Monte Carlo agreement checks: the mean of K independent estimates with its
-// standard error from their spread, a check that two such means agree, and the two image helpers
-// the bdpt tests share (an image's mean over channels, bit-for-bit equality).
+// standard error from their spread, a check that two such means agree, and the image helpers the
+// bdpt tests share (an image's mean over channels, bit-for-bit equality, the mean of K renders).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include "tritrace/image/image.h"
+#include "tritrace/render/renderer.h"
 
 namespace tritrace::testing_mc {
 
@@ -54,6 +55,16 @@ inline bool same_bits(const Image& a, const Image& b) {
   return a.width() == b.width() && a.height() == b.height() &&
          std::memcmp(a.pixels().data(), b.pixels().data(), a.pixels().size() * sizeof(glm::vec3)) ==
              0;
+}
+
+// The image mean (luminance_mean) of k renders of `scene` with seeds seed, seed + 1, ..., at spp,
+// as MeanAndError.
+inline MeanAndError mean_of_renders(const Scene& scene, const Accel& accel,
+                                    const Integrator& integrator, uint32_t spp, uint64_t seed,
+                                    int k) {
+  return mean_of(k, [&](int i) {
+    return luminance_mean(render(scene, accel, integrator, {.spp = spp, .seed = seed + i}));
+  });
 }
 
 }  // namespace tritrace::testing_mc
