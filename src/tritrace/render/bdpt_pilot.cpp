@@ -99,28 +99,22 @@ LightPathsChoice choose_light_paths(const Scene& scene, const Accel& accel,
     // strategies every sample has, b: those of the light subpath past its first vertex, I:
     // whether the sample traces it, a share F of each pixel's samples spread evenly), so
     //   Var X_F = Var(a_F + b_F) + (1 / F - 1) Var b_F,
-    // each Var from the spread of the pixel's samples (unbiased); the
-    // light-tracing splats (landing on other pixels, each a small part of a pixel's mean) add
-    // their second moment over F. A rare bright path that every share weighs alike would
-    // otherwise decide the choice alone (its square swamps the differences), so F = 1's spread
-    // is taken with each sample clamped at kPilotClamp times the mean, and each share's variance
-    // is that plus its own spread's difference from F = 1's (unclamped: where a share weighs a
-    // rare path more, as a small F weighs the camera's hits of a light seen through glass, that
-    // is the variance it adds).
-    double c_sum = 0.0, c_sum2 = 0.0;
-    for (size_t i = k; i < k + spp; ++i) {
-      const double x = std::min(all[i].always[0] + all[i].light[0], clamp);
-      c_sum += x;
-      c_sum2 += x * x;
-    }
-    const double baseline = (c_sum2 - c_sum * c_sum / m) / (m - 1.0) * m;
-    std::array<double, kPilotCandidates> spread{};
+    // each Var from the spread of the pixel's samples (unbiased); the light-tracing splats
+    // (landing on other pixels, each a small part of a pixel's mean) add their second moment
+    // over F. Var(a_F + b_F) is taken with each sample clamped at kPilotClamp times the image's
+    // mean, for every share alike. A rare bright path is met a handful of times in the pilot's
+    // samples, so its square is noise that decides the choice by chance: with the shares'
+    // differences from F = 1 unclamped, those on scenes/caustics.json came from a few samples
+    // between 30 and 100 times the mean, and the choice wavered with the seed between 1/4 and 1
+    // there, 1/8 and 1 on glass.json and 1/64 and 1 on sky.json (docs/BDPT.md, "Choosing F per
+    // scene"). The thinning's Var b stays unclamped: it is the light subpaths' spread within a
+    // pixel, not a rare path's square.
     for (size_t j = 0; j < kPilotCandidates; ++j) {
       const double f = kPilotShares[j];
       double sum = 0.0, sum2 = 0.0, light = 0.0, light2 = 0.0, thinned = 0.0;
       for (size_t i = k; i < k + spp; ++i) {
         const LightPathsTally::Sample& r = all[i];
-        const double x = r.always[j] + r.light[j];
+        const double x = std::min(r.always[j] + r.light[j], clamp);
         sum += x;
         sum2 += x * x;
         light += r.light[j];
@@ -131,13 +125,13 @@ LightPathsChoice choose_light_paths(const Scene& scene, const Accel& accel,
                    f * (static_cast<double>(r.light_vertices) +
                         kPilotConnectionCost * static_cast<double>(r.light_rays));
       }
-      spread[j] = (sum2 - sum * sum / m) / (m - 1.0) * m;
+      const double spread = (sum2 - sum * sum / m) / (m - 1.0) * m;
       // The thinning: (1 / F - 1) times b's variance, not its second moment as independent
       // choices would give: the samples that trace a light subpath are spread evenly over a
       // pixel's samples (traces_light_subpath: any n consecutive samples hold floor(n F) or
       // ceil(n F)), so b's mean over the pixel is carried by F m of them every time.
       thinned += (1.0 / f - 1.0) * (light2 - light * light / m) / (m - 1.0) * m;
-      moment[j] += baseline + (spread[j] - spread[0]) + thinned;
+      moment[j] += spread + thinned;
     }
   }
   choice.samples = count * spp;
