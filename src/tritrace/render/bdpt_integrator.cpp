@@ -739,10 +739,15 @@ class BdptTracer {
   // vertex with a guide cell, from the last to the first, kCausticDirections directions from the
   // guide, each followed through specular surfaces, its vertices written over the camera subpath
   // past that vertex (no longer read) so that the ratio walk weighs the path; every emitter met
-  // after at least one specular surface adds its weighted term. Its numbers come from a PCG32
-  // stream of the sample's own (pixel key and sample index), not from the sampler's dimensions, so
-  // that nothing else the sample draws moves.
-  void caustic_strategy(size_t k, const Sampler& sampler);
+  // after at least one specular surface adds its weighted term. Its numbers come from samplers
+  // of their own, not from the sample's dimensions, so that nothing else the sample draws moves:
+  // for camera vertex i a Sobol sequence of the pixel (the render's seed hashed with i), whose
+  // point 8 s + j is direction j of the pixel's sample s (photon, direction in its cone, then each
+  // specular vertex's lobe and direction). A pixel's guided directions at a vertex are thus
+  // stratified together, as its samples are: each is still drawn from the guide's density, so
+  // the estimate stays unbiased, and its variance falls. `pixel` is the sample's pixel index
+  // (y width + x).
+  void caustic_strategy(size_t k, const Sampler& sampler, uint32_t pixel);
   // BdptSettings::specular_view_rays for the wavefront's samples [0, count) that take them (their
   // `views`): each sample's rays from its own sampler of the pixel (a second seed, sample index
   // i n + j for its ray j of n), followed through specular surfaces only, traced a bounce of all of
@@ -1940,7 +1945,7 @@ void BdptTracer::wavefront(const SampleBatch& batch, const SampleOutput& out, co
       if (!out.normal.empty()) out.normal[first + k] = normal;
     }
     // (After the AOVs: it writes over the camera subpath.)
-    if (guide_ != nullptr) caustic_strategy(k, samplers[k]);
+    if (guide_ != nullptr) caustic_strategy(k, samplers[k], batch.pixels[first + k]);
     out.radiance[first + k] = state_[k].total;
   }
 }
@@ -2316,7 +2321,11 @@ void BdptTracer::queue_caustic_s0(int t, glm::vec3 contribution, float q) {
   pending_[static_cast<size_t>(pending_count_ - 1)].weighted = true;
 }
 
-void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
+void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler, uint32_t pixel) {
+  const int width = scene_.camera.width();
+  const int px = static_cast<int>(pixel % static_cast<uint32_t>(width));
+  const int py = static_cast<int>(pixel / static_cast<uint32_t>(width));
+  const uint64_t guide_seed = hash_combine(sampler.seed(), 0x6361757374696373ull);
   select(k);
   std::vector<Vertex>& path = thread_subpaths()[k].camera;
   const int nc = current_->nc;
@@ -2330,12 +2339,14 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
     if (cell.count == 0) continue;
     for (int j = 0; j < kCausticDirections; ++j) {
       Vertex& d = path[static_cast<size_t>(i)];  // (again: the subpath may have moved)
-      Pcg32 rng(hash_words(sampler.pixel_key(), sampler.sample_index(), i, j, 0x63617573746963ull),
-                0);
-      const float u_pick = rng.next_float();
-      // Braces: the two numbers are drawn left to right by any compiler (a constructor's
-      // arguments in parentheses are evaluated in an unspecified order: GCC and clang differ).
-      const glm::vec2 u_dir{rng.next_float(), rng.next_float()};
+      // Direction j of sample s: point 8 s + j of the pixel's sequence for camera vertex i.
+      Sampler numbers(hash_combine(guide_seed, static_cast<uint64_t>(i)), sampler.kind());
+      numbers.start_pixel_sample(
+          px, py,
+          sampler.sample_index() * static_cast<uint32_t>(kCausticDirections) +
+              static_cast<uint32_t>(j));
+      const float u_pick = numbers.get_1d();
+      const glm::vec2 u_dir = numbers.get_2d();
       const glm::vec3 w = CausticGuide::sample(cell, u_pick, u_dir);
       const float pg = CausticGuide::pdf(cell, w);
       if (!(pg > 0.0f)) continue;
@@ -2399,8 +2410,8 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler) {
         // choice between its delta lobes by its probability; no Russian roulette).
         if (!agrees(x, x.wo)) break;
         const glm::vec3 wo_local = x.frame.to_local(x.wo);
-        const float u_lobe = rng.next_float();
-        const glm::vec2 u{rng.next_float(), rng.next_float()};
+        const float u_lobe = numbers.get_1d();
+        const glm::vec2 u = numbers.get_2d();
         const BsdfSample bs = bsdf_sample(x, wo_local, u_lobe, u);
         if (!bs.valid()) break;
         const glm::vec3 w_next = x.frame.to_world(bs.wi);
