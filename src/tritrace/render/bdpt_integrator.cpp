@@ -233,6 +233,27 @@ bool agrees(const Vertex& x, glm::vec3 w) {
   return !x.smooth || shading_agrees(w, x.ns, x.ng);
 }
 
+// Vertex x's Bsdf sampled for the direction onwards from x.wo (the direction back along the path),
+// the lobe chosen by u_lobe and the direction by u: the camera walk, the light walk, the caustic
+// strategy's chains and the view rays all scatter this way. Invalid (bs) where the sample is, or
+// where x.wo or the new direction lies on different sides of the shading and geometric surfaces.
+struct Scatter {
+  BsdfSample bs;       // in x's shading frame
+  glm::vec3 wo_local;  // x.wo in that frame
+  glm::vec3 w_next;    // bs.wi in world space
+};
+
+Scatter scatter(const Vertex& x, float u_lobe, glm::vec2 u) {
+  Scatter s;
+  if (!agrees(x, x.wo)) return s;
+  s.wo_local = x.frame.to_local(x.wo);
+  s.bs = bsdf_sample(x, s.wo_local, u_lobe, u);
+  if (!s.bs.valid()) return s;
+  s.w_next = x.frame.to_world(s.bs.wi);
+  if (!agrees(x, s.w_next)) s.bs = {};
+  return s;
+}
+
 // f_s(w_cam, w_light) of Veach 1997, section 5.3: the Bsdf's value with the shading normal's
 // cosine moved onto the geometric one, so that the geometry terms use geometric normals.
 glm::vec3 surface_f(const Vertex& x, glm::vec3 w_cam, glm::vec3 w_light) {
@@ -994,14 +1015,12 @@ void BdptTracer::walk_scatter(std::vector<Vertex>& path, WalkState& w,
   const int count = w.count;
   Vertex& prev = path[static_cast<size_t>(count - 2)];
   Vertex& x = path[static_cast<size_t>(count - 1)];
-  const glm::vec2 u_choice = u[0], u_dir = u[1];
+  const glm::vec2 u_choice = u[0];
   const glm::vec3 w_prev = x.wo;
-  if (!agrees(x, w_prev)) return;
-  const glm::vec3 wo_local = x.frame.to_local(w_prev);
-  const BsdfSample bs = bsdf_sample(x, wo_local, u_choice.x, u_dir);
-  if (!bs.valid()) return;
-  const glm::vec3 w_next = x.frame.to_world(bs.wi);
-  if (!agrees(x, w_next)) return;
+  const Scatter sc = scatter(x, u_choice.x, u[1]);
+  if (!sc.bs.valid()) return;
+  const BsdfSample& bs = sc.bs;
+  const glm::vec3 wo_local = sc.wo_local, w_next = sc.w_next;
   glm::vec3 factor = bs.weight;
   if (light) {
     // The adjoint: f_s(w_next, w_prev) |n_g . w_next| / pdf (Veach 1997, sections 5.2-5.3).
@@ -2407,17 +2426,16 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler, uint32_t pix
         if (!x.specular || count >= max_vertices) break;
         specular_met = true;
         // A specular vertex's scattering as the camera subpath's walk_scatter samples it (the
-        // choice between its delta lobes by its probability; no Russian roulette).
-        if (!agrees(x, x.wo)) break;
-        const glm::vec3 wo_local = x.frame.to_local(x.wo);
+        // choice between its delta lobes by its probability; no Russian roulette). (Its numbers
+        // drawn first: where it fails the chain ends, so nothing else reads the sequence.)
         const float u_lobe = numbers.get_1d();
         const glm::vec2 u = numbers.get_2d();
-        const BsdfSample bs = bsdf_sample(x, wo_local, u_lobe, u);
-        if (!bs.valid()) break;
-        const glm::vec3 w_next = x.frame.to_world(bs.wi);
-        if (!agrees(x, w_next)) break;
+        const Scatter sc = scatter(x, u_lobe, u);
+        if (!sc.bs.valid()) break;
+        const BsdfSample& bs = sc.bs;
+        const glm::vec3 w_next = sc.w_next;
         x.delta = bs.delta;
-        prev.pdf_rev = to_area_prev(bs.delta ? 0.0f : bsdf_pdf(x, bs.wi, wo_local), x, prev);
+        prev.pdf_rev = to_area_prev(bs.delta ? 0.0f : bsdf_pdf(x, bs.wi, sc.wo_local), x, prev);
         beta *= bs.weight;
         if (!(max_component(beta) > 0.0f) || !std::isfinite(max_component(beta))) break;
         pdf_dir = bs.delta ? 0.0f : bs.pdf;
@@ -2497,16 +2515,16 @@ void BdptTracer::specular_views(const SampleBatch& batch, size_t first, size_t c
         make_surface(x, v.ray, hits[j]);
         ++v.count;
         if (after_specular && x.emits) le = emission(scene_, x, x.wo);
-        if (x.specular && v.count < max_vertices && agrees(x, x.wo)) {
+        if (x.specular && v.count < max_vertices) {
           // The scattering as the camera walk's walk_scatter samples it (the delta lobe chosen by
-          // its probability), without Russian roulette.
-          const glm::vec3 wo_local = x.frame.to_local(x.wo);
+          // its probability), without Russian roulette. (Where it fails the ray ends, so nothing
+          // else reads its sampler.)
           const glm::vec2 u_choice = v.sampler.get_2d();
           const glm::vec2 u_dir = v.sampler.get_2d();
-          const BsdfSample bs = bsdf_sample(x, wo_local, u_choice.x, u_dir);
-          const glm::vec3 w_next = bs.valid() ? x.frame.to_world(bs.wi) : glm::vec3(0.0f);
-          if (bs.valid() && agrees(x, w_next)) {
-            const glm::vec3 beta_next = v.beta * bs.weight;
+          const Scatter sc = scatter(x, u_choice.x, u_dir);
+          if (sc.bs.valid()) {
+            const glm::vec3 w_next = sc.w_next;
+            const glm::vec3 beta_next = v.beta * sc.bs.weight;
             goes_on = max_component(beta_next) > 0.0f && std::isfinite(max_component(beta_next));
             if (goes_on) {
               // (le is this vertex's, with the throughput that reached it.)
