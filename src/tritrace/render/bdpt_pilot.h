@@ -32,7 +32,7 @@ struct Scene;
 // choice on scenes/caustics.json depend on the seed: docs/PERFORMANCE.md).
 inline constexpr uint32_t kPilotPixels = 2048;
 inline constexpr uint32_t kPilotSpp = 8;
-// F = 1's variance is estimated with each sample clamped at this many times the mean
+// Every share's variance is estimated with each sample clamped at this many times the mean
 // (choose_light_paths says why). Too low a clamp cuts variance that every share has, so the
 // differences between shares look larger than they are and small shares lose; too high lets one
 // rare path decide (docs/BDPT.md, "Choosing F per scene").
