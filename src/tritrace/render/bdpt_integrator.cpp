@@ -489,6 +489,12 @@ bool traces_light_subpath(const Sampler& sampler, float light_paths) {
   return std::floor((i + 1.0) * f + phi) > std::floor(i * f + phi);
 }
 
+// Pixel index y width + x as (x, y).
+std::array<int, 2> pixel_xy(uint32_t pixel, int width) {
+  const uint32_t w = static_cast<uint32_t>(width);
+  return {static_cast<int>(pixel % w), static_cast<int>(pixel / w)};
+}
+
 // The caustic strategy's directions per guided vertex (BdptTracer::caustic_strategy): its vertices
 // are few (the caustics' cells), so several directions each cost little and cut its variance.
 inline constexpr int kCausticDirections = 8;
@@ -1766,9 +1772,8 @@ void BdptTracer::set_pass(size_t k, const SplatPass* pass, uint32_t pixel) {
   pass_ = pass;
   SampleState& st = state_[k];
   st.pixel = pixel;
-  const uint32_t width = pass ? static_cast<uint32_t>(pass->width) : 1;
-  st.pixel_ratio =
-      mis_count_ratio(static_cast<int>(pixel % width), static_cast<int>(pixel / width));
+  const auto [x, y] = pixel_xy(pixel, pass ? pass->width : 1);
+  st.pixel_ratio = mis_count_ratio(x, y);
 }
 
 void BdptTracer::select(size_t k) {
@@ -2341,9 +2346,7 @@ void BdptTracer::queue_caustic_s0(int t, glm::vec3 contribution, float q) {
 }
 
 void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler, uint32_t pixel) {
-  const int width = scene_.camera.width();
-  const int px = static_cast<int>(pixel % static_cast<uint32_t>(width));
-  const int py = static_cast<int>(pixel / static_cast<uint32_t>(width));
+  const auto [px, py] = pixel_xy(pixel, scene_.camera.width());
   const uint64_t guide_seed = hash_combine(sampler.seed(), 0x6361757374696373ull);
   select(k);
   std::vector<Vertex>& path = thread_subpaths()[k].camera;
@@ -2356,10 +2359,10 @@ void BdptTracer::caustic_strategy(size_t k, const Sampler& sampler, uint32_t pix
     if (candidate.type != VertexType::kSurface || !candidate.connectible) continue;
     const CausticGuide::Cell cell = guide_->cell(candidate.p);
     if (cell.count == 0) continue;
+    // Direction j of sample s: point 8 s + j of the pixel's sequence for camera vertex i.
+    Sampler numbers(hash_combine(guide_seed, static_cast<uint64_t>(i)), sampler.kind());
     for (int j = 0; j < kCausticDirections; ++j) {
       Vertex& d = path[static_cast<size_t>(i)];  // (again: the subpath may have moved)
-      // Direction j of sample s: point 8 s + j of the pixel's sequence for camera vertex i.
-      Sampler numbers(hash_combine(guide_seed, static_cast<uint64_t>(i)), sampler.kind());
       numbers.start_pixel_sample(
           px, py,
           sampler.sample_index() * static_cast<uint32_t>(kCausticDirections) +
@@ -2468,9 +2471,7 @@ void BdptTracer::specular_views(const SampleBatch& batch, size_t first, size_t c
   for (size_t k = 0; k < count; ++k) {
     if (!state_[k].views) continue;
     const Sampler& own = batch.samplers[first + k];
-    const uint32_t pixel = batch.pixels[first + k];
-    const int x = static_cast<int>(pixel % static_cast<uint32_t>(width));
-    const int y = static_cast<int>(pixel / static_cast<uint32_t>(width));
+    const auto [x, y] = pixel_xy(batch.pixels[first + k], width);
     for (int j = 0; j < n_rays; ++j) {
       View& v = views.emplace_back();
       // The second sequence: the pixel's samples' view rays are the first n_rays x spp points of
